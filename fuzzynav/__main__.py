@@ -1,0 +1,3 @@
+from fuzzynav.cli import main
+import sys
+sys.exit(main())

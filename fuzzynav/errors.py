@@ -1,0 +1,49 @@
+"""Exceptions that carry one clear, user-facing line.
+
+Every error a user can cause with bad input (a file, a field, a value) is raised as a
+:class:`FuzzynavError` subclass whose message names the file, the field (a JSON path or
+a TOML key) and what was wrong.  The CLI prints that one line and exits with code 2.
+"""
+from __future__ import annotations
+
+
+class FuzzynavError(Exception):
+    """Base class of errors caused by user input (exit code 2 in the CLI)."""
+
+
+class InputFileError(FuzzynavError, ValueError):
+    """A file (rule file, scenario, study config, recording) is malformed.
+
+    Parameters
+    ----------
+    path : str or os.PathLike or None
+        The file at fault (``None`` for an in-memory document).
+    where : str
+        The field at fault, e.g. a JSON path ``$.inputs[0].terms[1].params``.
+    what : str
+        What was wrong with it.
+    """
+
+    def __init__(self, path, where: str, what: str):
+        self.path = None if path is None else str(path)
+        self.where = where
+        self.what = what
+        prefix = f"{self.path}: " if self.path else ""
+        loc = f"{where}: " if where else ""
+        super().__init__(f"{prefix}{loc}{what}")
+
+
+class UnknownNameError(FuzzynavError, KeyError):
+    """A name (scenario, filter, adapter, sensor) is not registered."""
+
+    def __init__(self, kind: str, name: str, known):
+        self.kind, self.name = kind, name
+        self.known = sorted(known)
+        super().__init__(f"unknown {kind} {name!r}; known: {', '.join(self.known)}")
+
+    def __str__(self) -> str:  # KeyError would quote the message
+        return self.args[0]
+
+
+class DataMissingError(FuzzynavError, FileNotFoundError):
+    """A recording or data file the user named is not there."""
