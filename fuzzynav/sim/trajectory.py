@@ -17,66 +17,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fuzzynav.errors import InputFileError
+from fuzzynav.nav import attitude, earth
+from fuzzynav.sim.segments import SEGMENT_KINDS, Profile, Segment  # noqa: F401 (re-exported)
 
-SEGMENT_KINDS = ("static", "accelerate", "cruise", "turn", "climb", "figure8", "s-turns")
-
-
-@dataclass(frozen=True)
-class Segment:
-    """One motion segment of a trajectory.
-
-    Parameters
-    ----------
-    kind : str
-        ``static`` (speed forced to zero), ``accelerate`` (speed changes by
-        ``speed_change_mps``), ``cruise`` (everything held), ``turn`` (heading changes by
-        ``turn_deg``, or at ``turn_rate_dps`` mean rate, or on ``radius_m``), ``climb``
-        (flight-path angle rises to ``pitch_deg``, is held, and returns to level; negative
-        dives), ``figure8`` (a full right turn then a full left turn), ``s-turns``
-        (``n_turns`` alternating turns of ``turn_deg`` each).
-    duration_s : float
-        Length of the segment [s].
-    speed_change_mps : float
-        Speed change of an ``accelerate`` segment [m/s].
-    turn_deg : float
-        Heading change [deg], positive clockwise (to the right).
-    turn_rate_dps, radius_m : float, optional
-        Alternatives to ``turn_deg`` for ``turn``: mean turn rate [deg/s] or turn radius [m]
-        at the current speed (sign of ``turn_deg`` or of the rate gives the direction).
-    pitch_deg : float
-        Held pitch of a ``climb`` segment [deg].
-    bank : bool
-        Bank into turns as a coordinated aircraft turn (roll = atan(v r / g)); ``False``
-        keeps the wings level (cars, ships).
-    n_turns : int
-        Number of alternating turns of an ``s-turns`` segment.
-    """
-
-    kind: str
-    duration_s: float
-    speed_change_mps: float = 0.0
-    turn_deg: float = 0.0
-    turn_rate_dps: float | None = None
-    radius_m: float | None = None
-    pitch_deg: float = 0.0
-    bank: bool = False
-    n_turns: int = 2
-
-    def __post_init__(self):
-        if self.kind not in SEGMENT_KINDS:
-            raise InputFileError(None, "segment.kind",
-                                 f"unknown segment kind {self.kind!r}; known: "
-                                 + ", ".join(SEGMENT_KINDS))
-        if not (np.isfinite(self.duration_s) and self.duration_s > 0):
-            raise InputFileError(None, "segment.duration_s",
-                                 f"must be a positive number of seconds, got {self.duration_s!r}")
-        if not -80.0 < self.pitch_deg < 80.0:
-            raise InputFileError(None, "segment.pitch_deg",
-                                 f"must lie within (-80, 80) deg, got {self.pitch_deg!r}")
-        if self.kind == "s-turns" and self.n_turns < 1:
-            raise InputFileError(None, "segment.n_turns", "must be >= 1")
-
+#: Gauss-Legendre nodes per quadrature interval (exact for polynomials of degree 9)
+_GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(5)
+#: fixed-point sweeps for latitude, whose rate depends weakly on latitude itself
+_PICARD_SWEEPS = 4
 
 @dataclass(frozen=True)
 class Trajectory:
@@ -124,3 +71,135 @@ class Trajectory:
     def duration_s(self) -> float:
         """Length of the trajectory [s]."""
         return float(self.time_s[-1] - self.time_s[0])
+
+
+
+def _kinematics(prof: dict):
+    """Velocity, acceleration, Euler angles and body rate from profile values."""
+    s, sd = prof["speed"], prof["speed_dot"]
+    hd, th, thd = prof["heading"], prof["pitch"], prof["pitch_dot"]
+    psid, ga, gad = prof["heading_dot"], prof["roll"], prof["roll_dot"]
+    sh, ch, sp, cp = np.sin(hd), np.cos(hd), np.sin(th), np.cos(th)
+    u = np.stack([sh * cp, ch * cp, sp], -1)  # forward axis in ENU (no side-slip)
+    du = np.stack([ch * cp * psid - sh * sp * thd, -sh * cp * psid - ch * sp * thd, cp * thd], -1)
+    vel_n = s[..., None] * u
+    acc_n = sd[..., None] * u + s[..., None] * du
+    sg, cg = np.sin(ga), np.cos(ga)
+    # body rate of C_bn = R3(-heading) R1(pitch) R2(roll), expressed in body axes
+    omega_nb_b = np.stack([psid * sg * cp + thd * cg, -psid * sp + gad,
+                           -psid * cg * cp + thd * sg], -1)
+    att = np.stack([th, ga, hd], -1)
+    return vel_n, acc_n, att, omega_nb_b
+
+
+def _hermite(y0, y1, d0, d1, h, x):
+    """Cubic Hermite interpolation on intervals of length ``h`` at fractions ``x`` in [0, 1]."""
+    x2, x3 = x * x, x * x * x
+    return ((2 * x3 - 3 * x2 + 1) * y0 + (x3 - 2 * x2 + x) * h * d0
+            + (-2 * x3 + 3 * x2) * y1 + (x3 - x2) * h * d1)
+
+
+class _Quadrature:
+    """Gauss-Legendre nodes on the sub-intervals between ``edges`` (shape (J+1,))."""
+
+    def __init__(self, edges):
+        self.edges = edges
+        self.h = np.diff(edges)
+        self.frac = 0.5 * (_GL_NODES + 1.0)                      # (m,)
+        self.t = edges[:-1, None] + self.h[:, None] * self.frac  # (J, m)
+        self.w = 0.5 * self.h[:, None] * _GL_WEIGHTS             # (J, m)
+
+    def integrals(self, f):
+        """Integral of node values ``f`` (J, m[, k]) over each sub-interval."""
+        w = self.w if f.ndim == 2 else self.w[..., None]
+        return np.sum(f * w, axis=1)
+
+    def cumulative(self, y0, f):
+        """Running integral at the edges, starting from ``y0``."""
+        return y0 + np.concatenate([np.zeros((1,) + f.shape[2:]), np.cumsum(self.integrals(f), 0)])
+
+    def at_nodes(self, y_edges, dy_edges):
+        """Hermite interpolation of an edge function to the nodes."""
+        f = self.frac[None, :]
+        return _hermite(y_edges[:-1, None], y_edges[1:, None], dy_edges[:-1, None],
+                        dy_edges[1:, None], self.h[:, None], f)
+
+
+def _integrate_position(quad: _Quadrature, vel_edges, vel_nodes, lla0):
+    """Latitude, longitude, height at edges and nodes by quadrature of the velocity."""
+    h_e = quad.cumulative(lla0[2], vel_nodes[..., 2])
+    h_n = quad.at_nodes(h_e, vel_edges[:, 2])
+    lat_e = np.full(h_e.shape, lla0[0])
+    for _ in range(_PICARD_SWEEPS):
+        rm_e, _ = earth.radii(lat_e)
+        lat_n = quad.at_nodes(lat_e, vel_edges[:, 1] / (rm_e + h_e))
+        rm_n, _ = earth.radii(lat_n)
+        lat_e = quad.cumulative(lla0[0], vel_nodes[..., 1] / (rm_n + h_n))
+    rm_e, _ = earth.radii(lat_e)
+    lat_n = quad.at_nodes(lat_e, vel_edges[:, 1] / (rm_e + h_e))
+    _, rn_n = earth.radii(lat_n)
+    lon_e = quad.cumulative(lla0[1], vel_nodes[..., 0] / ((rn_n + h_n) * np.cos(lat_n)))
+    return np.stack([lat_e, lon_e, h_e], -1), lat_n, h_n
+
+
+def _body_rate_and_force(prof_nodes, lat_n, h_n):
+    """omega_ib_b and f_b at the quadrature nodes (true position)."""
+    vel_n, acc_n, att, omega_nb_b = _kinematics(prof_nodes)
+    C_bn = attitude.euler_to_dcm(att)
+    w_ie = earth.omega_ie_n(lat_n)
+    w_en = earth.omega_en_n(lat_n, h_n, vel_n)
+    C_nb = np.swapaxes(C_bn, -1, -2)
+    omega_ib_b = omega_nb_b + np.einsum("...ij,...j->...i", C_nb, w_ie + w_en)
+    g_n = np.zeros_like(vel_n)
+    g_n[..., 2] = -earth.gravity(lat_n, h_n)
+    f_n = acc_n + np.cross(2.0 * w_ie + w_en, vel_n) - g_n
+    return omega_ib_b, np.einsum("...ij,...j->...i", C_nb, f_n)
+
+
+def generate(start_lla_rad, segments, imu_rate_hz, initial_speed_mps=0.0,
+             initial_heading_rad=0.0) -> Trajectory:
+    """Truth and ideal IMU increments of a segment trajectory.
+
+    Parameters
+    ----------
+    start_lla_rad : array_like, shape (3,)
+        Start latitude [rad], longitude [rad], height [m].
+    segments : sequence of Segment
+        The motion, in order.
+    imu_rate_hz : float
+        IMU sampling rate [Hz]; the trajectory is cut to a whole number of samples.
+    initial_speed_mps, initial_heading_rad : float
+        Motion state at the start (heading clockwise from north).
+
+    Returns
+    -------
+    Trajectory
+    """
+    profile = Profile(segments, initial_speed_mps, initial_heading_rad)
+    dt = 1.0 / float(imu_rate_hz)
+    n = int(np.floor(profile.duration_s * imu_rate_hz + 1e-9))
+    time_s = np.arange(n + 1) / float(imu_rate_hz)
+    # split sample intervals where a piece starts or ends: the integrands' higher
+    # derivatives jump there, which would spoil the quadrature's exactness
+    b = profile.boundaries()
+    b = b[(b > 0.0) & (b < time_s[-1])]
+    b = b[np.abs(b / dt - np.round(b / dt)) > 1e-9]
+    edges = np.union1d(time_s, b)
+    quad = _Quadrature(edges)
+    vel_e, _, _, _ = _kinematics(profile.evaluate(edges))
+    prof_nodes = profile.evaluate(quad.t)
+    vel_nodes, _, _, _ = _kinematics(prof_nodes)
+    lla_e, lat_n, h_n = _integrate_position(quad, vel_e, vel_nodes, np.asarray(start_lla_rad, float))
+    omega_ib_b, f_b = _body_rate_and_force(prof_nodes, lat_n, h_n)
+    owner = np.searchsorted(time_s, edges[:-1] + 0.5 * quad.h) - 1
+    starts = np.searchsorted(owner, np.arange(n))
+    dtheta_b = np.add.reduceat(quad.integrals(omega_ib_b), starts, axis=0)
+    dv_b = np.add.reduceat(quad.integrals(f_b), starts, axis=0)
+    on_grid = np.searchsorted(edges, time_s)
+    vel_n, _, att, omega_nb_b = _kinematics(profile.evaluate(time_s))
+    att = att.copy()
+    att[:, 2] = attitude.wrap_2pi(att[:, 2])
+    return Trajectory(time_s=time_s, lla=lla_e[on_grid], vel_n=vel_n, att=att,
+                      q_bn=attitude.euler_to_quat(att), dtheta_b=dtheta_b, dv_b=dv_b,
+                      omega_nb_b=omega_nb_b, imu_rate_hz=float(imu_rate_hz),
+                      segments=tuple(segments))

@@ -1,0 +1,60 @@
+"""Strapdown mechanization replayed on error-free increments from the trajectory generator."""
+import numpy as np
+
+from fuzzynav.nav import attitude, earth, strapdown
+from fuzzynav.sim.trajectory import Segment, generate
+
+START = np.array([np.deg2rad(38.0178), np.deg2rad(112.4447), 825.0])
+
+
+def manoeuvring_hour():
+    """About 1 h of turns, banked turns, climbs, dives, S-turns and figure-eights."""
+    block = [Segment("turn", 30, turn_deg=90, bank=True), Segment("climb", 60, pitch_deg=5),
+             Segment("s-turns", 80, turn_deg=45, n_turns=4),
+             Segment("accelerate", 10, speed_change_mps=5), Segment("figure8", 120, bank=True),
+             Segment("climb", 40, pitch_deg=-4), Segment("accelerate", 10, speed_change_mps=-5),
+             Segment("cruise", 30)]
+    segs = [Segment("static", 60), Segment("accelerate", 20, speed_change_mps=15)] + block * 9
+    segs += [Segment("accelerate", 20, speed_change_mps=-15), Segment("static", 80)]
+    return segs
+
+
+def test_one_hour_replay_stays_on_truth():
+    tr = generate(START, manoeuvring_hour(), 100.0, 0.0, 0.3)
+    assert tr.duration_s >= 3600.0
+    out = strapdown.integrate(tr.lla[0], tr.vel_n[0], tr.q_bn[0], tr.dtheta_b, tr.dv_b,
+                              0.01, stride=100)
+    idx = np.arange(0, tr.n_samples + 1, 100)
+    lla, ref = out["lla"], tr.lla[idx]
+    err = np.array([earth.lla_to_enu(*a, *b) for a, b in zip(lla[::10], ref[::10])])
+    assert np.abs(err).max() < 0.05
+    phi = attitude.attitude_error(attitude.quat_to_dcm(out["q_bn"]),
+                                  attitude.quat_to_dcm(tr.q_bn[idx]))
+    assert np.rad2deg(np.abs(phi)).max() < 1e-4
+    # the trajectory really manoeuvres: km travelled, 3-D, banked
+    assert np.ptp(tr.lla[:, 2]) > 100 and np.abs(tr.att[:, 1]).max() > 0.1
+
+
+def test_error_of_the_algorithm_shrinks_with_the_step():
+    """A wrong term would show as an error that does not converge at the algorithm's order."""
+    segs = [Segment("accelerate", 20, speed_change_mps=15)] + \
+        [Segment("climb", 60, pitch_deg=5), Segment("turn", 30, turn_deg=-120, bank=True)] * 4
+    errs = []
+    for rate in (25.0, 50.0):
+        tr = generate(START, segs, rate, 0.0, 1.0)
+        out = strapdown.integrate(tr.lla[0], tr.vel_n[0], tr.q_bn[0], tr.dtheta_b, tr.dv_b,
+                                  1.0 / rate, stride=tr.n_samples)
+        errs.append(np.abs(out["vel_n"][-1] - tr.vel_n[-1]).max())
+    assert errs[1] < errs[0] / 3.0  # at least second order
+
+
+def test_static_vehicle_stays_put_and_keeps_gravity_balance():
+    tr = generate(START, [Segment("static", 600)], 100.0)
+    np.testing.assert_allclose(tr.dv_b[:, :2], 0.0, atol=1e-15)
+    # float sample times carry ~1e-13 s of rounding, hence the 1e-10 relative tolerance
+    np.testing.assert_allclose(tr.dv_b[:, 2] / 0.01, earth.gravity(START[0], START[2]), rtol=1e-10)
+    omega = np.linalg.norm(tr.dtheta_b, axis=1) / 0.01
+    np.testing.assert_allclose(omega, earth.OMEGA_IE, rtol=1e-10)
+    out = strapdown.integrate(tr.lla[0], tr.vel_n[0], tr.q_bn[0], tr.dtheta_b, tr.dv_b, 0.01,
+                              stride=tr.n_samples)
+    assert np.abs(out["vel_n"][-1]).max() < 1e-9
