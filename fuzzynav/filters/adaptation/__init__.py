@@ -1,0 +1,122 @@
+"""Adaptation policies: the slot between innovation and update.
+
+At each measurement epoch of a sensor, after its residual ``r`` (length ``m``), ``H P- H^T``
+and the nominal variances ``R`` are formed and before the update, the sensor's policy runs::
+
+    status = kernel(fp, ip, st, r, HPH, R, chan, m, out, diag)
+
+* ``fp`` / ``ip`` — the policy's float / int constants (e.g. a compiled fuzzy system);
+* ``st`` — its mutable state (innovation windows, running estimates), kept across epochs;
+* ``chan`` — channel id per row (see the measurement model's ``channels``);
+* outputs: ``out[0]`` multiplies the propagated part of ``P-`` (alpha^2 of exponential
+  weighting, lambda of fading memory; 1 = none), ``out[1]`` multiplies the process noise from
+  now on (1 = unchanged), ``out[2 + i]`` multiplies ``R[i]`` for this update; ``diag[:4]``
+  diagnostic values logged per epoch (alpha, DoM, ...);
+* ``status`` — bit flags: 1 an input of a fuzzy system was clamped, 2 no rule fired.
+
+A policy is one module here defining an :class:`Adapter` subclass and registering it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba as nb
+import numpy as np
+from numba import types
+
+from fuzzynav.errors import UnknownNameError
+
+ADAPT_SIG = types.int64(types.float64[:], types.int64[:], types.float64[:], types.float64[:],
+                        types.float64[:, :], types.float64[:], types.int64[:], types.int64,
+                        types.float64[:], types.float64[:])
+#: number of diagnostic values a policy may log per epoch
+N_DIAG = 4
+
+
+@dataclass(frozen=True)
+class Bound:
+    """An adapter's arrays for one sensor stream, ready for the loop."""
+
+    kernel_id: int
+    fp: np.ndarray
+    ip: np.ndarray
+    state: np.ndarray
+    diag_names: tuple
+
+
+class Adapter:
+    """Base class of adaptation policies (immutable configuration).
+
+    Subclasses set ``name``, ``kernel`` (compiled with :data:`ADAPT_SIG`) and
+    ``diag_names``, and implement :meth:`arrays`.
+    """
+
+    name = "none"
+    kernel = None
+    diag_names: tuple = ()
+
+    def arrays(self, model):
+        """``(fp, ip, state)`` for a sensor served by measurement ``model``."""
+        return np.zeros(1), np.zeros(1, dtype=np.int64), np.zeros(1)
+
+    def bind(self, model) -> Bound:
+        """Arrays and kernel id for the loop."""
+        fp, ip, st = self.arrays(model)
+        _, index = kernel_table()
+        return Bound(index[self.name], np.ascontiguousarray(fp, dtype=float),
+                     np.ascontiguousarray(ip, dtype=np.int64),
+                     np.ascontiguousarray(st, dtype=float), tuple(self.diag_names))
+
+
+@nb.njit(ADAPT_SIG, cache=True)
+def none_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
+    out[0] = 1.0
+    out[1] = 1.0
+    for i in range(m):
+        out[2 + i] = 1.0
+    return 0
+
+
+class NoAdaptation(Adapter):
+    """The plain EKF: nominal noise, no adaptation."""
+
+    name = "none"
+    kernel = none_kernel
+
+
+ADAPTERS: dict[str, type] = {}
+_ORDER: list[str] = []
+BUILTIN_MODULES: tuple = ()
+
+
+def register(cls):
+    """Class decorator registering an :class:`Adapter` subclass under ``cls.name``."""
+    if cls.name not in ADAPTERS:
+        _ORDER.append(cls.name)
+    ADAPTERS[cls.name] = cls
+    return cls
+
+
+register(NoAdaptation)
+
+
+def _load_builtins():
+    import importlib
+
+    for mod in BUILTIN_MODULES:
+        importlib.import_module(f"{__name__}.{mod}")
+
+
+def get(name: str) -> type:
+    """The adapter class registered as ``name``."""
+    _load_builtins()
+    try:
+        return ADAPTERS[name]
+    except KeyError:
+        raise UnknownNameError("adaptation policy", name, ADAPTERS) from None
+
+
+def kernel_table():
+    """``(tuple of kernels, {name: index})`` for the filter loop."""
+    _load_builtins()
+    return tuple(ADAPTERS[k].kernel for k in _ORDER), {k: i for i, k in enumerate(_ORDER)}

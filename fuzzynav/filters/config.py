@@ -1,0 +1,103 @@
+"""Filter configuration: initial uncertainty, process noise, gating, output rate.
+
+Datasheet units at this edge (deg, °/h, µg, °/√h, µg/√Hz); :meth:`FilterConfig.P0` and
+:meth:`FilterConfig.q_diag` return the SI arrays the loop uses.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from fuzzynav import units
+from fuzzynav.errors import InputFileError
+from fuzzynav.filters.error_model import MODEL_15, ErrorModel
+
+
+def _per_block(values, n_blocks, name):
+    values = tuple(values) if np.ndim(values) else (values,) * n_blocks
+    if len(values) != n_blocks:
+        raise InputFileError(None, name, f"needs one value per block ({n_blocks}), got {len(values)}")
+    return values
+
+
+@dataclass(frozen=True)
+class FilterConfig:
+    """Everything a filter run needs besides data, initial state and adaptation policies.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        Sensor-error state layout (15 states by default).
+    init_att_sigma_deg : (3,) tuple
+        Initial 1-sigma attitude error phi (east, north, up) [deg].
+    init_vel_sigma_mps, init_pos_sigma_m : float
+        Initial 1-sigma velocity [m/s] and position [m] errors.
+    gyro_sigma_dph, accel_sigma_ug : tuple per block
+        1-sigma of each sensor-error block: initial uncertainty of a random constant, or the
+        steady-state sigma of a Gauss-Markov block [°/h, µg].
+    gyro_rw_dph_psh, accel_rw_ug_psqrts : tuple per block
+        Random-walk densities added to random-constant blocks [°/h/√h, µg/√s] (0 = none).
+    arw_dpsh, vrw_ug_psqrthz : float
+        Angle and velocity random walk the filter assumes [°/√h, µg/√Hz].
+    gate_probability : float or None
+        Chi-square gate: epochs whose NIS exceeds this quantile are rejected (None = off).
+    max_prop_dt_s : float
+        Longest covariance-propagation interval [s] (also propagated at every measurement).
+    out_rate_hz : float
+        Rate of the recorded solution [Hz] (rounded to a whole number of IMU samples).
+    """
+
+    model: ErrorModel = MODEL_15
+    init_att_sigma_deg: tuple = (0.1, 0.1, 1.0)
+    init_vel_sigma_mps: float = 0.1
+    init_pos_sigma_m: float = 3.0
+    gyro_sigma_dph: tuple = (10.0,)
+    accel_sigma_ug: tuple = (1000.0,)
+    gyro_rw_dph_psh: tuple = (0.0,)
+    accel_rw_ug_psqrts: tuple = (0.0,)
+    arw_dpsh: float = 0.1
+    vrw_ug_psqrthz: float = 100.0
+    gate_probability: float | None = None
+    max_prop_dt_s: float = 1.0
+    out_rate_hz: float = 10.0
+    extras: dict = field(default_factory=dict, compare=False)
+
+    def with_(self, **changes) -> "FilterConfig":
+        """A copy with some fields changed."""
+        return replace(self, **changes)
+
+    def _blocks(self):
+        ng, na = len(self.model.gyro_tau_s), len(self.model.accel_tau_s)
+        return (_per_block(self.gyro_sigma_dph, ng, "gyro_sigma_dph"),
+                _per_block(self.accel_sigma_ug, na, "accel_sigma_ug"),
+                _per_block(self.gyro_rw_dph_psh, ng, "gyro_rw_dph_psh"),
+                _per_block(self.accel_rw_ug_psqrts, na, "accel_rw_ug_psqrts"))
+
+    def P0(self) -> np.ndarray:
+        """Initial covariance (n x n, diagonal, SI)."""
+        gs, as_, _, _ = self._blocks()
+        d = [*(np.asarray(self.init_att_sigma_deg, float) * units.DEG),
+             *[self.init_vel_sigma_mps] * 3, *[self.init_pos_sigma_m] * 3]
+        for s in gs:
+            d += [s * units.DPH] * 3
+        for s in as_:
+            d += [s * units.UG] * 3
+        return np.diag(np.square(d))
+
+    def q_diag(self) -> np.ndarray:
+        """Continuous process-noise spectral densities per state (SI)."""
+        gs, as_, grw, arw = self._blocks()
+        q = [(self.arw_dpsh * units.DPSH) ** 2] * 3 + [(self.vrw_ug_psqrthz * units.UG) ** 2] * 3
+        q += [0.0] * 3
+        for sig, rw, tau in zip(gs, grw, self.model.gyro_tau_s):
+            q += [_block_q(sig * units.DPH, rw * units.DPH_PSH, tau)] * 3
+        for sig, rw, tau in zip(as_, arw, self.model.accel_tau_s):
+            q += [_block_q(sig * units.UG, rw * units.UG, tau)] * 3
+        return np.array(q)
+
+
+def _block_q(sigma, rw, tau):
+    """Driving-noise density of a sensor block: 2 sigma^2 / tau for Gauss-Markov, rw^2 else."""
+    return rw * rw if math.isinf(tau) else 2.0 * sigma * sigma / tau

@@ -1,0 +1,111 @@
+"""Measurement models: one module per sensor kind, each returning ``(z, H, R)`` per epoch.
+
+A model is a numba kernel with the fixed signature :data:`MEAS_SIG`::
+
+    m = kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan)
+
+* ``nav`` — strapdown state (:mod:`fuzzynav.nav.strapdown` layout), ``C_bn`` its DCM;
+* ``aux`` — ``[omega_ib_b (3) rad/s, f_b (3) m/s^2]`` of the latest IMU interval;
+* ``row`` — this epoch's data row (by default ``[z..., sigma...]`` of the SensorData);
+* ``par`` — constants packed by the model's ``pack`` function (lever arms, switches);
+* ``dt_back`` — how long ago [s] the measurement was taken (it is processed at the first
+  IMU sample at or after its time; models move the INS quantities back by this much);
+* outputs: ``z[:m]`` the residual *INS minus sensor* (so ``z = H dx + v``), ``H[:m, :]``
+  (zeroed by the caller), ``R[:m]`` the diagonal variance, ``chan[:m]`` a channel id per row
+  (indices into the model's ``channels``, used by adaptation policies).
+
+Returns ``m``, the number of rows (0 to skip the epoch).  A new sensor is one module here
+plus :func:`register`; the filter loop dispatches through numba first-class functions.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+from numba import types
+
+from fuzzynav.errors import UnknownNameError
+
+MEAS_SIG = types.int64(types.float64[:], types.float64[:, :], types.float64[:],
+                       types.float64[:], types.float64[:], types.float64,
+                       types.float64[:], types.float64[:, :], types.float64[:],
+                       types.int64[:])
+
+
+def default_rows(data) -> np.ndarray:
+    """Data rows ``[z..., sigma...]`` of a :class:`~fuzzynav.sim.sensors.SensorData`."""
+    return np.hstack([data.z, data.sigma]).astype(float)
+
+
+@dataclass(frozen=True)
+class MeasurementModel:
+    """A registered measurement model.
+
+    Attributes
+    ----------
+    kind : str
+        Sensor kind it serves (``SensorData.kind``).
+    kernel : numba dispatcher compiled with :data:`MEAS_SIG`.
+    max_rows : int
+        Largest ``m`` it returns.
+    channels : tuple of str
+        Names of the channel ids it writes into ``chan``.
+    pack : callable
+        ``pack(sensor_data, options: dict) -> float64 array`` of constants ``par``.
+    rows : callable
+        ``rows(sensor_data) -> (M, W) float64`` data rows.
+    """
+
+    kind: str
+    kernel: object
+    max_rows: int
+    channels: tuple
+    pack: Callable
+    rows: Callable = default_rows
+
+    def channel_index(self, name: str) -> int:
+        """Index of channel ``name`` (clear error when the model has no such channel)."""
+        if name == "all":
+            return -1
+        try:
+            return self.channels.index(name)
+        except ValueError:
+            raise UnknownNameError(f"channel of the {self.kind} model", name,
+                                   self.channels + ("all",)) from None
+
+
+MODELS: dict[str, MeasurementModel] = {}
+#: order of the kernels in the tuple handed to the loop (index = kernel id)
+_ORDER: list[str] = []
+BUILTIN_MODULES = ("gnss",)
+
+
+def register(model: MeasurementModel) -> MeasurementModel:
+    """Register a measurement model under its sensor kind."""
+    if model.kind not in MODELS:
+        _ORDER.append(model.kind)
+    MODELS[model.kind] = model
+    return model
+
+
+def _load_builtins():
+    import importlib
+
+    for mod in BUILTIN_MODULES:
+        importlib.import_module(f"{__name__}.{mod}")
+
+
+def get(kind: str) -> MeasurementModel:
+    """The model registered for sensor ``kind``."""
+    _load_builtins()
+    try:
+        return MODELS[kind]
+    except KeyError:
+        raise UnknownNameError("measurement model", kind, MODELS) from None
+
+
+def kernel_table():
+    """``(tuple of kernels, {kind: index})`` for the filter loop."""
+    _load_builtins()
+    return tuple(MODELS[k].kernel for k in _ORDER), {k: i for i, k in enumerate(_ORDER)}

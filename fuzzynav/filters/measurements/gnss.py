@@ -1,0 +1,77 @@
+"""GNSS position and velocity, loosely coupled, with a lever arm.
+
+Data row: ``[lat_rad, lon_rad, h_m, vel_e, vel_n, vel_u, sigma x 6]`` (NaN entries are
+skipped, so position-only receivers work).  Parameters: ``lever_arm_b`` [m, body RFU] of the
+antenna from the IMU, and switches ``use_position`` / ``use_velocity``.
+
+Residuals (INS minus GNSS, ENU metres and m/s) at the measurement time::
+
+    z_pos = (p_ins - p_gnss) + C_bn l - v dt_back,   H = [ [C_bn l x]  0  I  0 ]
+    z_vel = v_ins + C_bn (omega_ib_b x l) - v_gnss,   H = [ 0  I  0  0 ]
+
+(the lever-arm velocity neglects the small earth-rate and attitude-error couplings).
+"""
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
+from fuzzynav.nav.earth import radii_nb
+
+
+@nb.njit(MEAS_SIG, cache=True)
+def gnss_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
+    lx, ly, lz = par[0], par[1], par[2]
+    # antenna offset in ENU and its velocity from the body rotation
+    le = C_bn[0, 0] * lx + C_bn[0, 1] * ly + C_bn[0, 2] * lz
+    ln = C_bn[1, 0] * lx + C_bn[1, 1] * ly + C_bn[1, 2] * lz
+    lu = C_bn[2, 0] * lx + C_bn[2, 1] * ly + C_bn[2, 2] * lz
+    wx, wy, wz = aux[0], aux[1], aux[2]
+    cx, cy, cz = wy * lz - wz * ly, wz * lx - wx * lz, wx * ly - wy * lx
+    lat, h = nav[7], nav[9]
+    rm, rn = radii_nb(lat)
+    m = 0
+    if par[3] != 0.0:
+        de = (nav[8] - row[1]) * (rn + h) * math.cos(lat) + le - nav[4] * dt_back
+        dn = (nav[7] - row[0]) * (rm + h) + ln - nav[5] * dt_back
+        du = (nav[9] - row[2]) + lu - nav[6] * dt_back
+        res = (de, dn, du)
+        for i in range(3):
+            if math.isfinite(res[i]) and row[6 + i] > 0.0:
+                z[m] = res[i]
+                # d(C l) = (C l) x phi  ->  [C l x]
+                if i == 0:
+                    H[m, 1], H[m, 2] = -lu, ln
+                elif i == 1:
+                    H[m, 0], H[m, 2] = lu, -le
+                else:
+                    H[m, 0], H[m, 1] = -ln, le
+                H[m, 6 + i] = 1.0
+                R[m] = row[6 + i] * row[6 + i]
+                chan[m] = 0
+                m += 1
+    if par[4] != 0.0:
+        for i in range(3):
+            lever_v = C_bn[i, 0] * cx + C_bn[i, 1] * cy + C_bn[i, 2] * cz
+            res = nav[4 + i] + lever_v - row[3 + i]
+            if math.isfinite(res) and row[9 + i] > 0.0:
+                z[m] = res
+                H[m, 3 + i] = 1.0
+                R[m] = row[9 + i] * row[9 + i]
+                chan[m] = 1
+                m += 1
+    return m
+
+
+def _pack(data, options) -> np.ndarray:
+    lever = np.asarray(options.get("lever_arm_b", data.meta.get("lever_arm_b", np.zeros(3))),
+                       dtype=float)
+    return np.array([*lever, float(options.get("use_position", True)),
+                     float(options.get("use_velocity", True))])
+
+
+MODEL = register(MeasurementModel(kind="gnss", kernel=gnss_kernel, max_rows=6,
+                                  channels=("pos", "vel"), pack=_pack))

@@ -1,0 +1,158 @@
+"""Run a filter: pack Python objects into arrays, call the compiled loop, bundle the result."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import chi2
+
+from fuzzynav.errors import FuzzynavError
+from fuzzynav.filters import adaptation, measurements
+from fuzzynav.filters.adaptation import N_DIAG, NoAdaptation
+from fuzzynav.filters.config import FilterConfig
+from fuzzynav.filters.loop import ST_OK, run_loop
+from fuzzynav.filters.result import EventLog, FilterResult
+from fuzzynav.nav import strapdown
+
+
+@dataclass(frozen=True)
+class InitialState:
+    """The filter's initial navigation state.
+
+    Attributes
+    ----------
+    time_s : float
+        Time of the state (must equal the first IMU sample time).
+    lla : (3,) latitude [rad], longitude [rad], height [m].
+    vel_n : (3,) ENU velocity [m/s].
+    q_bn : (4,) attitude quaternion.
+    """
+
+    time_s: float
+    lla: np.ndarray
+    vel_n: np.ndarray
+    q_bn: np.ndarray
+
+
+def _imu_arrays(imu):
+    time_s = np.ascontiguousarray(imu.time_s, dtype=float)
+    dth = np.ascontiguousarray(imu.dtheta_b, dtype=float)
+    dv = np.ascontiguousarray(imu.dv_b, dtype=float)
+    if time_s.shape != (dth.shape[0] + 1,) or dv.shape != dth.shape:
+        raise FuzzynavError(f"IMU arrays disagree: time {time_s.shape}, dtheta {dth.shape}, "
+                            f"dv {dv.shape} (time needs one entry more than the increments)")
+    if np.any(np.diff(time_s) <= 0):
+        raise FuzzynavError("IMU sample times must increase strictly")
+    return time_s, dth, dv
+
+
+def _sensor_tables(sensors, adapters, options, gate_probability):
+    """Per-sensor kernel ids, parameters, adapter arrays and gates; the merged event list."""
+    meas_fns, meas_index = measurements.kernel_table()
+    names = sorted(sensors)
+    models = [measurements.get(sensors[nm].kind) for nm in names]
+    M = max([mdl.max_rows for mdl in models], default=1)
+    bounds = [adapters.get(nm, NoAdaptation()).bind(mdl) for nm, mdl in zip(names, models)]
+    pars = [np.asarray(mdl.pack(sensors[nm], options.get(nm, {})), float)
+            for nm, mdl in zip(names, models)]
+    s_mpar = np.zeros((max(len(names), 1), max([p.size for p in pars], default=1)))
+    for i, p in enumerate(pars):
+        s_mpar[i, :p.size] = p
+    rows = [mdl.rows(sensors[nm]) for nm, mdl in zip(names, models)]
+    W = max([r.shape[1] for r in rows], default=1)
+    ev_t = np.concatenate([sensors[nm].time_s for nm in names] or [np.zeros(0)]).astype(float)
+    ev_s = np.concatenate([np.full(len(r), i) for i, r in enumerate(rows)] or [np.zeros(0)])
+    ev_data = np.zeros((ev_t.size, W))
+    o = 0
+    for r in rows:
+        ev_data[o:o + len(r), :r.shape[1]] = r
+        o += len(r)
+    order = np.argsort(ev_t, kind="stable")
+    gate = np.zeros((max(len(names), 1), M + 1))
+    if gate_probability is not None:
+        gate[:, 1:] = chi2.ppf(gate_probability, np.arange(1, M + 1))
+
+    def flat(arrs, dtype):
+        off = np.concatenate([[0], np.cumsum([a.size for a in arrs])]).astype(np.int64)
+        cat = np.concatenate(arrs).astype(dtype) if arrs else np.zeros(1, dtype)
+        return (cat if cat.size else np.zeros(1, dtype)), off
+
+    afp, afp_off = flat([b.fp for b in bounds], float)
+    aip, aip_off = flat([b.ip for b in bounds], np.int64)
+    ast, ast_off = flat([b.state for b in bounds], float)
+    return dict(names=names, models=models, bounds=bounds, M=M, meas_fns=meas_fns,
+                s_meas=np.array([meas_index[m.kind] for m in models] or [0], np.int64),
+                s_mpar=s_mpar, ev_t=np.ascontiguousarray(ev_t[order]),
+                ev_s=np.ascontiguousarray(ev_s[order].astype(np.int64)),
+                ev_data=np.ascontiguousarray(ev_data[order]), order=order,
+                s_adapt=np.array([b.kernel_id for b in bounds] or [0], np.int64),
+                afp=afp, afp_off=afp_off, aip=aip, aip_off=aip_off, ast=ast, ast_off=ast_off,
+                gate=gate)
+
+
+def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterConfig(),
+               adapters=None, sensor_options=None) -> FilterResult:
+    """Run the closed-loop error-state filter.
+
+    Parameters
+    ----------
+    imu : object
+        With ``time_s`` (N+1,), ``dtheta_b`` (N, 3) [rad] and ``dv_b`` (N, 3) [m/s]
+        (a :class:`~fuzzynav.sim.trajectory.Trajectory` or a simulated/real IMU log).
+    sensors : mapping name -> SensorData
+        Aiding measurements; each kind needs a registered measurement model.
+    init : InitialState
+        Initial navigation state at ``imu.time_s[0]``.
+    config : FilterConfig
+    adapters : mapping name -> Adapter, optional
+        Adaptation policy per sensor (default: none, the plain EKF).
+    sensor_options : mapping name -> dict, optional
+        Options for the measurement models (e.g. ``{"gnss": {"use_velocity": False}}``).
+
+    Returns
+    -------
+    FilterResult
+    """
+    time_s, dth, dv = _imu_arrays(imu)
+    tb = _sensor_tables(dict(sensors), dict(adapters or {}), dict(sensor_options or {}),
+                        config.gate_probability)
+    blk_start, blk_kind, blk_inv_tau = config.model.block_arrays()
+    n = config.model.n_states
+    dt_nom = float(np.median(np.diff(time_s)))
+    stride = max(1, int(round(1.0 / (config.out_rate_hz * dt_nom))))
+    K = dth.shape[0] // stride + 1
+    E, M = tb["ev_t"].size, tb["M"]
+    out = dict(t=np.full(K, np.nan), nav=np.full((K, strapdown.NAV_SIZE), np.nan),
+               xs=np.full((K, n - 9), np.nan), sig=np.full((K, n), np.nan))
+    ev = dict(r=np.full((E, M), np.nan), S=np.full((E, M), np.nan), nis=np.full(E, np.nan),
+              flag=np.zeros(E, np.int64), diag=np.full((E, N_DIAG), np.nan))
+    nav0 = strapdown.make_nav(init.lla, init.vel_n, init.q_bn)
+    adapt_fns, _ = adaptation.kernel_table()
+    status, done = run_loop(
+        dth, dv, time_s, nav0, np.zeros(n - 9), config.P0(), config.q_diag(), blk_start,
+        blk_kind, blk_inv_tau, tb["ev_t"], tb["ev_s"], tb["ev_data"], tb["meas_fns"],
+        tb["s_meas"], tb["s_mpar"], adapt_fns, tb["s_adapt"], tb["afp"], tb["afp_off"],
+        tb["aip"], tb["aip_off"], tb["ast"], tb["ast_off"], tb["gate"],
+        float(config.max_prop_dt_s), stride, out["t"], out["nav"], out["xs"], out["sig"],
+        ev["r"], ev["S"], ev["nis"], ev["flag"], ev["diag"])
+    return _bundle(out, ev, tb, config, status, done, time_s)
+
+
+def _bundle(out, ev, tb, config, status, done, time_s) -> FilterResult:
+    keep = np.isfinite(out["t"])
+    events = {}
+    for i, (nm, mdl, bd) in enumerate(zip(tb["names"], tb["models"], tb["bounds"])):
+        sel = tb["ev_s"] == i
+        events[nm] = EventLog(time_s=tb["ev_t"][sel], residual=ev["r"][sel], S_diag=ev["S"][sel],
+                              nis=ev["nis"][sel], flag=ev["flag"][sel],
+                              diag=ev["diag"][sel][:, :len(bd.diag_names)],
+                              diag_names=bd.diag_names, channels=mdl.channels)
+    ng = len(config.model.gyro_tau_s)
+    nav = out["nav"][keep]
+    msg = "ok" if status == ST_OK else (
+        f"stopped at t = {time_s[done]:.2f} s: covariance lost positive definiteness")
+    return FilterResult(time_s=out["t"][keep], lla=nav[:, 7:10], vel_n=nav[:, 4:7],
+                        q_bn=nav[:, 0:4], sensor_states=out["xs"][keep], sigma=out["sig"][keep],
+                        state_labels=tuple(config.model.labels()), events=events, status=msg,
+                        gyro_blocks=tuple(range(ng)),
+                        accel_blocks=tuple(range(ng, ng + len(config.model.accel_tau_s))))
