@@ -50,7 +50,7 @@ def _load_builtin_kinds():
 
 
 #: modules of this package that register built-in sensor kinds
-BUILTIN_MODULES: tuple[str, ...] = ("gnss", "polarization")
+BUILTIN_MODULES: tuple[str, ...] = ("gnss",)
 
 
 @dataclass(frozen=True)
