@@ -1,0 +1,174 @@
+"""Simulate a scenario once per (scenario, seed) and cache the result as arrays.
+
+Randomness: each component draws from its own generator, derived from the seed and the
+component's name (``SeedSequence(seed, spawn_key=(crc32(name),))``), so adding, removing
+or reordering a sensor leaves the IMU noise and the other sensors' noise unchanged.
+
+Cache: one ``.npz`` per (scenario, seed), named ``<scenario>-<seed>-<key>.npz`` with
+``key`` the SHA-256 of the scenario's canonical form, the seed and :data:`DATA_VERSION`.
+Files are written atomically (temporary file + ``os.replace``) and read with
+``allow_pickle=False``; a file that is unreadable, incomplete or made for another key is
+regenerated, never trusted.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import tempfile
+import zlib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from fuzzynav.sim.imu import ImuData
+from fuzzynav.sim.scenario import Scenario
+from fuzzynav.sim.sensors import SensorData
+from fuzzynav.sim.trajectory import Trajectory, generate
+
+#: bump when the simulation or the file layout changes (invalidates every cache file)
+DATA_VERSION = 1
+
+_TRUTH_ARRAYS = ("time_s", "lla", "vel_n", "att", "q_bn", "dtheta_b", "dv_b", "omega_nb_b")
+_IMU_ARRAYS = ("time_s", "dtheta_b", "dv_b", "gyro_bias_rps", "accel_bias_mps2")
+
+
+@dataclass(frozen=True)
+class SensorLog:
+    """Truth and every sensor's output for one (scenario, seed).
+
+    Attributes
+    ----------
+    scenario : Scenario
+    seed : int
+    truth : Trajectory
+    imu : ImuData
+        Corrupted increments, with the applied bias series.
+    sensors : dict
+        Sensor name -> :class:`~fuzzynav.sim.sensors.SensorData`.
+    """
+
+    scenario: Scenario
+    seed: int
+    truth: Trajectory
+    imu: ImuData
+    sensors: dict
+
+
+def component_rng(seed: int, name: str) -> np.random.Generator:
+    """The generator of one component (``"imu"``, ``"sensor:<name>"``) for ``seed``."""
+    key = zlib.crc32(name.encode("utf-8"))
+    return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(key,)))
+
+
+def cache_key(scenario: Scenario, seed: int) -> str:
+    """Hex SHA-256 identifying the data of ``(scenario, seed)``."""
+    text = f"fuzzynav-sim v{DATA_VERSION}\n{int(seed)}\n{scenario.canonical()}"
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def _generate(scenario: Scenario, seed: int) -> SensorLog:
+    truth = generate(scenario.start_lla_rad, scenario.segments, scenario.imu.rate_hz,
+                     scenario.initial_speed_mps, np.deg2rad(scenario.initial_heading_deg))
+    imu = scenario.imu.corrupt(truth, component_rng(seed, "imu"))
+    sensors = {name: spec.simulate(truth, component_rng(seed, f"sensor:{name}"),
+                                   scenario.start_utc)
+               for name, spec in scenario.sensors.items()}
+    return SensorLog(scenario=scenario, seed=int(seed), truth=truth, imu=imu, sensors=sensors)
+
+
+# -- file layout -------------------------------------------------------------------------------
+def _to_arrays(log: SensorLog, key: str) -> dict:
+    out = {"key": np.array(key), "imu_rate_hz": np.array(log.truth.imu_rate_hz),
+           "sensor_names": np.array(sorted(log.sensors), dtype=str)}
+    out.update({f"truth.{k}": getattr(log.truth, k) for k in _TRUTH_ARRAYS})
+    out.update({f"imu.{k}": getattr(log.imu, k) for k in _IMU_ARRAYS})
+    out.update({f"imu.meta.{k}": np.asarray(v) for k, v in log.imu.meta.items()})
+    for name, data in log.sensors.items():
+        p = f"sensor.{name}"
+        out.update({f"{p}.kind": np.array(data.kind), f"{p}.time_s": data.time_s,
+                    f"{p}.z": data.z, f"{p}.sigma": data.sigma})
+        out.update({f"{p}.meta.{k}": np.asarray(v) for k, v in data.meta.items()})
+    return out
+
+
+def _meta(arrays, prefix: str) -> dict:
+    return {k[len(prefix):]: (arrays[k][()] if arrays[k].ndim == 0 else arrays[k])
+            for k in arrays if k.startswith(prefix)}
+
+
+def _from_arrays(a, scenario: Scenario, seed: int) -> SensorLog:
+    truth = Trajectory(**{k: a[f"truth.{k}"] for k in _TRUTH_ARRAYS},
+                       imu_rate_hz=float(a["imu_rate_hz"]), segments=scenario.segments)
+    imu = ImuData(**{k: a[f"imu.{k}"] for k in _IMU_ARRAYS}, meta=_meta(a, "imu.meta."))
+    sensors = {}
+    for name in a["sensor_names"].tolist():
+        p = f"sensor.{name}"
+        sensors[name] = SensorData(kind=str(a[f"{p}.kind"]), time_s=a[f"{p}.time_s"],
+                                   z=a[f"{p}.z"], sigma=a[f"{p}.sigma"],
+                                   meta=_meta(a, f"{p}.meta."))
+    if sorted(sensors) != sorted(scenario.sensors):
+        raise ValueError("cache holds other sensors than the scenario")
+    return SensorLog(scenario=scenario, seed=int(seed), truth=truth, imu=imu, sensors=sensors)
+
+
+def _read_cache(path: Path, key: str, scenario: Scenario, seed: int):
+    """The cached log, or ``None`` if the file is missing, unreadable or not for ``key``."""
+    try:
+        with np.load(path, allow_pickle=False) as npz:
+            arrays = {k: npz[k] for k in npz.files}
+        if str(arrays["key"]) != key:
+            return None
+        return _from_arrays(arrays, scenario, seed)
+    except FileNotFoundError:
+        return None
+    except Exception:  # noqa: BLE001 - any damage means: regenerate, never trust
+        return None
+
+
+def _write_cache(path: Path, arrays: dict):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            np.savez(f, **arrays)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def cache_path(cache_dir, scenario: Scenario, seed: int) -> Path:
+    """Where the cache file of ``(scenario, seed)`` lives in ``cache_dir``."""
+    key = cache_key(scenario, seed)
+    safe = "".join(c if c.isalnum() or c in "-_" else "_" for c in scenario.name)
+    return Path(cache_dir) / f"{safe}-{int(seed)}-{key[:16]}.npz"
+
+
+def simulate(scenario: Scenario, seed: int, cache_dir=None) -> SensorLog:
+    """Truth, corrupted IMU and every sensor's data for ``(scenario, seed)``.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    seed : int
+        Non-negative seed; the same (scenario, seed) always gives the same data.
+    cache_dir : path-like, optional
+        Directory of ``.npz`` cache files; ``None`` computes without caching.
+
+    Returns
+    -------
+    SensorLog
+    """
+    if int(seed) < 0:
+        raise ValueError(f"seed must be non-negative, got {seed}")
+    if cache_dir is None:
+        return _generate(scenario, seed)
+    key = cache_key(scenario, seed)
+    path = cache_path(cache_dir, scenario, seed)
+    log = _read_cache(path, key, scenario, seed)
+    if log is None:
+        log = _generate(scenario, seed)
+        _write_cache(path, _to_arrays(log, key))
+    return log
+

@@ -1,0 +1,252 @@
+"""Scenarios: a typed description of a simulated run, read from TOML or a built-in name.
+
+File layout (every key, unit and default in ``docs/simulation.md``)::
+
+    name = "paper000"                 # optional, default: the file name
+    description = "..."
+    [start]                           # lat_deg, lon_deg, h_m, speed_mps, heading_deg, utc
+    [imu]                             # ImuSpec fields (datasheet units) and rate_hz
+    [[segments]]                      # Segment fields, one table per segment, in order
+    [sensors.<name>]                  # kind = "<registered kind>" and that kind's fields
+
+Every problem is one :class:`fuzzynav.errors.InputFileError` naming the file, the TOML key
+path (``segments[3].turn_deg``, ``sensors.gps.rate_hz``) and what was wrong.
+"""
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import re
+import tomllib
+import types
+from dataclasses import asdict, dataclass
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from fuzzynav.errors import DataMissingError, InputFileError, UnknownNameError
+from fuzzynav.sim.imu import ImuSpec
+from fuzzynav.sim.segments import SEGMENT_KINDS, Profile, Segment
+from fuzzynav.sim.sensors import spec_class
+from fuzzynav.sim.tomltable import Table, with_path
+
+_SENSOR_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]{0,39}$")
+#: default start time: the 2024 March equinox, 04:00 UTC (about noon in China)
+DEFAULT_UTC = _dt.datetime(2024, 3, 20, 4, 0, tzinfo=_dt.timezone.utc)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A simulated run: start state, motion, IMU and aiding sensors.
+
+    Attributes
+    ----------
+    name, description : str
+    start_lat_deg, start_lon_deg : float
+        Start position [deg] (north, east positive).
+    start_h_m : float
+        Start ellipsoidal height [m].
+    initial_speed_mps : float
+        Speed at ``t = 0`` [m/s].
+    initial_heading_deg : float
+        Heading at ``t = 0`` [deg], clockwise from north.
+    start_utc : datetime.datetime
+        UTC time of ``t = 0`` (for the sun, used by polarization sensors).
+    segments : tuple of Segment
+    imu : ImuSpec
+    sensors : Mapping[str, Spec]
+        Sensor name -> registered sensor ``Spec`` (read-only mapping).
+    """
+
+    name: str
+    description: str
+    start_lat_deg: float
+    start_lon_deg: float
+    start_h_m: float
+    initial_speed_mps: float
+    initial_heading_deg: float
+    start_utc: _dt.datetime
+    segments: tuple
+    imu: ImuSpec
+    sensors: types.MappingProxyType
+
+    def __post_init__(self):
+        object.__setattr__(self, "segments", tuple(self.segments))
+        object.__setattr__(self, "sensors", types.MappingProxyType(dict(self.sensors)))
+
+    @property
+    def start_lla_rad(self) -> np.ndarray:
+        """Start latitude [rad], longitude [rad], height [m]."""
+        return np.array([np.deg2rad(self.start_lat_deg), np.deg2rad(self.start_lon_deg),
+                         self.start_h_m])
+
+    @property
+    def duration_s(self) -> float:
+        """Total length of the segments [s]."""
+        return float(sum(s.duration_s for s in self.segments))
+
+    # -- canonical form -----------------------------------------------------------------
+    def to_dict(self) -> dict:
+        """The scenario as a TOML-ready table (round-trips through :func:`scenario_from_dict`)."""
+        return {
+            "name": self.name, "description": self.description,
+            "start": {"lat_deg": self.start_lat_deg, "lon_deg": self.start_lon_deg,
+                      "h_m": self.start_h_m, "speed_mps": self.initial_speed_mps,
+                      "heading_deg": self.initial_heading_deg,
+                      "utc": self.start_utc.isoformat()},
+            "imu": self.imu.to_dict(),
+            "segments": [{k: v for k, v in asdict(s).items() if v is not None}
+                         for s in self.segments],
+            "sensors": {name: _sensor_dict(spec) for name, spec in self.sensors.items()},
+        }
+
+    def canonical(self) -> str:
+        """Canonical JSON of everything that shapes the data (not name or description)."""
+        d = self.to_dict()
+        del d["name"], d["description"]
+        return json.dumps(d, sort_keys=True, separators=(",", ":"), allow_nan=False)
+
+
+def _sensor_dict(spec) -> dict:
+    if hasattr(spec, "to_dict"):
+        return spec.to_dict()
+    return {"kind": spec.kind, **asdict(spec)}
+
+
+# -- parsing ------------------------------------------------------------------------------
+def _segment(t: Table) -> Segment:
+    kind = t.string("kind", choices=SEGMENT_KINDS)
+    kw = dict(kind=kind,
+              duration_s=t.number("duration_s", lo=0.0, lo_open=True),
+              speed_change_mps=t.number("speed_change_mps", 0.0),
+              turn_deg=t.number("turn_deg", 0.0),
+              turn_rate_dps=t.number("turn_rate_dps", None),
+              radius_m=t.number("radius_m", None, lo=0.0, lo_open=True),
+              pitch_deg=t.number("pitch_deg", 0.0, lo=-80.0, hi=80.0, lo_open=True,
+                                 hi_open=True),
+              bank=t.boolean("bank", False),
+              n_turns=t.integer("n_turns", 2, lo=1))
+    t.finish()
+    try:
+        return Segment(**kw)
+    except InputFileError as exc:
+        raise InputFileError(None, exc.where.replace("segment", t.where, 1), exc.what) from None
+
+
+def _sensor(t: Table, name: str):
+    if not _SENSOR_NAME.match(name):
+        raise t.error("", "a sensor name must start with a letter and use only letters, "
+                          "digits, '_' and '-' (at most 40)")
+    kind = t.string("kind")
+    try:
+        cls = spec_class(kind)
+    except UnknownNameError as exc:
+        raise t.error("kind", str(exc)) from None
+    return cls.from_dict({k: v for k, v in t.data.items() if k != "kind"}, t.where)
+
+
+def scenario_from_dict(d: dict, default_name: str = "scenario") -> Scenario:
+    """Build a :class:`Scenario` from a parsed TOML document (errors carry no file)."""
+    top = Table(d)
+    name = top.string("name", default_name)
+    description = top.string("description", "")
+    st = top.table("start")
+    start = dict(start_lat_deg=st.number("lat_deg", lo=-90.0, hi=90.0),
+                 start_lon_deg=st.number("lon_deg", lo=-180.0, hi=360.0),
+                 start_h_m=st.number("h_m", 0.0, lo=-1000.0, hi=1e5),
+                 initial_speed_mps=st.number("speed_mps", 0.0, lo=0.0),
+                 initial_heading_deg=st.number("heading_deg", 0.0),
+                 start_utc=st.datetime_utc("utc", DEFAULT_UTC))
+    st.finish()
+    imu_table = top.table("imu")
+    imu = ImuSpec.from_dict(imu_table.data, imu_table.where)
+    segments = tuple(_segment(t) for t in top.tables("segments"))
+    if not segments:
+        raise top.error("segments", "needs at least one [[segments]] table")
+    sens = top.table("sensors", required=False)
+    sensors = {}
+    if sens is not None:
+        for key in list(sens.data):
+            sensors[key] = _sensor(sens.table(key), key)
+    top.finish()
+    # the motion is checked now (a static segment while moving, a turn at rest, ...), so
+    # that a bad file fails at load time and not in the middle of a study
+    Profile(segments, start["initial_speed_mps"], np.deg2rad(start["initial_heading_deg"]))
+    return Scenario(name=name, description=description, segments=segments, imu=imu,
+                    sensors=sensors, **start)
+
+
+# -- built-ins and loading -------------------------------------------------------------------
+def _builtin_dir():
+    return resources.files("fuzzynav.sim") / "scenarios"
+
+
+def list_scenarios() -> list[str]:
+    """Names of the built-in scenarios."""
+    return sorted(p.name[:-5] for p in _builtin_dir().iterdir() if p.name.endswith(".toml"))
+
+
+def _looks_like_path(name_or_path) -> bool:
+    s = str(name_or_path)
+    return isinstance(name_or_path, Path) or s.endswith(".toml") or "/" in s or "\\" in s
+
+
+def _merge(base: dict, over: dict) -> dict:
+    """``over`` on top of ``base``: tables merge key by key, everything else replaces."""
+    out = dict(base)
+    for k, v in over.items():
+        out[k] = _merge(base[k], v) if isinstance(v, dict) and isinstance(base.get(k), dict) \
+            else v
+    return out
+
+
+def _load(name_or_path, depth=0) -> Scenario:
+    if _looks_like_path(name_or_path):
+        path = Path(name_or_path)
+        if not path.is_file():
+            raise DataMissingError(f"{path}: scenario file not found")
+        text, stem, label, here = path.read_bytes(), path.stem, str(path), path.parent
+    else:
+        name = str(name_or_path)
+        if name not in list_scenarios():
+            raise UnknownNameError("scenario", name, list_scenarios())
+        res = _builtin_dir() / f"{name}.toml"
+        text, stem, label, here = res.read_bytes(), name, f"<built-in {name}.toml>", None
+    with with_path(label):
+        try:
+            doc = tomllib.loads(text.decode("utf-8"))
+        except UnicodeDecodeError as exc:
+            raise InputFileError(None, "", f"not UTF-8 text ({exc.reason})") from None
+        except tomllib.TOMLDecodeError as exc:
+            raise InputFileError(None, "", f"invalid TOML: {exc}") from None
+        if "base" in doc:
+            base = doc.pop("base")
+            if not isinstance(base, str):
+                raise InputFileError(None, "base", "must be a scenario name or a file path")
+            if depth >= 8:
+                raise InputFileError(None, "base", "scenarios derive from each other in a loop")
+            if here is not None and _looks_like_path(base):
+                base = here / base
+            doc.setdefault("name", stem)
+            doc = _merge(_load(base, depth + 1).to_dict(), doc)
+        return scenario_from_dict(doc, default_name=stem)
+
+
+def load_scenario(name_or_path) -> Scenario:
+    """A built-in scenario by name, or a scenario TOML file by path.
+
+    A file may start from another scenario with ``base = "paper000"`` (a built-in name or
+    a path relative to the file): its tables are merged key by key onto the base's, arrays
+    (such as ``segments``) replace the base's.
+
+    Raises
+    ------
+    UnknownNameError
+        Not a built-in name (and not a path).
+    DataMissingError
+        The file does not exist.
+    InputFileError
+        The file is not valid TOML or not a valid scenario (file, key path, problem).
+    """
+    return _load(name_or_path)
