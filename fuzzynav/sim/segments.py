@@ -228,3 +228,24 @@ class Profile:
         return {"speed": s, "speed_dot": sd, "heading": h, "heading_dot": hd,
                 "pitch": p, "pitch_dot": pd, "roll": np.arctan(a),
                 "roll_dot": ad / (1.0 + a * a)}
+
+
+def manoeuvring_profile(duration_s: float, speed_mps: float = 15.0, bank: bool = True):
+    """A repeatable 3-D manoeuvring profile of about ``duration_s`` seconds.
+
+    Rest, acceleration to ``speed_mps``, then repeated blocks of banked turns, a climb,
+    S-turns, a speed change, a figure-eight and a dive; braking to rest at the end, padded
+    with rest to the requested duration.  Used by tests and benchmarks.
+    """
+    block = [Segment("turn", 30, turn_deg=90, bank=bank), Segment("climb", 60, pitch_deg=5),
+             Segment("s-turns", 80, turn_deg=45, n_turns=4),
+             Segment("accelerate", 10, speed_change_mps=5), Segment("figure8", 120, bank=bank),
+             Segment("climb", 40, pitch_deg=-4), Segment("accelerate", 10, speed_change_mps=-5),
+             Segment("cruise", 30)]
+    block_s = sum(s.duration_s for s in block)
+    head = [Segment("static", 60), Segment("accelerate", 20, speed_change_mps=speed_mps)]
+    tail = [Segment("accelerate", 20, speed_change_mps=-speed_mps)]
+    n_blocks = max(0, int((duration_s - 100.0) // block_s))
+    segs = head + block * n_blocks + tail
+    rest = duration_s - sum(s.duration_s for s in segs)
+    return segs + ([Segment("static", rest)] if rest > 0 else [])

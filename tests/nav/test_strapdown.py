@@ -2,25 +2,14 @@
 import numpy as np
 
 from fuzzynav.nav import attitude, earth, strapdown
+from fuzzynav.sim.segments import manoeuvring_profile
 from fuzzynav.sim.trajectory import Segment, generate
 
 START = np.array([np.deg2rad(38.0178), np.deg2rad(112.4447), 825.0])
 
 
-def manoeuvring_hour():
-    """About 1 h of turns, banked turns, climbs, dives, S-turns and figure-eights."""
-    block = [Segment("turn", 30, turn_deg=90, bank=True), Segment("climb", 60, pitch_deg=5),
-             Segment("s-turns", 80, turn_deg=45, n_turns=4),
-             Segment("accelerate", 10, speed_change_mps=5), Segment("figure8", 120, bank=True),
-             Segment("climb", 40, pitch_deg=-4), Segment("accelerate", 10, speed_change_mps=-5),
-             Segment("cruise", 30)]
-    segs = [Segment("static", 60), Segment("accelerate", 20, speed_change_mps=15)] + block * 9
-    segs += [Segment("accelerate", 20, speed_change_mps=-15), Segment("static", 80)]
-    return segs
-
-
 def test_one_hour_replay_stays_on_truth():
-    tr = generate(START, manoeuvring_hour(), 100.0, 0.0, 0.3)
+    tr = generate(START, manoeuvring_profile(3600.0), 100.0, 0.0, 0.3)
     assert tr.duration_s >= 3600.0
     out = strapdown.integrate(tr.lla[0], tr.vel_n[0], tr.q_bn[0], tr.dtheta_b, tr.dv_b,
                               0.01, stride=100)

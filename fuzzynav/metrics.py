@@ -1,0 +1,148 @@
+"""Navigation errors against truth, RMS metrics and Monte-Carlo statistics.
+
+Metric names carry their unit: ``rms_pos_e_m``, ``rms_vel_n_mps``, ``rms_heading_deg``, ...
+Aggregates over Monte-Carlo runs report the mean with a 95 % Student-t confidence interval;
+comparisons between two filters on the same seeds are paired (bootstrap over seeds).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+from fuzzynav.nav import attitude, earth
+
+AXES = ("e", "n", "u")
+ATT_NAMES = ("pitch", "roll", "heading")
+
+
+@dataclass(frozen=True)
+class NavErrors:
+    """Errors (estimate minus truth) at common epochs.
+
+    Attributes
+    ----------
+    time_s : (K,)
+    pos_m : (K, 3) ENU position error [m].
+    vel_mps : (K, 3) ENU velocity error [m/s] (NaN when the truth has none).
+    att_rad : (K, 3) pitch, roll, heading errors [rad], wrapped (NaN without attitude truth).
+    """
+
+    time_s: np.ndarray
+    pos_m: np.ndarray
+    vel_mps: np.ndarray
+    att_rad: np.ndarray
+
+
+def _enu_difference(lla, lla_ref):
+    """ENU difference of nearby geodetic points, row by row (first order in the offset)."""
+    d = lla - lla_ref
+    return earth.delta_lla_to_enu(d[:, 0], d[:, 1], d[:, 2], lla_ref[:, 0], lla_ref[:, 2])
+
+
+def errors_vs_trajectory(result, truth) -> NavErrors:
+    """Errors of a filter result against a simulated :class:`Trajectory` (same clock)."""
+    k = np.clip(np.searchsorted(truth.time_s, result.time_s - 1e-9), 0, truth.time_s.size - 1)
+    if np.abs(truth.time_s[k] - result.time_s).max() > 1e-6:
+        raise ValueError("result epochs are not on the truth's sample grid")
+    att_err = attitude.euler_error(result.att, truth.att[k])
+    return NavErrors(result.time_s, _enu_difference(result.lla, truth.lla[k]),
+                     result.vel_n - truth.vel_n[k], att_err)
+
+
+def errors_vs_reference(result, ref_time_s, ref_lla, ref_vel_n=None) -> NavErrors:
+    """Errors against a reference trajectory sampled at other times (e.g. RTK fixes).
+
+    The filter solution is interpolated linearly to the reference epochs inside its span.
+    """
+    t = np.asarray(ref_time_s, float)
+    inside = (t >= result.time_s[0]) & (t <= result.time_s[-1])
+    t = t[inside]
+    lla = np.column_stack([np.interp(t, result.time_s, result.lla[:, i]) for i in range(3)])
+    vel = np.column_stack([np.interp(t, result.time_s, result.vel_n[:, i]) for i in range(3)])
+    pos_err = _enu_difference(lla, np.asarray(ref_lla, float)[inside])
+    vel_err = vel - np.asarray(ref_vel_n, float)[inside] if ref_vel_n is not None \
+        else np.full_like(vel, np.nan)
+    return NavErrors(t, pos_err, vel_err, np.full_like(vel, np.nan))
+
+
+def rms_metrics(err: NavErrors, t_start_s: float = 0.0) -> dict:
+    """RMS of every axis after ``t_start_s`` (skips the initial convergence).
+
+    Returns a dict with ``rms_pos_{e,n,u}_m``, ``rms_pos_h_m`` (horizontal),
+    ``rms_pos_m`` (3-D), ``rms_vel_{e,n,u}_mps``, ``rms_vel_mps``,
+    ``rms_{pitch,roll,heading}_deg``, ``rms_att_deg`` (RMS over the three angles) and
+    ``max_pos_h_m``.
+    """
+    sel = err.time_s >= t_start_s
+    p, v, a = err.pos_m[sel], err.vel_mps[sel], np.rad2deg(err.att_rad[sel])
+
+    def rms(x):
+        return float(np.sqrt(np.mean(np.square(x)))) if x.size else float("nan")
+
+    out = {f"rms_pos_{ax}_m": rms(p[:, i]) for i, ax in enumerate(AXES)}
+    out["rms_pos_h_m"] = rms(np.hypot(p[:, 0], p[:, 1]))
+    out["rms_pos_m"] = rms(np.linalg.norm(p, axis=1))
+    out["max_pos_h_m"] = float(np.max(np.hypot(p[:, 0], p[:, 1]))) if p.size else float("nan")
+    out.update({f"rms_vel_{ax}_mps": rms(v[:, i]) for i, ax in enumerate(AXES)})
+    out["rms_vel_mps"] = rms(np.linalg.norm(v, axis=1))
+    out.update({f"rms_{nm}_deg": rms(a[:, i]) for i, nm in enumerate(ATT_NAMES)})
+    out["rms_att_deg"] = rms(np.linalg.norm(a, axis=1))
+    return out
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """Mean of a metric over runs with its 95 % confidence interval."""
+
+    mean: float
+    lo: float
+    hi: float
+    n: int
+
+    def __str__(self) -> str:
+        if self.n < 2:
+            return f"{self.mean:.4g}"
+        return f"{self.mean:.4g} ± {self.half_width:.2g}"
+
+    @property
+    def half_width(self) -> float:
+        """Half width of the interval."""
+        return 0.5 * (self.hi - self.lo)
+
+
+def mean_ci(values, level: float = 0.95) -> Estimate:
+    """Mean and Student-t confidence interval of independent per-run values."""
+    x = np.asarray(values, float)
+    x = x[np.isfinite(x)]
+    if x.size == 0:
+        return Estimate(float("nan"), float("nan"), float("nan"), 0)
+    m = float(x.mean())
+    if x.size < 2:
+        return Estimate(m, m, m, 1)
+    h = stats.t.ppf(0.5 + level / 2, x.size - 1) * x.std(ddof=1) / np.sqrt(x.size)
+    return Estimate(m, m - h, m + h, int(x.size))
+
+
+def improvement_ci(baseline, candidate, level: float = 0.95, n_boot: int = 2000,
+                   seed: int = 0) -> Estimate:
+    """Improvement [%] of ``candidate`` over ``baseline``: ``100 (1 - mean(c) / mean(b))``.
+
+    Values are paired per run (same seeds); the interval is a percentile bootstrap over runs.
+    Positive means the candidate's error is smaller.
+    """
+    b = np.asarray(baseline, float)
+    c = np.asarray(candidate, float)
+    ok = np.isfinite(b) & np.isfinite(c)
+    b, c = b[ok], c[ok]
+    if b.size == 0 or b.mean() == 0:
+        return Estimate(float("nan"), float("nan"), float("nan"), 0)
+    point = 100.0 * (1.0 - c.mean() / b.mean())
+    if b.size < 2:
+        return Estimate(point, point, point, 1)
+    rng = np.random.default_rng(seed)
+    idx = rng.integers(0, b.size, (n_boot, b.size))
+    boot = 100.0 * (1.0 - c[idx].mean(1) / b[idx].mean(1))
+    lo, hi = np.percentile(boot, [50 * (1 - level), 50 * (1 + level)])
+    return Estimate(point, float(lo), float(hi), int(b.size))
