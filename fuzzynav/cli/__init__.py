@@ -13,7 +13,7 @@ import sys
 from fuzzynav.errors import FuzzynavError
 
 #: modules under ``fuzzynav.cli`` that contribute sub-commands, in help order
-COMMAND_MODULES = ("fis",)
+COMMAND_MODULES = ("fis", "nav")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,153 @@
+"""``fuzzynav scenarios`` and ``fuzzynav run``: simulate or load data, run a filter, score it."""
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+from fuzzynav.errors import FuzzynavError
+
+
+def default_cache_dir() -> Path:
+    """Simulation cache: ``$FUZZYNAV_CACHE`` or ``~/.cache/fuzzynav``."""
+    return Path(os.environ.get("FUZZYNAV_CACHE", Path.home() / ".cache" / "fuzzynav"))
+
+
+def register(sub) -> None:
+    p = sub.add_parser("scenarios", help="list built-in scenarios, data sources and filters")
+    p.set_defaults(func=_cmd_scenarios)
+    p = sub.add_parser("run", help="run one filter on a scenario (or a recording) and print RMS")
+    add_source_arguments(p)
+    p.add_argument("--filter", default="ekf", help="named filter (see `fuzzynav scenarios`)")
+    add_common_arguments(p)
+    p.set_defaults(func=_cmd_run)
+
+
+def add_source_arguments(p) -> None:
+    p.add_argument("scenario", nargs="?", help="built-in scenario name or scenario TOML file")
+    p.add_argument("--data", metavar="KIND:DIR",
+                   help="a recording instead of a scenario, e.g. rtklib:../shared/datasets/rtklib-drive")
+
+
+def add_common_arguments(p) -> None:
+    p.add_argument("--rules", action="append", metavar="FILE",
+                   help="fuzzy rule file(s) for fuzzy filters (repeatable)")
+    p.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
+    p.add_argument("--mc", type=int, default=1, metavar="K", help="Monte-Carlo runs (seeds)")
+    p.add_argument("--t-start", type=float, default=0.0, metavar="S",
+                   help="skip the first S seconds in the RMS (initial convergence)")
+    p.add_argument("--json", action="store_true", help="print machine-readable JSON")
+    p.add_argument("--plot", metavar="DIR", help="write error-curve figures into DIR")
+    p.add_argument("--cache", metavar="DIR", help="simulation cache (default: %(default)s)",
+                   default=str(default_cache_dir()))
+
+
+def _cmd_scenarios(args) -> int:
+    from fuzzynav.filters.named import list_filters
+    from fuzzynav.sim.scenario import list_scenarios, load_scenario
+
+    print("built-in scenarios:")
+    for name in list_scenarios():
+        scn = load_scenario(name)
+        print(f"  {name:<24} {scn.duration_s:7.0f} s  {scn.description}")
+    print("\ndata sources (--data KIND:DIR):")
+    for kind, desc in data_sources().items():
+        print(f"  {kind:<24} {desc}")
+    print("\nfilters (--filter NAME):")
+    for f in list_filters():
+        print(f"  {f.name:<24} {f.description}")
+    return 0
+
+
+def data_sources() -> dict:
+    """Recording kinds usable with ``--data``."""
+    try:
+        from fuzzynav.realdata import SOURCES
+    except ImportError:  # pragma: no cover - real-data support not installed
+        return {}
+    return {k: v.description for k, v in SOURCES.items()}
+
+
+def filter_options(args) -> dict:
+    """Filter options from the command line."""
+    opts = {}
+    if args.rules:
+        opts["rules"] = list(args.rules)
+    return opts
+
+
+def _cmd_run(args) -> int:
+    if (args.scenario is None) == (args.data is None):
+        raise FuzzynavError("give either a SCENARIO or --data KIND:DIR")
+    if args.mc < 1:
+        raise FuzzynavError(f"--mc must be >= 1, got {args.mc}")
+    if args.data:
+        from fuzzynav.realdata import run_recording
+
+        return run_recording(args.data, args.filter, filter_options(args), args)
+    return run_scenario_filters(args, [args.filter], baseline=None)
+
+
+def run_scenario_filters(args, filters, baseline=None, claims=None, claim_labels=()) -> int:
+    """Simulate, run ``filters`` on ``args.mc`` seeds, print the table, plot if asked."""
+    from fuzzynav.experiment import monte_carlo
+    from fuzzynav.report import comparison_rows, render
+    from fuzzynav.sim.scenario import load_scenario
+
+    scn = load_scenario(args.scenario)
+    seeds = list(range(args.seed, args.seed + args.mc))
+    df = monte_carlo(scn, filters, seeds, filter_options(args), args.cache, args.t_start,
+                     progress=not args.json and args.mc > 1)
+    if args.json:
+        print(json.dumps(_json_summary(df, scn, filters, seeds), indent=2))
+    else:
+        print(f"scenario {scn.name} ({scn.duration_s:.0f} s), seeds {seeds[0]}..{seeds[-1]}"
+              + (" — mean ± 95 % CI over seeds" if len(seeds) > 1 else ""))
+        header = ["RMS error", *filters]
+        if baseline is not None:
+            header += [f"{f} vs {baseline}" for f in filters if f != baseline]
+        header += list(claim_labels)
+        print(render(header, comparison_rows(df, filters, baseline, claims=claims)))
+        bad = df[df["completed"] < 1]
+        if len(bad):
+            print(f"warning: {len(bad)} run(s) stopped early (covariance lost)")
+    if args.plot:
+        _plot_first_seed(scn, filters, seeds[0], args)
+    return 0
+
+
+def _json_summary(df, scn, filters, seeds) -> dict:
+    from fuzzynav.metrics import mean_ci
+
+    metrics = [c for c in df.columns if c.startswith(("rms_", "max_"))]
+    out = {"scenario": scn.name, "seeds": seeds, "filters": {}}
+    for f in filters:
+        sub = df[df["filter"] == f]
+        out["filters"][f] = {m: {"mean": mean_ci(sub[m]).mean, "ci95": [mean_ci(sub[m]).lo,
+                                                                          mean_ci(sub[m]).hi],
+                                 "values": sub[m].tolist()} for m in metrics}
+    return out
+
+
+def _plot_first_seed(scn, filters, seed, args) -> None:
+    from fuzzynav import plots
+    from fuzzynav.experiment import run_on_log
+    from fuzzynav.metrics import errors_vs_trajectory
+    from fuzzynav.sim.log import simulate
+
+    log = simulate(scn, seed, args.cache)
+    outs = {f: run_on_log(log, f, filter_options(args)) for f in filters}
+    errs = {f: errors_vs_trajectory(o.result, log.truth) for f, o in outs.items()}
+    out_dir = Path(args.plot)
+    path = plots.save(plots.error_curves(errs, f"{scn.name}, seed {seed}"),
+                      out_dir / f"{scn.name}_errors.png")
+    print(f"wrote {path}")
+    series = {}
+    for f, o in outs.items():
+        for sensor, ev in o.result.events.items():
+            for name in ev.diag_names:
+                series[f"{f} {sensor} {name}"] = (ev.time_s, ev.diagnostic(name))
+    if series:
+        path = plots.save(plots.adaptation_curves(series, "adaptation"),
+                          out_dir / f"{scn.name}_adaptation.png")
+        print(f"wrote {path}")

@@ -1,0 +1,126 @@
+"""Filters selectable by name (``--filter ekf``): a configuration plus adaptation policies.
+
+A named filter is a function of a :class:`FilterContext` (the nominal IMU noise, the sensor
+streams and user options such as ``rules``) returning a :class:`FilterSetup`.  Register one
+with :func:`register_filter`; the CLI, the experiment runner and studies look them up here.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from fuzzynav import units
+from fuzzynav.errors import UnknownNameError
+from fuzzynav.filters.config import FilterConfig
+
+
+@dataclass(frozen=True)
+class FilterContext:
+    """What a named filter may look at to configure itself.
+
+    Attributes
+    ----------
+    imu_noise : object or None
+        Nominal IMU noise in SI (:class:`fuzzynav.sim.imu.ImuNoise`); None = defaults.
+    sensors : dict
+        Sensor name -> SensorData of the run.
+    options : dict
+        User options (e.g. ``rules``: a rule file or list of them, ``init_att_sigma_deg``).
+    """
+
+    imu_noise: object = None
+    sensors: dict = field(default_factory=dict)
+    options: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class FilterSetup:
+    """Everything :func:`fuzzynav.filters.runner.run_filter` needs besides the data."""
+
+    config: FilterConfig
+    adapters: dict = field(default_factory=dict)
+    sensor_options: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class NamedFilter:
+    name: str
+    description: str
+    make: Callable
+
+
+FILTERS: dict[str, NamedFilter] = {}
+BUILTIN_MODULES: tuple = ()
+
+
+def register_filter(name: str, description: str):
+    """Decorator registering ``make(context) -> FilterSetup`` under ``name``."""
+
+    def deco(fn):
+        FILTERS[name] = NamedFilter(name, description, fn)
+        return fn
+
+    return deco
+
+
+def _load_builtins():
+    import importlib
+
+    for mod in BUILTIN_MODULES:
+        importlib.import_module(f"fuzzynav.filters.{mod}")
+
+
+def get_filter(name: str) -> NamedFilter:
+    """The named filter ``name`` (clear error listing the known names)."""
+    _load_builtins()
+    try:
+        return FILTERS[name]
+    except KeyError:
+        raise UnknownNameError("filter", name, FILTERS) from None
+
+
+def list_filters() -> list[NamedFilter]:
+    """All registered named filters, sorted by name."""
+    _load_builtins()
+    return [FILTERS[k] for k in sorted(FILTERS)]
+
+
+def config_from_imu(noise, **overrides) -> FilterConfig:
+    """A 15-state configuration matched to nominal IMU noise.
+
+    Biases are random constants whose prior sigma covers the constant bias, the turn-on
+    spread and the bias instability; the instability's Gauss-Markov driving noise
+    (2 sigma^2 / tau) becomes the random walk that lets the estimate follow it.
+    """
+    if noise is None:
+        return FilterConfig(**overrides)
+    g, a = noise.gyro, noise.accel
+
+    def prior(t):
+        return math.sqrt(float(np.mean(np.square(t.bias))) + t.bias_sigma**2 + t.gm_sigma**2)
+
+    def walk(t):
+        return math.sqrt(t.rrw**2 + (2.0 * t.gm_sigma**2 / t.gm_tau_s if t.gm_sigma else 0.0))
+
+    cfg = dict(gyro_sigma_dph=(max(prior(g) / units.DPH, 1e-3),),
+               accel_sigma_ug=(max(prior(a) / units.UG, 1e-1),),
+               gyro_rw_dph_psh=(walk(g) / units.DPH_PSH,),
+               accel_rw_ug_psqrts=(walk(a) / units.UG,),
+               arw_dpsh=max(g.white / units.DPSH, 1e-4),
+               vrw_ug_psqrthz=max(a.white / units.UG, 1e-2))
+    cfg.update(overrides)
+    return FilterConfig(**cfg)
+
+
+def _config_overrides(options) -> dict:
+    keys = ("init_att_sigma_deg", "init_vel_sigma_mps", "init_pos_sigma_m", "gate_probability",
+            "max_prop_dt_s", "out_rate_hz")
+    return {k: options[k] for k in keys if k in options}
+
+
+@register_filter("ekf", "EKF with the nominal noise the sensors and the IMU datasheet claim")
+def _ekf(ctx: FilterContext) -> FilterSetup:
+    return FilterSetup(config_from_imu(ctx.imu_noise, **_config_overrides(ctx.options)))
