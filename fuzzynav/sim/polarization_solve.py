@@ -30,6 +30,8 @@ import numpy as np
 
 _HALF_PI = 0.5 * math.pi
 _TWO_PI = 2.0 * math.pi
+#: how far (sine of elevation) a noisy sun direction may miss the reachable elevations
+_FOLD_SLACK = 0.05
 
 
 @nb.njit(cache=True)
@@ -272,14 +274,18 @@ def _image_e_vectors(aops, views_b):
 
 @nb.njit(cache=True)
 def _pitch_heading_candidates(s_b, sun_n, roll):
-    """(pitch, heading) pairs with ``C_bn(pitch, roll, heading) s_b = sun_n``, up to 2."""
+    """(pitch, heading) pairs with ``C_bn(pitch, roll, heading) s_b = sun_n``, up to 2.
+
+    Near the fold (sun abeam) noise can lift the sun's elevation just out of reach of any
+    pitch; up to ``_FOLD_SLACK`` the fold point itself is returned and Gauss-Newton refines.
+    """
     out = np.full((2, 2), np.nan)
     ux, uy, uz = _rot_y(roll, s_b[0], s_b[1], s_b[2])
     rho = math.hypot(uy, uz)
-    if rho < 1e-12 or abs(sun_n[2]) > rho:
+    if rho < 1e-12 or abs(sun_n[2]) > rho + _FOLD_SLACK:
         return out
     p0 = math.atan2(uy, uz)
-    d = math.acos(sun_n[2] / rho)
+    d = math.acos(min(1.0, max(-1.0, sun_n[2] / rho)))
     for j in range(2):
         p = _wrap(p0 + d if j == 0 else p0 - d)
         if abs(p) > _HALF_PI:
@@ -357,30 +363,51 @@ def imaging_pitch_heading(aops, views_b, sun_n, roll, pitch_prior, heading_prior
 
 
 @nb.njit(cache=True)
+def _normal_equations(aops, views_b, sun_n, roll, p, h):
+    """``J^T J`` (3 entries), ``J^T r`` and the cost ``r^T r`` of the AoP residuals."""
+    n00 = n01 = n11 = g0 = g1 = cost = 0.0
+    for i in range(aops.shape[0]):
+        if np.isnan(aops[i]):
+            continue
+        a, dp, _, dh = aop_euler_partials(views_b[i], sun_n, p, roll, h)
+        r = _fold(aops[i] - a)
+        n00 += dp * dp
+        n01 += dp * dh
+        n11 += dh * dh
+        g0 += dp * r
+        g1 += dh * r
+        cost += r * r
+    return n00, n01, n11, g0, g1, cost
+
+
+@nb.njit(cache=True)
 def _gauss_newton(aops, views_b, sun_n, roll, p, h):
-    """Least-squares (pitch, heading) of the AoP residuals; returns J^T J at the end."""
-    jtj = np.zeros((2, 2))
-    for _ in range(30):
-        jtj[:, :] = 0.0
-        g0 = g1 = 0.0
-        for i in range(aops.shape[0]):
-            if np.isnan(aops[i]):
-                continue
-            a, dp, _, dh = aop_euler_partials(views_b[i], sun_n, p, roll, h)
-            r = _fold(aops[i] - a)
-            jtj[0, 0] += dp * dp
-            jtj[0, 1] += dp * dh
-            jtj[1, 1] += dh * dh
-            g0 += dp * r
-            g1 += dh * r
-        jtj[1, 0] = jtj[0, 1]
-        det = jtj[0, 0] * jtj[1, 1] - jtj[0, 1] ** 2
+    """Least-squares (pitch, heading) of the AoP residuals; returns J^T J at the end.
+
+    Gauss-Newton with Levenberg damping: the start can sit on the fold where J^T J is
+    singular (noisy sun abeam); the damping steps off it and fades as the fit converges.
+    """
+    n00, n01, n11, g0, g1, cost = _normal_equations(aops, views_b, sun_n, roll, p, h)
+    lam = 1e-9
+    for _ in range(200):
+        damp = lam * 0.5 * (n00 + n11)
+        d00, d11 = n00 + damp, n11 + damp
+        det = d00 * d11 - n01 * n01
         if not det > 0.0:
             break
-        step_p = (jtj[1, 1] * g0 - jtj[0, 1] * g1) / det
-        step_h = (jtj[0, 0] * g1 - jtj[0, 1] * g0) / det
-        p += step_p
-        h += step_h
-        if abs(step_p) + abs(step_h) < 1e-13:
-            break
+        step_p = (d11 * g0 - n01 * g1) / det
+        step_h = (d00 * g1 - n01 * g0) / det
+        trial = _normal_equations(aops, views_b, sun_n, roll, p + step_p, h + step_h)
+        if trial[5] <= cost:
+            p, h = p + step_p, h + step_h
+            n00, n01, n11, g0, g1, cost = trial
+            lam = max(lam * 0.1, 1e-12)
+            if abs(step_p) + abs(step_h) < 1e-13:
+                break
+        else:
+            lam *= 10.0
+            if lam > 1e10:
+                break
+    jtj = np.empty((2, 2))
+    jtj[0, 0], jtj[0, 1], jtj[1, 0], jtj[1, 1] = n00, n01, n01, n11
     return p, h, jtj

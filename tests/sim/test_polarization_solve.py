@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from fuzzynav.nav.attitude import euler_to_dcm, rotvec_to_dcm
+from fuzzynav.nav.attitude import dcm_to_euler, euler_to_dcm, rotvec_to_dcm
 from fuzzynav.sim import polarization_solve as ps
 from fuzzynav.sim import skylight as sk
 
@@ -145,6 +145,28 @@ def test_aop_attitude_jacobian_matches_the_attitude_error_definition():
                 ap = ps.view_aop(v, (rotvec_to_dcm(-phi) @ C).T @ sun_n)
                 am = ps.view_aop(v, (rotvec_to_dcm(phi) @ C).T @ sun_n)
                 assert sk.fold_half_pi(ap - am) / (2 * eps) == pytest.approx(H[i], abs=1e-6)
+
+
+def test_documented_heading_difference_model():
+    # docs/polarization.md: z = psi_ins - psi_pol = H phi for a noise-free AoP, with psi_pol
+    # converted at the INS tilt and H from the Euler-error rows and the tilt partials
+    rng = np.random.default_rng(14)
+    for pitch, roll, heading, sun_n in _cases(200, 15, np.radians(20.0), (5.0, 70.0)):
+        C = euler_to_dcm([pitch, roll, heading])
+        aop = ps.zenith_aop(C, sun_n)
+        _, dh = ps.heading_from_zenith_aop(aop, sun_n, pitch, roll, heading)
+        if abs(dh) > 10.0:
+            continue
+        phi = 1e-7 * rng.standard_normal(3)
+        p_i, r_i, h_i = dcm_to_euler(rotvec_to_dcm(-phi) @ C)
+        h_pol, _ = ps.heading_from_zenith_aop(aop, sun_n, p_i, r_i, h_i)
+        z = _wrap(h_i - h_pol)
+        sh, ch, t = np.sin(heading), np.cos(heading), np.tan(pitch)
+        d_pitch = sh * phi[1] - ch * phi[0]
+        d_roll = -(sh * phi[0] + ch * phi[1]) / np.cos(pitch)
+        d_head = phi[2] - t * (sh * phi[0] + ch * phi[1])
+        dp, dr = ps.zenith_heading_tilt_partials(sun_n, pitch, roll, heading)
+        assert z == pytest.approx(d_head - dp * d_pitch - dr * d_roll, rel=1e-4, abs=1e-12)
 
 
 def test_no_root_gives_nan():
