@@ -50,7 +50,7 @@ def _load_builtin_kinds():
 
 
 #: modules of this package that register built-in sensor kinds
-BUILTIN_MODULES: tuple[str, ...] = ("gnss",)
+BUILTIN_MODULES: tuple[str, ...] = ("gnss", "polarization")
 
 
 @dataclass(frozen=True)
