@@ -74,6 +74,8 @@ def _aop_and_gradient(v, sx, sy, sz):
     num = sx - v[0] * c
     den = v[1] * sz - v[2] * sy
     q = num * num + den * den
+    if q == 0.0:  # sun on the view axis: unpolarized, no angle
+        return np.nan, np.nan, np.nan, np.nan
     # d num/ds = e_x - v_x v ; d den/ds = (0, -v_z, v_y)
     g0 = (den * (1.0 - v[0] * v[0])) / q
     g1 = (den * (-v[0] * v[1]) + num * v[2]) / q
@@ -230,7 +232,7 @@ def heading_from_zenith_aop(aop, sun_n, pitch, roll, heading_prior):
     h = h1 if abs(_wrap(h1 - heading_prior)) <= abs(_wrap(h2 - heading_prior)) else h2
     v = np.array([0.0, 0.0, 1.0])
     dh = aop_euler_partials(v, sun_n, pitch, roll, h)[3]
-    return h, 1.0 / dh
+    return h, (1.0 / dh if dh != 0.0 else np.inf)
 
 
 @nb.njit(cache=True)
@@ -248,6 +250,8 @@ def zenith_heading_tilt_partials(sun_n, pitch, roll, heading):
     """
     v = np.array([0.0, 0.0, 1.0])
     _, dp, dr, dh = aop_euler_partials(v, sun_n, pitch, roll, heading)
+    if dh == 0.0:  # double root: the heading does not follow the tilt smoothly
+        return np.inf, np.inf
     return -dp / dh, -dr / dh
 
 

@@ -178,6 +178,8 @@ def test_no_root_gives_nan():
     assert np.isfinite(h_level)
     assert np.isnan(h) and np.isnan(dh)
     assert np.isnan(ps.zenith_aop(np.eye(3), ZENITH))
+    aop, H = ps.aop_attitude_jacobian(np.eye(3), ZENITH, ZENITH)
+    assert np.isnan(aop) and np.isnan(H).all()
 
 
 def _imaging(pitch, roll, heading, sun_n, views=VIEWS):
