@@ -21,5 +21,9 @@ try:  # the filter loop dispatches sensors through numba first-class functions
     from numba.core.errors import NumbaExperimentalFeatureWarning as _NEFW
 
     _warnings.filterwarnings("ignore", category=_NEFW)
+    from numba.core.errors import NumbaPerformanceWarning as _NPW
+
+    # contiguity hints from kernels called with generic 1-D views; measured, not a concern
+    _warnings.filterwarnings("ignore", category=_NPW)
 except ImportError:  # pragma: no cover - numba is a hard dependency
     pass

@@ -1,0 +1,45 @@
+"""Fuzzy exponential weighting (paper 000): a fuzzy system maps the degree of mismatch to alpha.
+
+At each epoch of the bound sensor, the windowed innovation statistics of the channels named
+in the rule file's binding (e.g. DoM of ``pos`` and ``vel``) feed the fuzzy system; its output
+``alpha`` (>= 1) weights the update as the paper writes it::
+
+    P- = alpha^2 Phi P Phi^T + Gamma Q Gamma^T,    K = P- H^T (H P- H^T + R / alpha^2)^-1
+
+(``alpha^2`` multiplies the part of ``P-`` propagated since the last update; the process
+noise accumulated since then is not weighted).  Outputs below 1, and NaN (no statistic),
+are replaced by 1 (no weighting).  Logged per epoch: ``alpha`` and the fuzzy inputs.
+"""
+from __future__ import annotations
+
+import numba as nb
+
+from fuzzynav.filters.adaptation import ADAPT_SIG, register
+from fuzzynav.filters.adaptation.fuzzy_common import IP_OUT, evaluate
+from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
+
+
+@nb.njit(ADAPT_SIG, cache=True)
+def alpha_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
+    status, x, y = evaluate(fp, ip, st, r, HPH, R, chan, m)
+    alpha = y[ip[IP_OUT]]
+    if not alpha >= 1.0:
+        alpha = 1.0
+    out[0] = alpha * alpha
+    out[1] = 1.0
+    for i in range(m):
+        out[2 + i] = 1.0 / (alpha * alpha)
+    diag[0] = alpha
+    for j in range(min(x.size, diag.size - 1)):
+        diag[1 + j] = x[j]
+    return status
+
+
+@register
+class FuzzyExponentialWeighting(FuzzyPolicy):
+    """Paper 000's fuzzy adaptive (exponentially weighted) Kalman filter, per sensor."""
+
+    name = "exponential-weighting"
+    kernel = alpha_kernel
+    role = "alpha"
+    diag_prefix = ("alpha",)

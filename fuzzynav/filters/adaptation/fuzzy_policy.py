@@ -1,0 +1,46 @@
+"""Base class of the fuzzy adaptation policies: a rule file bound to a sensor stream."""
+from __future__ import annotations
+
+from fuzzynav.filters.adaptation import Adapter
+from fuzzynav.filters.adaptation.fuzzy_common import channels_of, check_binding, pack
+
+
+class FuzzyPolicy(Adapter):
+    """A fuzzy system driving an adaptation, configured by its rule file's ``binding``.
+
+    Parameters
+    ----------
+    fis : fuzzynav.fuzzy.FuzzySystem
+        The rule set; its ``binding.adapter`` must equal the policy's ``name``.
+    source : str, optional
+        Where it came from (named in error messages).
+    """
+
+    role = ""
+    diag_prefix: tuple = ()
+    floats: tuple = ()
+
+    def __init__(self, fis, source=None):
+        self.fis = fis
+        self.source = source
+        self.binding = check_binding(fis, source, self.name)
+        self.diag_names = tuple(self.diag_prefix) + tuple(fis.input_names)
+
+    @classmethod
+    def from_file(cls, path):
+        """Load a rule file and bind it."""
+        from fuzzynav.fuzzy import load_fis
+
+        return cls(load_fis(path), str(path))
+
+    @property
+    def channels(self) -> tuple:
+        """Measurement channels the rule file reads."""
+        return channels_of(self.fis)
+
+    def arrays(self, model):
+        return pack(self.fis, self.source, self.binding, model, self.role, self.policy_floats())
+
+    def policy_floats(self) -> tuple:
+        """Extra floats of the policy (stored in ``fp[1:]``)."""
+        return tuple(self.floats)

@@ -1,0 +1,54 @@
+"""Fuzzy R-scaling (paper 002): ``R(k) = t(k) R(k-1)`` with ``t(k) = FIS(ROR(k))``.
+
+``ROR(k) = tr(C_r) / tr(D_r)``, the windowed actual innovation covariance over the
+theoretical one ``D_r = H P- H^T + R(k-1)`` (``R(k-1)`` the already adapted variance).  The
+running factor ``s = R(k) / R_nominal`` starts at 1 and is kept within
+``[1e-3, 1e3]`` so a long run of bad epochs cannot drive it to zero or infinity.  Logged per
+epoch: the running factor ``r_scale``, the step ``t`` and the fuzzy inputs.
+"""
+from __future__ import annotations
+
+import numba as nb
+
+from fuzzynav.filters.adaptation import ADAPT_SIG, register
+from fuzzynav.filters.adaptation.fuzzy_common import IP_OUT, evaluate, scalars
+from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
+
+S_MIN, S_MAX = 1e-3, 1e3
+
+
+@nb.njit(ADAPT_SIG, cache=True)
+def rscale_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
+    sc = scalars(st)
+    if sc[0] == 0.0:
+        sc[0] = 1.0
+    s = sc[0]
+    for i in range(m):  # the statistics see R(k-1), the running adapted variance
+        R[i] *= s
+    status, x, y = evaluate(fp, ip, st, r, HPH, R, chan, m)
+    for i in range(m):
+        R[i] /= s
+    t = y[ip[IP_OUT]]
+    if not t > 0.0:
+        t = 1.0
+    s = min(max(s * t, S_MIN), S_MAX)
+    sc[0] = s
+    out[0] = 1.0
+    out[1] = 1.0
+    for i in range(m):
+        out[2 + i] = s
+    diag[0] = s
+    diag[1] = t
+    for j in range(min(x.size, diag.size - 2)):
+        diag[2 + j] = x[j]
+    return status
+
+
+@register
+class FuzzyRScaling(FuzzyPolicy):
+    """Paper 002's fuzzy adaptive measurement-noise scaling."""
+
+    name = "r-scaling"
+    kernel = rscale_kernel
+    role = "r_scale"
+    diag_prefix = ("r_scale", "t")

@@ -1,0 +1,83 @@
+"""Windowed innovation statistics shared by adaptation policies (numba).
+
+A window keeps, for the last ``N`` epochs, the sum of squared residuals of each channel
+and of all rows together (column ``C``).  Layout inside a policy's state array ``st``
+starting at ``off``::
+
+    st[off]                      number of epochs stored (<= N)
+    st[off + 1]                  index of the next slot
+    st[off + 2 : off + 2 + N (C + 1)]   ring buffer, one row of C + 1 sums per epoch
+
+Statistics of a channel ``c`` (``c = -1`` for all rows) at the current epoch:
+
+* ``trace_actual`` — window mean of the channel's sum of squared residuals, the trace of
+  the measured innovation covariance ``C_r = mean(r r^T)``;
+* ``trace_theory`` — the channel's trace of ``P_z = H P- H^T + R`` now;
+* ``dom`` (relative trace) — ``(tr P_z - tr C_r) / tr P_z``: 0 when the filter is
+  consistent, negative when innovations are larger than the model says, at most 1;
+* ``ror`` — ``tr C_r / tr P_z`` (paper 002's ratio of residuals).
+"""
+from __future__ import annotations
+
+import numba as nb
+
+
+def window_size(n: int, n_channels: int) -> int:
+    """Length of the state slice a window needs."""
+    return 2 + n * (n_channels + 1)
+
+
+@nb.njit(cache=True)
+def push(st, off, n, n_channels, r, chan, m):
+    """Add this epoch's per-channel sums of squared residuals to the window."""
+    w = n_channels + 1
+    base = off + 2 + int(st[off + 1]) * w
+    for c in range(w):
+        st[base + c] = 0.0
+    for i in range(m):
+        rr = r[i] * r[i]
+        st[base + chan[i]] += rr
+        st[base + n_channels] += rr
+    st[off + 1] = (st[off + 1] + 1) % n
+    if st[off] < n:
+        st[off] += 1
+
+
+@nb.njit(cache=True)
+def trace_actual(st, off, n, n_channels, c):
+    """Window mean of the channel's squared-residual sum (``c = -1``: all rows)."""
+    w = n_channels + 1
+    col = n_channels if c < 0 else c
+    k = int(st[off])
+    if k == 0:
+        return 0.0
+    s = 0.0
+    for j in range(k):
+        s += st[off + 2 + j * w + col]
+    return s / k
+
+
+@nb.njit(cache=True)
+def trace_theory(HPH, R, chan, m, c):
+    """The channel's trace of ``H P- H^T + R`` (``c = -1``: all rows)."""
+    s = 0.0
+    for i in range(m):
+        if c < 0 or chan[i] == c:
+            s += HPH[i, i] + R[i]
+    return s
+
+
+@nb.njit(cache=True)
+def statistic(kind, st, off, n, n_channels, HPH, R, chan, m, c):
+    """Statistic ``kind`` (0 = dom, 1 = ror) of channel ``c``; NaN if the channel is absent."""
+    th = trace_theory(HPH, R, chan, m, c)
+    if th <= 0.0:
+        return float("nan")
+    act = trace_actual(st, off, n, n_channels, c)
+    if kind == 0:
+        return (th - act) / th
+    return act / th
+
+
+#: statistic names as written in rule-file bindings
+STATISTICS = {"dom": 0, "ror": 1}

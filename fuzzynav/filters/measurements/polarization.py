@@ -1,0 +1,158 @@
+"""Skylight-polarization compass: heading (and pitch) residuals against the INS.
+
+Data row (:mod:`fuzzynav.sim.sensors.polarization`): ``[aop_1..aop_k, sun_e, sun_n, sun_u,
+sigma_1..sigma_k, 0, 0, 0]``.  Parameters: ``[sensor_type, k, mode, prior_pitch_std,
+prior_heading_std, views_b (k x 3)]``.
+
+Modes
+-----
+``angles`` (default, as the papers do): the sensor's AoPs are converted into attitude angles
+with the INS prediction resolving the 180° ambiguity, and the filter sees
+
+* point (zenith) sensor: ``z = heading_ins - heading_pol`` with
+  ``H = dpsi/dphi - (dpsi_pol/dpitch) dpitch/dphi - (dpsi_pol/droll) droll/dphi`` — the
+  conversion uses the INS tilt, whose error therefore enters the converted heading;
+  ``R = (dheading/daop)^2 sigma_aop^2``;
+* imaging sensor: pitch and heading (roll from the INS, not estimated, as in paper 000);
+  their 2x2 covariance is decorrelated (the heading row is conditioned on the pitch row)
+  so that ``R`` stays diagonal.
+
+``aop``: the raw angles of polarization, ``z_i = aop_pred_i(INS) - aop_i`` (folded mod pi)
+with the exact Jacobian on the attitude error — no conversion, no ambiguity beyond the
+E-vector sign.
+
+Channels: ``heading``, ``pitch``, ``aop``.
+"""
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
+from fuzzynav.sim import polarization_solve as ps
+
+MODES = {"angles": 0, "aop": 1}
+CH_HEADING, CH_PITCH, CH_AOP = 0, 1, 2
+_HDR = 5
+
+
+@nb.njit(cache=True)
+def euler_jacobian(C, J):
+    """Rows d(pitch, roll, heading)/d(phi) of ``C_bn`` for ``C_calc = (I - [phi x]) C``."""
+    cp2 = C[0, 1] ** 2 + C[1, 1] ** 2  # cos^2 pitch
+    cp = math.sqrt(cp2)
+    J[0, 0], J[0, 1], J[0, 2] = -C[1, 1] / cp, C[0, 1] / cp, 0.0
+    J[1, 0] = (C[2, 2] * C[1, 0] - C[2, 0] * C[1, 2]) / cp2
+    J[1, 1] = (C[2, 0] * C[0, 2] - C[2, 2] * C[0, 0]) / cp2
+    J[1, 2] = 0.0
+    J[2, 0], J[2, 1], J[2, 2] = -C[2, 1] * C[0, 1] / cp2, -C[2, 1] * C[1, 1] / cp2, 1.0
+
+
+@nb.njit(cache=True)
+def _wrap(a):
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+@nb.njit(cache=True)
+def _fold(a):
+    return (a + 0.5 * math.pi) % math.pi - 0.5 * math.pi
+
+
+@nb.njit(cache=True)
+def _euler(C):
+    pitch = math.asin(max(-1.0, min(1.0, C[2, 1])))
+    roll = math.atan2(-C[2, 0], C[2, 2])
+    heading = math.atan2(C[0, 1], C[1, 1]) % (2.0 * math.pi)
+    return pitch, roll, heading
+
+
+@nb.njit(cache=True)
+def _point(C, aop, sun, sigma, J, z, H, R, chan):
+    pitch, roll, heading = _euler(C)
+    h, dh_da = ps.heading_from_zenith_aop(aop, sun, pitch, roll, heading)
+    if not math.isfinite(h):
+        return 0
+    dp, dr = ps.zenith_heading_tilt_partials(sun, pitch, roll, h)
+    euler_jacobian(C, J)
+    z[0] = _wrap(heading - h)
+    for j in range(3):
+        H[0, j] = J[2, j] - dp * J[0, j] - dr * J[1, j]
+    R[0] = (dh_da * sigma) ** 2
+    chan[0] = CH_HEADING
+    return 1
+
+
+@nb.njit(cache=True)
+def _imaging(C, aops, views, sun, sigma, prior_std, J, z, H, R, chan):
+    pitch, roll, heading = _euler(C)
+    p, h, cov, k = ps.imaging_pitch_heading(aops, views, sun, roll, pitch, heading,
+                                            prior_std[0], prior_std[1], sigma)
+    if not (math.isfinite(p) and math.isfinite(h)):
+        return 0
+    euler_jacobian(C, J)
+    g = cov[0, 1] / cov[0, 0]  # heading row conditioned on the pitch row
+    z[0] = pitch - p
+    z[1] = _wrap(heading - h) - g * z[0]
+    for j in range(3):
+        H[0, j] = J[0, j]
+        H[1, j] = J[2, j] - g * J[0, j]
+    R[0] = cov[0, 0]
+    R[1] = cov[1, 1] - g * cov[0, 1]
+    chan[0], chan[1] = CH_PITCH, CH_HEADING
+    return 2
+
+
+@nb.njit(cache=True)
+def _raw(C, aops, views, sun, sigmas, z, H, R, chan):
+    m = 0
+    for i in range(aops.size):
+        if not (math.isfinite(aops[i]) and sigmas[i] > 0.0):
+            continue
+        pred, jac = ps.aop_attitude_jacobian(C, views[i], sun)
+        if not math.isfinite(pred):
+            continue
+        z[m] = _fold(pred - aops[i])
+        for j in range(3):
+            H[m, j] = jac[j]
+        R[m] = sigmas[i] ** 2
+        chan[m] = CH_AOP
+        m += 1
+    return m
+
+
+@nb.njit(MEAS_SIG, cache=True)
+def polarization_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
+    kind, k, mode = int(par[0]), int(par[1]), int(par[2])
+    views = np.empty((k, 3))
+    for i in range(k):
+        for j in range(3):
+            views[i, j] = par[_HDR + 3 * i + j]
+    aops = row[0:k]
+    sun = row[k:k + 3]
+    sig = row[k + 3:2 * k + 3]
+    J = np.empty((3, 3))
+    if mode == 1:
+        return _raw(C_bn, aops, views, sun, sig, z, H, R, chan)
+    if kind == 0:
+        if not (math.isfinite(aops[0]) and sig[0] > 0.0):
+            return 0
+        return _point(C_bn, aops[0], sun, sig[0], J, z, H, R, chan)
+    return _imaging(C_bn, aops, views, sun, sig[0], par[3:5], J, z, H, R, chan)
+
+
+def _pack(data, options) -> np.ndarray:
+    views = np.asarray(data.meta.get("views_b", [[0.0, 0.0, 1.0]]), float).reshape(-1, 3)
+    mode = options.get("mode", "angles")
+    if mode not in MODES:
+        from fuzzynav.errors import UnknownNameError
+
+        raise UnknownNameError("polarization measurement mode", mode, MODES)
+    prior = np.deg2rad(options.get("prior_std_deg", (5.0, 10.0)))
+    return np.concatenate([[float(data.meta.get("sensor_type", 0)), views.shape[0],
+                            MODES[mode], *prior], views.ravel()])
+
+
+MODEL = register(MeasurementModel(kind="polarization", kernel=polarization_kernel,
+                                  max_rows=9, channels=("heading", "pitch", "aop"), pack=_pack))
