@@ -7,7 +7,7 @@ from scipy import stats
 
 from fuzzynav.errors import InputFileError
 from fuzzynav.nav.attitude import euler_to_dcm, euler_to_quat
-from fuzzynav.sim import polarization_solve as ps
+from fuzzynav.nav import polarization as ps
 from fuzzynav.sim import skylight as sk
 from fuzzynav.sim import sun
 from fuzzynav.sim.sensors import SensorData, spec_class

@@ -86,7 +86,7 @@ class NoAdaptation(Adapter):
 
 ADAPTERS: dict[str, type] = {}
 _ORDER: list[str] = []
-BUILTIN_MODULES: tuple = ("fuzzy_alpha", "fuzzy_rscale")
+BUILTIN_MODULES: tuple = ("fuzzy_alpha", "fuzzy_rscale", "classical")
 
 
 def register(cls):

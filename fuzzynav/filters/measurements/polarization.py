@@ -31,7 +31,7 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
-from fuzzynav.sim import polarization_solve as ps
+from fuzzynav.nav import polarization as ps
 
 MODES = {"angles": 0, "aop": 1}
 CH_HEADING, CH_PITCH, CH_AOP = 0, 1, 2
@@ -72,9 +72,11 @@ def _euler(C):
 def _point(C, aop, sun, sigma, J, z, H, R, chan):
     pitch, roll, heading = _euler(C)
     h, dh_da = ps.heading_from_zenith_aop(aop, sun, pitch, roll, heading)
-    if not math.isfinite(h):
+    if not (math.isfinite(h) and math.isfinite(dh_da)):
         return 0
     dp, dr = ps.zenith_heading_tilt_partials(sun, pitch, roll, h)
+    if not (math.isfinite(dp) and math.isfinite(dr)):
+        return 0  # the two heading roots coincide: the conversion is singular here
     euler_jacobian(C, J)
     z[0] = _wrap(heading - h)
     for j in range(3):
