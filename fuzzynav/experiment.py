@@ -53,7 +53,7 @@ def run_on_log(log: SensorLog, filter_name: str, options=None, t_start_s: float 
     """Run one named filter (or an explicit ``setup``) on a simulated log and score it."""
     setup = setup or setup_for(log, filter_name, options)
     init = perturbed_initial_state(log, setup)
-    res = run_filter(log.imu, log.sensors, init, setup.config, setup.adapters,
+    res = run_filter(log.imu, setup.sensors_for(log.sensors), init, setup.config, setup.adapters,
                      setup.sensor_options)
     metrics = rms_metrics(errors_vs_trajectory(res, log.truth), t_start_s)
     metrics["completed"] = float(res.ok)

@@ -194,9 +194,23 @@ def covariance_ok(P):
 
 
 @nb.njit(cache=True)
-def scale_predicted(P, Qacc, factor):
-    """``P <- factor (P - Qacc) + Qacc``: weight the propagated part of P (fading / alpha^2)."""
+def scale_predicted(P, Qacc, factor, H, m, d):
+    """Weight the propagated part of P on the states the measurement sees directly.
+
+    ``P <- D (P - Qacc) D + Qacc`` with ``D_ii = sqrt(factor)`` for the states with a non-zero
+    column in the first ``m`` rows of ``H`` and 1 elsewhere (``d`` is an n-vector scratch).
+    With every state seen this is ``factor (P - Qacc) + Qacc`` (alpha^2 or lambda of a
+    fading filter); restricting it keeps one sensor's weighting from inflating the states
+    only another sensor corrects — the single-filter form of the papers' sub-filters.
+    """
     n = P.shape[0]
+    s = math.sqrt(factor)
+    for j in range(n):
+        d[j] = 1.0
+        for a in range(m):
+            if H[a, j] != 0.0:
+                d[j] = s
+                break
     for i in range(n):
         for j in range(n):
-            P[i, j] = factor * (P[i, j] - Qacc[i, j]) + Qacc[i, j]
+            P[i, j] = d[i] * d[j] * (P[i, j] - Qacc[i, j]) + Qacc[i, j]

@@ -188,7 +188,7 @@ def run_loop(dth, dv, time_s, nav0, xs0, P0, q_diag, blk_start, blk_kind, blk_in
                 e += 1
                 continue
             if out_a[0] != 1.0:
-                kalman.scale_predicted(P, Qacc, out_a[0])
+                kalman.scale_predicted(P, Qacc, out_a[0], H, m, x)
                 kalman.innovation_cov(P, H, m, PHt, HPH)
                 for i in range(m):
                     for j in range(m):

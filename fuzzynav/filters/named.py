@@ -38,11 +38,23 @@ class FilterContext:
 
 @dataclass(frozen=True)
 class FilterSetup:
-    """Everything :func:`fuzzynav.filters.runner.run_filter` needs besides the data."""
+    """Everything :func:`fuzzynav.filters.runner.run_filter` needs besides the data.
+
+    ``sigma_override`` replaces the claimed sigma of a sensor's epochs (sensor name ->
+    (M, m) array), e.g. with the simulator's true noise.
+    """
 
     config: FilterConfig
     adapters: dict = field(default_factory=dict)
     sensor_options: dict = field(default_factory=dict)
+    sigma_override: dict = field(default_factory=dict)
+
+    def sensors_for(self, sensors: dict) -> dict:
+        """The sensor streams as this filter sees them (sigma overrides applied)."""
+        from dataclasses import replace
+
+        return {nm: replace(d, sigma=self.sigma_override[nm]) if nm in self.sigma_override
+                else d for nm, d in sensors.items()}
 
 
 @dataclass(frozen=True)
@@ -53,7 +65,7 @@ class NamedFilter:
 
 
 FILTERS: dict[str, NamedFilter] = {}
-BUILTIN_MODULES: tuple = ()
+BUILTIN_MODULES: tuple = ("catalog",)
 
 
 def register_filter(name: str, description: str):

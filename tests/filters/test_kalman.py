@@ -59,7 +59,17 @@ def test_cholesky_rejects_indefinite_and_checks_flag_bad_covariance():
     assert not kalman.covariance_ok(P)
 
 
-def test_scale_predicted_weights_only_the_propagated_part():
-    P, Q = 4.0 * np.eye(2), np.eye(2)
-    kalman.scale_predicted(P, Q, 1.21)
-    np.testing.assert_allclose(P, (1.21 * 3.0 + 1.0) * np.eye(2))
+def test_scale_predicted_weights_only_the_propagated_part_of_the_seen_states():
+    rng = np.random.default_rng(4)
+    P, Q = _spd(rng, 4) + 4 * np.eye(4), np.eye(4)
+    H = np.zeros((2, 4))
+    H[0, 1] = 1.0
+    H[1, 2] = -0.5
+    D = np.diag([1.0, 1.1, 1.1, 1.0])
+    ref = D @ (P - Q) @ D + Q
+    all_seen = 1.21 * (P - Q) + Q
+    P2 = P.copy()
+    kalman.scale_predicted(P, Q, 1.21, H, 2, np.zeros(4))
+    np.testing.assert_allclose(P, ref, rtol=1e-14)
+    kalman.scale_predicted(P2, Q, 1.21, np.ones((1, 4)), 1, np.zeros(4))
+    np.testing.assert_allclose(P2, all_seen, rtol=1e-14)

@@ -8,8 +8,9 @@ and the nominal variances ``R`` are formed and before the update, the sensor's p
 * ``fp`` / ``ip`` — the policy's float / int constants (e.g. a compiled fuzzy system);
 * ``st`` — its mutable state (innovation windows, running estimates), kept across epochs;
 * ``chan`` — channel id per row (see the measurement model's ``channels``);
-* outputs: ``out[0]`` multiplies the propagated part of ``P-`` (alpha^2 of exponential
-  weighting, lambda of fading memory; 1 = none), ``out[1]`` multiplies the process noise from
+* outputs: ``out[0]`` multiplies the propagated part of ``P-`` on the states this
+  measurement sees directly (alpha^2 of exponential weighting, lambda of fading memory;
+  1 = none; see :func:`fuzzynav.filters.kalman.scale_predicted`), ``out[1]`` multiplies the process noise from
   now on (1 = unchanged), ``out[2 + i]`` multiplies ``R[i]`` for this update; ``diag[:4]``
   diagnostic values logged per epoch (alpha, DoM, ...);
 * ``status`` — bit flags: 1 an input of a fuzzy system was clamped, 2 no rule fired.

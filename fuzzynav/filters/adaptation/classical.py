@@ -9,7 +9,8 @@ measurement (stable for a given sensor configuration).
   ``d_k = (1-b)/(1-b^(k+1))``, floored at a fraction of the nominal variance.
 * :class:`Huber` — M-estimation: ``w_i = min(1, gamma / |r_i / sqrt(S_ii)|)``, R divided by w.
 * :class:`FadingMemory` — strong tracking: ``V = (rho V + r r^T) / (1 + rho)``,
-  ``lambda = max(1, (tr V - beta tr R) / tr(H P- H^T))`` inflates the propagated P.
+  ``lambda = min(max(1, (tr V - beta tr R) / tr(H P- H^T)), lam_max)`` inflates the
+  propagated P.
 * :class:`VariationalBayes` — Särkkä & Nummenmaa (2009) diagonal-R inverse-Gamma posteriors
   with forgetting ``rho`` and a few fixed-point iterations, done in measurement space.
 """
@@ -125,7 +126,7 @@ class Huber(Adapter):
 
 @nb.njit(ADAPT_SIG, cache=True)
 def fading_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
-    rho, beta = fp[0], fp[1]
+    rho, beta, lam_max = fp[0], fp[1], fp[2]
     trv, trr, trh = 0.0, 0.0, 0.0
     first = st[0] == 0.0
     st[0] = 1.0
@@ -135,7 +136,10 @@ def fading_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
         trv += v
         trr += R[i]
         trh += HPH[i, i]
-    lam = max(1.0, (trv - beta * trr) / trh) if trh > 0.0 else 1.0
+    st[1 + _MAXROWS] += 1.0
+    lam = 1.0
+    if trh > 0.0 and st[1 + _MAXROWS] >= 1.0 / (1.0 - rho):  # after the average has settled
+        lam = min(max(1.0, (trv - beta * trr) / trh), lam_max)
     _ones(out, m)
     out[0] = lam
     diag[0] = lam
@@ -144,17 +148,23 @@ def fading_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
 
 @register
 class FadingMemory(Adapter):
-    """Strong-tracking fading memory: inflate the propagated P by lambda >= 1."""
+    """Strong-tracking fading memory: inflate the propagated P by lambda >= 1.
+
+    ``beta`` > 1 softens the test (innovations must exceed ``beta R``) and ``lam_max`` caps the
+    factor: when ``H P- H^T`` is much smaller than ``R`` (a converged heading, say) the noise of
+    the innovation average alone would otherwise give huge factors and inflate P without end.
+    """
 
     name = "fading-memory"
     kernel = fading_kernel
     diag_names = ("lambda",)
 
-    def __init__(self, rho: float = 0.95, beta: float = 1.0):
-        self.rho, self.beta = float(rho), float(beta)
+    def __init__(self, rho: float = 0.95, beta: float = 4.0, lam_max: float = 3.0):
+        self.rho, self.beta, self.lam_max = float(rho), float(beta), float(lam_max)
 
     def arrays(self, model):
-        return np.array([self.rho, self.beta]), np.zeros(1, np.int64), np.zeros(1 + _MAXROWS)
+        return (np.array([self.rho, self.beta, self.lam_max]), np.zeros(1, np.int64),
+                np.zeros(2 + _MAXROWS))
 
 
 @nb.njit(ADAPT_SIG, cache=True)

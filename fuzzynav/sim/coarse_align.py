@@ -1,0 +1,213 @@
+"""Initial navigation state from the data itself: level at rest, heading once moving.
+
+* **Rest.**  The opening period in which the GNSS speed stays below ``rest_speed_mps``
+  (or, without GNSS velocity, the IMU's rate and specific force stay steady).
+* **Level.**  Pitch and roll from the mean specific force ``f`` at rest, which points up:
+  ``f_b = |f| (-cos p sin r, sin p, cos p cos r)`` (RFU body, :mod:`fuzzynav.nav.attitude`).
+* **Heading**, three ways:
+
+  - given by the caller;
+  - ``course``: when the body's forward axis is the vehicle's (a mounting is known), the
+    GNSS course over ground is the heading of that axis while driving; each epoch in the
+    first ``window_s`` of motion with speed above ``min_speed_mps`` gives
+    ``heading_0 = course - azimuth of the forward axis`` propagated back to the end of
+    rest with the gyros, and their circular mean is used;
+  - ``specific-force``: when the forward axis is unknown (IMU frame = body frame), the
+    specific force, levelled and carried by the gyros into the rest frame and integrated
+    over short intervals between GNSS epochs, ``a_j = L sum C_b0_b dv_b``, must equal the
+    velocity change the GNSS sees over the same interval with Coriolis put back,
+    ``b_j = v(t_j+1) - v(t_j) + int (2 w_ie + w_en) x v dt``, up to the heading; the
+    horizontal parts give it in closed form, ``heading = atan2(sum(b_e a_n - b_n a_e),
+    sum(b_e a_e + b_n a_n))`` (a two-dimensional Wahba problem in velocity-increment
+    form: no differentiation of the GNSS velocity, and over intervals of a second an
+    accelerometer bias of some mg barely matters, while summed over a whole window it
+    would turn the solution by tens of degrees).
+
+The gyros are corrected by their mean at rest (bias and earth rate together); over a
+window of a minute the earth rate left out of the propagation is below 0.25 deg.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba as nb
+import numpy as np
+
+from fuzzynav.errors import InputFileError
+from fuzzynav.nav import attitude, earth
+from fuzzynav.nav.strapdown import quat_mul, rv2q
+
+
+@dataclass(frozen=True)
+class InitialState:
+    """Initial navigation state estimated from the data.
+
+    Attributes
+    ----------
+    time_s : float
+        Epoch of the state: the end of the opening rest [s].
+    lla : ndarray, shape (3,)
+        GNSS position at ``time_s`` (antenna; lat, lon [rad], h [m]).
+    vel_n : ndarray, shape (3,)
+        GNSS velocity at ``time_s`` [m/s] (ENU).
+    att : ndarray, shape (3,)
+        Pitch, roll, heading [rad] of the body frame.
+    gyro_bias_rps : ndarray, shape (3,)
+        Mean gyro rate at rest minus the earth rate seen with ``att`` [rad/s].
+    f_rest_mps2 : float
+        Magnitude of the mean specific force at rest [m/s^2].
+    rest_s : tuple of float
+        The rest period used for levelling [s].
+    method : str
+        ``given``, ``course`` or ``specific-force``.
+    """
+
+    time_s: float
+    lla: np.ndarray
+    vel_n: np.ndarray
+    att: np.ndarray
+    gyro_bias_rps: np.ndarray
+    f_rest_mps2: float
+    rest_s: tuple
+    method: str
+
+
+def _speed(gnss) -> np.ndarray:
+    return np.hypot(gnss.z[:, 3], gnss.z[:, 4])
+
+
+def opening_rest(imu, gnss, rest_speed_mps=0.2, margin_s=1.0, min_rest_s=2.0):
+    """The rest period at the start, ``(t0, t1)`` [s], from the GNSS speed."""
+    t0 = float(imu.time_s[0])
+    speed = _speed(gnss)
+    after = (gnss.time_s >= t0) & np.isfinite(speed)
+    moving = after & (speed > rest_speed_mps)
+    t_move = gnss.time_s[moving][0] if moving.any() else float(imu.time_s[-1])
+    t1 = float(t_move) - margin_s
+    if t1 - t0 < min_rest_s:
+        raise InputFileError(None, "initialisation", f"no rest of {min_rest_s:g} s at the "
+                             f"start (moving {t_move - t0:.1f} s after the first IMU sample)")
+    return t0, t1
+
+
+def level(imu, t0, t1):
+    """Pitch, roll [rad], mean specific force [m/s^2] and mean rate [rad/s] over a rest."""
+    sel = (imu.time_s[:-1] >= t0) & (imu.time_s[1:] <= t1)
+    dt = np.sum(np.diff(imu.time_s)[sel])
+    f = imu.dv_b[sel].sum(0) / dt
+    w = imu.dtheta_b[sel].sum(0) / dt
+    pitch = np.arctan2(f[1], np.hypot(f[0], f[2]))
+    roll = np.arctan2(-f[0], f[2])
+    return float(pitch), float(roll), f, w
+
+
+@nb.njit(cache=True)
+def _chain(dtheta):
+    """Quaternions of C_b0_bk: body at sample k relative to body at sample 0."""
+    n = dtheta.shape[0]
+    q = np.empty((n + 1, 4))
+    q[0] = (1.0, 0.0, 0.0, 0.0)
+    for k in range(n):
+        r = rv2q(dtheta[k, 0], dtheta[k, 1], dtheta[k, 2])
+        a = quat_mul(q[k, 0], q[k, 1], q[k, 2], q[k, 3], r[0], r[1], r[2], r[3])
+        s = 1.0 / np.sqrt(a[0] ** 2 + a[1] ** 2 + a[2] ** 2 + a[3] ** 2)
+        q[k + 1] = (a[0] * s, a[1] * s, a[2] * s, a[3] * s)
+    return q
+
+
+def relative_attitude(imu, k0, k1, rate_bias_rps):
+    """``C_b0_b`` at samples ``k0 .. k1`` from bias-corrected gyro increments, (K, 3, 3)."""
+    dth = imu.dtheta_b[k0:k1] - rate_bias_rps * np.diff(imu.time_s[k0:k1 + 1])[:, None]
+    return attitude.quat_to_dcm(_chain(np.ascontiguousarray(dth)))
+
+
+def _gnss_at(gnss, t):
+    return np.array([np.interp(t, gnss.time_s, gnss.z[:, j]) for j in range(6)])
+
+
+def _window(imu, gnss, t_ref, window_s, min_speed_mps):
+    k0 = int(np.searchsorted(imu.time_s, t_ref))
+    sel = ((gnss.time_s > imu.time_s[k0]) & (gnss.time_s <= t_ref + window_s)
+           & (gnss.time_s < imu.time_s[-1]))
+    if not np.any(sel & (_speed(gnss) >= min_speed_mps)):
+        raise InputFileError(None, "initialisation", f"the vehicle does not reach "
+                             f"{min_speed_mps:g} m/s within {window_s:g} s after rest")
+    k1 = int(np.searchsorted(imu.time_s, gnss.time_s[sel][-1])) + 1
+    return k0, k1, np.flatnonzero(sel)
+
+
+def heading_from_course(imu, gnss, t_ref, c_level, rate_bias, window_s=30.0,
+                        min_speed_mps=2.0) -> float:
+    """Heading [rad] at ``t_ref`` of a body whose y axis is the direction of travel."""
+    k0, k1, idx = _window(imu, gnss, t_ref, window_s, min_speed_mps)
+    idx = idx[_speed(gnss)[idx] >= min_speed_mps]
+    C = relative_attitude(imu, k0, k1, rate_bias)
+    t_imu = imu.time_s[k0:k1 + 1]
+    k = np.clip(np.searchsorted(t_imu, gnss.time_s[idx]), 0, len(t_imu) - 1)
+    fwd = np.einsum("ij,kjl,l->ki", c_level, C[k], np.array([0.0, 1.0, 0.0]))
+    course = np.arctan2(gnss.z[idx, 3], gnss.z[idx, 4])
+    d = course - np.arctan2(fwd[:, 0], fwd[:, 1])
+    return float(attitude.wrap_2pi(np.arctan2(np.sin(d).mean(), np.cos(d).mean())))
+
+
+def heading_from_specific_force(imu, gnss, t_ref, c_level, rate_bias, window_s=60.0,
+                                min_speed_mps=2.0, interval_s=1.0) -> float:
+    """Heading [rad] at ``t_ref`` by matching levelled specific force to GNSS velocity.
+
+    Over each interval of about ``interval_s`` between GNSS epochs in the window, the
+    levelled specific force carried into the rest frame, ``a = L sum C_b0_b dv_b``, is
+    paired with the velocity change ``b = dv_gnss + int (2 w_ie + w_en) x v dt``; the
+    horizontal parts give the heading in closed form.  Short intervals keep an
+    accelerometer bias from accumulating (it would over a whole window).
+    """
+    k0, k1, idx = _window(imu, gnss, t_ref, window_s, min_speed_mps)
+    C = relative_attitude(imu, k0, k1, rate_bias)
+    dv_b0 = np.einsum("kij,kj->ki", C[:-1], imu.dv_b[k0:k1])
+    a_cum = np.vstack([np.zeros(3), np.cumsum(dv_b0, 0)]) @ c_level.T
+    t_imu = imu.time_s[k0:k1 + 1]
+    step = max(1, int(round(interval_s / np.median(np.diff(gnss.time_s)))))
+    i0, i1 = idx[:-step], idx[step:]
+    a = np.column_stack([np.interp(gnss.time_s[i1], t_imu, a_cum[:, j])
+                         - np.interp(gnss.time_s[i0], t_imu, a_cum[:, j]) for j in range(2)])
+    v = gnss.z[:, 3:6]
+    lla = gnss.z[idx[0], :3]
+    w = 2.0 * earth.omega_ie_n(lla[0]) + earth.omega_en_n(lla[0], lla[2], v)
+    coriolis = np.cross(w, v)
+    b = (v[i1] - v[i0] + 0.5 * (coriolis[i1] + coriolis[i0])
+         * (gnss.time_s[i1] - gnss.time_s[i0])[:, None])
+    num = np.sum(b[:, 0] * a[:, 1] - b[:, 1] * a[:, 0])
+    den = np.sum(b[:, 0] * a[:, 0] + b[:, 1] * a[:, 1])
+    return float(attitude.wrap_2pi(np.arctan2(num, den)))
+
+
+def initial_state(imu, gnss, heading_rad=None, forward_known=False, **kw) -> InitialState:
+    """Initial state at the end of the opening rest.
+
+    Parameters
+    ----------
+    imu : ImuData
+    gnss : SensorData
+        GNSS fixes with velocity (kind ``gnss``).
+    heading_rad : float, optional
+        A known heading [rad]; else it is estimated.
+    forward_known : bool
+        Whether body y is the vehicle's forward axis (a mounting is given): then the
+        heading comes from the GNSS course, else from specific-force matching.
+    **kw
+        ``window_s``, ``min_speed_mps`` for the heading estimators.
+    """
+    t0, t1 = opening_rest(imu, gnss)
+    pitch, roll, f, w = level(imu, t0, t1)
+    c_level = attitude.euler_to_dcm(np.array([pitch, roll, 0.0]))
+    if heading_rad is not None:
+        heading, method = float(attitude.wrap_2pi(heading_rad)), "given"
+    elif forward_known:
+        heading, method = heading_from_course(imu, gnss, t1, c_level, w, **kw), "course"
+    else:
+        heading = heading_from_specific_force(imu, gnss, t1, c_level, w, **kw)
+        method = "specific-force"
+    att = np.array([pitch, roll, heading])
+    g = _gnss_at(gnss, t1)
+    w_ie_b = attitude.euler_to_dcm(att).T @ earth.omega_ie_n(g[0])
+    return InitialState(time_s=t1, lla=g[:3], vel_n=g[3:], att=att, gyro_bias_rps=w - w_ie_b,
+                        f_rest_mps2=float(np.linalg.norm(f)), rest_s=(t0, t1), method=method)

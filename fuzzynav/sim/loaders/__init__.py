@@ -1,0 +1,8 @@
+"""Loaders of real recordings into fuzzynav's containers.
+
+Each loader takes the recording's directory (any copy of a recording of that kind loads)
+and returns IMU increments in the body RFU frame (:class:`fuzzynav.sim.imu.ImuData`) and
+aiding-sensor data (:class:`fuzzynav.sim.sensors.SensorData`) on one time axis.
+
+* :mod:`.rtklib` — RTKLIB-logged IMU CSV + time tags + RTKLIB ``.pos`` (the rtklib-drive).
+"""

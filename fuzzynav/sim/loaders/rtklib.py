@@ -1,0 +1,321 @@
+"""Loader for RTKLIB-logged car recordings: ``imu_*.csv`` + ``.tag`` and ``gnss_*.pos``.
+
+The directory holds (the ``rtklib-drive`` recording of rtklibexplorer/GNSS_IMU is one):
+
+* ``imu_<id>.csv`` — no header; ``acc x, y, z [g], gyro x, y, z [deg/s], tick [ms since IMU
+  power-up]``; the first and the last line may be cut (logging started or stopped inside
+  them): the first line is always dropped, the last unless the file ends with a newline;
+* ``imu_<id>.csv.tag`` — RTKLIB time tags of the CSV (:mod:`.timetag`);
+* ``gnss_<id>*.pos`` — the RTKLIB solution (:mod:`.rtkpos`), GPST;
+* optionally ``mounting.toml`` (:mod:`.mounting`).
+
+Time alignment (IMU tick -> GPST):
+
+1. the IMU's own ticks are regularised into its sample clock (:mod:`.increments`);
+2. each CSV line is matched to the tag record by which the logger had written it (the tag
+   counts bytes as logged; CR LF line ends turned into LF by a copy are detected), giving
+   its arrival time on the logging PC's clock;
+3. a straight line through arrival versus sample clock gives the clock rate and the mean
+   arrival latency: ``t = start + (a + b x) / 1000 - imu_delay_s``, ``x`` the sample clock
+   [ms] since the first kept line, ``start`` the GPST of the tag file;
+4. ``imu_delay_s`` is what remains between a sample and the fitted arrival (buffering,
+   the PC clock's offset from GPST).  Its default, :data:`DEFAULT_IMU_DELAY_S`, was
+   measured on the rtklib-drive by matching the gyro yaw rate to the GNSS course rate
+   (:func:`fuzzynav.sim.loaders.sync.course_rate_lag`; ``docs/data.md``).
+
+If the tag's byte counts do not fit the CSV (another copy of the file), the source's
+method is used instead: the sample clock is stretched onto ``[start, start + last tick]``.
+
+Times in the returned :class:`Recording` are seconds since ``epoch_gpst_s`` (a whole GPST
+second just before the first IMU sample, counted from 1970 in the GPS time scale).
+"""
+from __future__ import annotations
+
+import io
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from fuzzynav import units
+from fuzzynav.errors import DataMissingError, InputFileError
+from fuzzynav.sim.imu import ImuData
+from fuzzynav.sim.loaders import increments, timetag
+from fuzzynav.sim.loaders.mounting import Mounting
+from fuzzynav.sim.loaders.rtkpos import read_pos
+from fuzzynav.sim.sensors import SensorData
+
+#: sample-to-fitted-arrival delay of the rtklib-drive IMU [s] (see the module docstring)
+DEFAULT_IMU_DELAY_S = 0.21
+_CSV_COLUMNS = 7
+
+
+@dataclass(frozen=True)
+class TimeAlignment:
+    """How IMU ticks were put on GPST.
+
+    Attributes
+    ----------
+    method : str
+        ``"tag-fit"`` (line arrival times fitted) or ``"endpoints"`` (the stretch fallback).
+    clock_rate : float
+        Logging-PC milliseconds per IMU-clock millisecond.
+    latency_ms : float
+        Fitted arrival of the first kept sample after the tag start [ms].
+    resid_sd_ms : float
+        Robust spread of the arrivals about the fitted line [ms].
+    imu_delay_s : float
+        Delay subtracted from the fitted arrival [s].
+    crlf_restored : bool
+        Whether the CSV copy had lost the CR of CR LF line ends.
+    clock : increments.SampleClock
+        The regularised IMU sample clock.
+    """
+
+    method: str
+    clock_rate: float
+    latency_ms: float
+    resid_sd_ms: float
+    imu_delay_s: float
+    crlf_restored: bool
+    clock: increments.SampleClock
+
+
+@dataclass(frozen=True)
+class Recording:
+    """A loaded car recording.
+
+    Attributes
+    ----------
+    directory : Path
+    files : dict
+        ``imu``, ``tag``, ``pos`` (and ``mounting`` if read) -> Path.
+    epoch_gpst_s : int
+        GPST (seconds since 1970, GPS scale) of ``t = 0``.
+    imu : ImuData
+        Increments in the body frame (the IMU frame without a mounting).
+    gnss : SensorData
+        All fixes in the IMU's time span, kind ``gnss``, RTKLIB sigmas; ``meta``: ``q``,
+        ``ns``, ``ratio``, ``age_s``, ``lever_arm_b``.
+    reference : SensorData
+        The untouched RTK-fixed (Q = 1) epochs, for scoring.
+    mounting : Mounting or None
+    timing : TimeAlignment
+    """
+
+    directory: Path
+    files: dict
+    epoch_gpst_s: int
+    imu: ImuData
+    gnss: SensorData
+    reference: SensorData
+    mounting: Mounting | None
+    timing: TimeAlignment
+
+    def initial_state(self, heading_rad=None, **kw):
+        """Initial state from the data (:func:`fuzzynav.sim.coarse_align.initial_state`).
+
+        The heading comes from the GNSS course when a mounting says where forward is, else
+        from matching the specific force to the GNSS velocity changes.
+        """
+        from fuzzynav.sim.coarse_align import initial_state
+
+        return initial_state(self.imu, self.gnss, heading_rad=heading_rad,
+                             forward_known=self.mounting is not None, **kw)
+
+
+# -- files --------------------------------------------------------------------------------
+def _one(directory: Path, pattern: str, what: str) -> Path:
+    found = sorted(directory.glob(pattern))
+    if not found:
+        raise DataMissingError(f"{directory}: no {what} ({pattern}) in the recording directory")
+    if len(found) > 1:
+        raise InputFileError(directory, pattern, "several files match ("
+                             + ", ".join(p.name for p in found) + "); pass session=")
+    return found[0]
+
+
+def find_files(directory, session=None) -> dict:
+    """The IMU CSV, its tag and the GNSS solution in ``directory`` (clear errors if not)."""
+    directory = Path(directory)
+    if not directory.is_dir():
+        raise DataMissingError(f"{directory}: recording directory not found")
+    sid = "*" if session is None else str(session)
+    imu = _one(directory, f"imu_{sid}.csv", "IMU file")
+    tag = imu.with_name(imu.name + ".tag")
+    if not tag.is_file():
+        raise DataMissingError(f"{tag}: time-tag file of {imu.name} not found")
+    session_id = imu.stem[len("imu_"):]
+    pos = _one(directory, f"gnss_{session_id}*.pos", "GNSS solution")
+    return {"imu": imu, "tag": tag, "pos": pos}
+
+
+def read_imu_csv(path):
+    """Rows of an IMU CSV with partial first/last lines dropped.
+
+    Returns
+    -------
+    data : ndarray, shape (K, 7)
+    kept : ndarray of int, shape (K,)
+        0-based line index of each row in the file.
+    line_lengths : ndarray of int
+        Length of every line of the file (without ``\\n``).
+    file_size : int
+    """
+    path = Path(path)
+    raw = path.read_bytes()
+    lines = raw.split(b"\n")
+    if raw.endswith(b"\n"):
+        lines = lines[:-1]
+    last = len(lines) if raw.endswith(b"\n") else len(lines) - 1
+    kept = np.arange(1, last)
+    if kept.size < 2:
+        raise InputFileError(path, "", "fewer than two complete sample lines")
+    body = b"\n".join(lines[1:last])
+    try:
+        data = np.loadtxt(io.BytesIO(body), delimiter=",", ndmin=2)
+    except ValueError:
+        data = None
+    if data is None or data.shape[1] != _CSV_COLUMNS or not np.all(np.isfinite(data)):
+        for i in kept:
+            fields = lines[i].split(b",")
+            try:
+                ok = len(fields) == _CSV_COLUMNS and all(np.isfinite(float(f)) for f in fields)
+            except ValueError:
+                ok = False
+            if not ok:
+                raise InputFileError(path, f"line {i + 1}", "expected 7 numbers: acc x,y,z [g], "
+                                     "gyro x,y,z [deg/s], tick [ms]")
+    bad = np.flatnonzero(np.diff(data[:, 6]) <= 0)
+    if bad.size:
+        raise InputFileError(path, f"line {kept[bad[0] + 1] + 1}", "tick does not increase")
+    return data, kept, np.array([len(x) for x in lines], dtype=np.int64), len(raw)
+
+
+# -- time alignment -----------------------------------------------------------------------------
+def align_time(tag, clock, kept, line_lengths, file_size, imu_delay_s):
+    """GPST offset [s] from tag start of every kept sample, and the :class:`TimeAlignment`."""
+    x_ms = clock.time_ms - clock.time_ms[0]
+    matched = timetag.logged_line_ends(tag, line_lengths, file_size)
+    if matched is not None:
+        ends, crlf = matched
+        arrival = timetag.arrival_ticks(tag, ends[kept])
+        ok = arrival >= 0
+        a, b, sd, _ = timetag.fit_clock(x_ms[ok], arrival[ok])
+        method = "tag-fit"
+    else:
+        a, b, sd, crlf, method = 0.0, float(tag.tick_ms[-1]) / x_ms[-1], float("nan"), \
+            False, "endpoints"
+    offset_s = (a + b * x_ms) / 1000.0 - imu_delay_s
+    return offset_s, TimeAlignment(method=method, clock_rate=float(b), latency_ms=float(a),
+                                   resid_sd_ms=float(sd), imu_delay_s=float(imu_delay_s),
+                                   crlf_restored=bool(crlf), clock=clock)
+
+
+# -- assembly -----------------------------------------------------------------------------------
+def _resolve_mounting(mounting, directory: Path, files: dict):
+    if isinstance(mounting, str) and mounting == "auto":
+        path = directory / "mounting.toml"
+        if not path.is_file():
+            return None
+        files["mounting"] = path
+        return Mounting.from_toml(path)
+    if mounting is None or isinstance(mounting, Mounting):
+        return mounting
+    files["mounting"] = Path(mounting)
+    if not files["mounting"].is_file():
+        raise DataMissingError(f"{mounting}: mounting file not found")
+    return Mounting.from_toml(mounting)
+
+
+def _imu_data(data, t_s, mounting, resample_hz, span):
+    """Increments in the body frame between the chosen boundaries."""
+    rates = np.column_stack([data[:, 3:6] * units.DPS, data[:, 0:3] * units.G0])
+    if mounting is not None:
+        c = mounting.matrix
+        rates = np.column_stack([rates[:, :3] @ c.T, rates[:, 3:] @ c.T])
+    lo, hi = max(t_s[0], span[0]), min(t_s[-1], span[1])
+    if resample_hz is None:
+        bounds = t_s[(t_s >= lo) & (t_s <= hi)]
+    else:
+        bounds = increments.grid_bounds(lo, hi, resample_hz)
+    if bounds.size < 2:
+        raise InputFileError(None, "span_s", f"leaves no IMU data (IMU covers {t_s[0]:.3f} "
+                                             f"to {t_s[-1]:.3f} s)")
+    inc = increments.integrate_rates(t_s, rates, bounds)
+    return ImuData(time_s=bounds, dtheta_b=inc[:, :3], dv_b=inc[:, 3:])
+
+
+def _fixes(pos, epoch: int, t_lo: float, t_hi: float, lever_arm_b, fixed_only: bool,
+           velocity_lag_s: float = 0.0):
+    c = pos.columns
+    t = (pos.time_int_s - epoch) + pos.time_frac_s
+    sel = (t >= t_lo) & (t <= t_hi) & ((c["q"] == 1) if fixed_only else True)
+    vel = np.column_stack([c["vel_e"], c["vel_n"], c["vel_u"]])
+    if velocity_lag_s:  # a velocity reported late belongs to an earlier instant
+        vel = np.column_stack([np.interp(t + velocity_lag_s, t, vel[:, j]) for j in range(3)])
+    z = np.column_stack([np.deg2rad(c["lat_deg"]), np.deg2rad(c["lon_deg"]), c["h_m"],
+                         vel])[sel]
+    sigma = np.column_stack([c["sd_e"], c["sd_n"], c["sd_u"],
+                             c["sd_ve"], c["sd_vn"], c["sd_vu"]])[sel]
+    meta = {k: c[k][sel] for k in ("q", "ns", "ratio", "age_s")}
+    meta["lever_arm_b"] = np.asarray(lever_arm_b, dtype=float)
+    return SensorData(kind="gnss", time_s=t[sel], z=z, sigma=sigma, meta=meta)
+
+
+def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
+                resample_hz="nominal", span_s=None, session=None,
+                gnss_velocity_lag_s=0.0) -> Recording:
+    """Load an RTKLIB-logged IMU + GNSS recording.
+
+    Parameters
+    ----------
+    directory : path-like
+        The recording directory.
+    mounting : "auto", Mounting, path-like or None
+        ``"auto"`` reads ``mounting.toml`` from the directory if present; ``None`` uses
+        the IMU frame as the body frame.
+    imu_delay_s : float
+        Delay from an IMU sample to its fitted arrival at the logger [s].
+    resample_hz : "nominal", float or None
+        Increment grid: whole multiples of ``1/resample_hz`` GPST seconds (``"nominal"``:
+        the IMU's rate rounded to a whole Hz); ``None`` keeps the sample instants.
+    span_s : (float, float), optional
+        Keep only this time window, seconds after the first IMU sample.
+    session : str, optional
+        The ``<id>`` of ``imu_<id>.csv`` when the directory holds several.
+    gnss_velocity_lag_s : float
+        How late the receiver reports its velocities [s]; when non-zero the velocities of
+        ``gnss`` (not of ``reference``) are moved back by this much (by interpolation).
+        RTKLIB's on the rtklib-drive lag the positions by about 0.14 s
+        (:func:`fuzzynav.sim.loaders.sync.velocity_lag`).
+
+    Returns
+    -------
+    Recording
+    """
+    directory = Path(directory)
+    files = find_files(directory, session)
+    mount = _resolve_mounting(mounting, directory, files)
+    tag = timetag.read_timetag(files["tag"])
+    data, kept, lengths, size = read_imu_csv(files["imu"])
+    clock = increments.regular_sample_times(data[:, 6])
+    offset_s, timing = align_time(tag, clock, kept, lengths, size, imu_delay_s)
+    frac0 = tag.start_frac_s + offset_s[0]
+    epoch = tag.start_int_s + int(np.floor(frac0))
+    t_s = (tag.start_frac_s - (epoch - tag.start_int_s)) + offset_s
+    span = (-np.inf, np.inf) if span_s is None else (t_s[0] + span_s[0], t_s[0] + span_s[1])
+    rate = round(1000.0 / clock.period_ms) if resample_hz == "nominal" else resample_hz
+    try:
+        imu = _imu_data(data, t_s, mount, rate, span)
+    except InputFileError as exc:
+        raise InputFileError(files["imu"], exc.where, exc.what) from None
+    imu.meta.update(n_missing_samples=clock.n_missing, max_gap_s=clock.max_gap_ms / 1000.0,
+                    tick_jitter_ms=clock.jitter_ms)
+    pos = read_pos(files["pos"])
+    lever = np.zeros(3) if mount is None else mount.gnss_lever_arm_b_m
+    t_lo, t_hi = imu.time_s[0], imu.time_s[-1]
+    return Recording(directory=directory, files=files, epoch_gpst_s=int(epoch), imu=imu,
+                     gnss=_fixes(pos, epoch, t_lo, t_hi, lever, False, gnss_velocity_lag_s),
+                     reference=_fixes(pos, epoch, t_lo, t_hi, lever, True),
+                     mounting=mount, timing=timing)

@@ -1,0 +1,113 @@
+"""RTKLIB solution files (``.pos``) in geodetic form with GPST calendar times.
+
+Header lines start with ``%``; the last of them names the columns, e.g. ::
+
+    %  GPST  latitude(deg) longitude(deg) height(m) Q ns sdn(m) sde(m) sdu(m) sdne(m) ...
+       ... age(s) ratio vn(m/s) ve(m/s) vu(m/s) sdvn sdve sdvu sdvne sdveu sdvun
+
+Columns are located by these names, so files with or without the velocity block load.
+Quality ``Q``: 1 fixed, 2 float, 3 SBAS, 4 DGPS, 5 single, 6 PPP.
+"""
+from __future__ import annotations
+
+import calendar
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from fuzzynav.errors import InputFileError
+
+#: columns after the two date-time fields, by header name -> our name
+_COLUMNS = {"latitude(deg)": "lat_deg", "longitude(deg)": "lon_deg", "height(m)": "h_m",
+            "Q": "q", "ns": "ns", "sdn(m)": "sd_n", "sde(m)": "sd_e", "sdu(m)": "sd_u",
+            "age(s)": "age_s", "ratio": "ratio", "vn(m/s)": "vel_n", "ve(m/s)": "vel_e",
+            "vu(m/s)": "vel_u", "sdvn": "sd_vn", "sdve": "sd_ve", "sdvu": "sd_vu"}
+_REQUIRED = ("lat_deg", "lon_deg", "h_m", "q", "sd_n", "sd_e", "sd_u")
+_VELOCITY = ("vel_e", "vel_n", "vel_u", "sd_ve", "sd_vn", "sd_vu")
+
+
+@dataclass(frozen=True)
+class PosFile:
+    """Columns of a ``.pos`` file.
+
+    Attributes
+    ----------
+    time_int_s, time_frac_s : ndarray
+        GPST of each epoch as seconds since 1970 (GPS scale), integer and fraction.
+    columns : dict
+        name -> ndarray (N,): ``lat_deg lon_deg h_m q ns sd_n sd_e sd_u age_s ratio`` and,
+        when present, ``vel_e vel_n vel_u sd_ve sd_vn sd_vu`` (NaN where the file has none).
+    """
+
+    time_int_s: np.ndarray
+    time_frac_s: np.ndarray
+    columns: dict
+
+
+def _header_columns(path, header_line: str) -> dict:
+    names = header_line.lstrip("%").split()
+    if not names or names[0] != "GPST":
+        raise InputFileError(path, "header", "expected the time column 'GPST' in calendar form "
+                                             f"(RTKLIB 'yyyy/mm/dd hh:mm:ss'), got {names[:1]}")
+    # the date-time is two whitespace-separated fields under one header name
+    index = {_COLUMNS[n]: k + 1 for k, n in enumerate(names[1:], start=1) if n in _COLUMNS}
+    missing = [c for c in _REQUIRED if c not in index]
+    if missing:
+        raise InputFileError(path, "header", "not a geodetic RTKLIB solution: no column "
+                             + ", ".join(missing) + " (llh output with latitude(deg) ... needed)")
+    return index
+
+
+def _parse_time(path, lineno, date: str, clock: str):
+    try:
+        y, mo, d = (int(v) for v in date.split("/"))
+        hh, mm, ss = clock.split(":")
+        sec = float(ss)
+        whole = int(np.floor(sec))
+        t = calendar.timegm((y, mo, d, int(hh), int(mm), whole, 0, 0, 0))
+        return t, sec - whole
+    except (ValueError, TypeError):
+        raise InputFileError(path, f"line {lineno}",
+                             f"bad GPST date-time {date} {clock!r}") from None
+
+
+def read_pos(path) -> PosFile:
+    """Parse an RTKLIB ``.pos`` file (llh, GPST)."""
+    path = Path(path)
+    index, rows, t_int, t_frac, linenos = None, [], [], [], []
+    with open(path, encoding="ascii", errors="replace") as f:
+        for lineno, line in enumerate(f, start=1):
+            if line.startswith("%"):
+                tokens = line.lstrip("%").split()
+                if len(tokens) >= 4 and (tokens[0] in ("GPST", "UTC", "JST")
+                                         or "latitude(deg)" in tokens):
+                    index = _header_columns(path, line)
+                continue
+            if not line.strip():
+                continue
+            if index is None:
+                raise InputFileError(path, "header", "no column header line ('%  GPST ...') "
+                                                     "before the first solution")
+            fields = line.split()
+            try:
+                rows.append([float(fields[k]) for k in index.values()])
+            except (ValueError, IndexError):
+                raise InputFileError(path, f"line {lineno}",
+                                     f"expected {max(index.values()) + 1} numeric fields") from None
+            ti, tf = _parse_time(path, lineno, fields[0], fields[1])
+            t_int.append(ti)
+            t_frac.append(tf)
+            linenos.append(lineno)
+    if not rows:
+        raise InputFileError(path, "", "no solutions in the file")
+    data = np.array(rows, dtype=float)
+    columns = {name: data[:, j] for j, name in enumerate(index)}
+    for name in _VELOCITY + ("ns", "age_s", "ratio"):
+        columns.setdefault(name, np.full(data.shape[0], np.nan))
+    t_int, t_frac = np.array(t_int, dtype=np.int64), np.array(t_frac)
+    bad = np.flatnonzero(np.diff((t_int - t_int[0]) + t_frac) <= 0.0)
+    if bad.size:
+        raise InputFileError(path, f"line {linenos[bad[0] + 1]}",
+                             "epoch not after the previous one (times must increase)")
+    return PosFile(time_int_s=t_int, time_frac_s=t_frac, columns=columns)
