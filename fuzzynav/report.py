@@ -50,7 +50,8 @@ def comparison_rows(df: pd.DataFrame, filters, baseline=None, rows=NAV_ROWS, cla
 
 
 def render(header, rows, markdown=False) -> str:
-    """Render rows as an aligned text table or a Markdown table."""
+    """Render rows as an aligned text table or a Markdown table (short rows padded)."""
+    rows = [list(r) + ["—"] * (len(header) - len(r)) for r in rows]
     if markdown:
         lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
         lines += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]

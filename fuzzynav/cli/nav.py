@@ -21,6 +21,13 @@ def register(sub) -> None:
     p.add_argument("--filter", default="ekf", help="named filter (see `fuzzynav scenarios`)")
     add_common_arguments(p)
     p.set_defaults(func=_cmd_run)
+    p = sub.add_parser("compare", help="compare filters on a scenario (the papers' table layout)")
+    p.add_argument("scenario", help="built-in scenario name or scenario TOML file")
+    p.add_argument("--filters", default="ekf,fakf",
+                   help="comma-separated named filters; the first is the baseline of the "
+                        "improvement column (default: %(default)s)")
+    add_common_arguments(p)
+    p.set_defaults(func=_cmd_compare, data=None)
 
 
 def add_source_arguments(p) -> None:
@@ -86,6 +93,19 @@ def _cmd_run(args) -> int:
 
         return run_recording(args.data, args.filter, filter_options(args), args)
     return run_scenario_filters(args, [args.filter], baseline=None)
+
+
+def _cmd_compare(args) -> int:
+    from fuzzynav.claims import claims_for
+
+    filters = [f.strip() for f in args.filters.split(",") if f.strip()]
+    if len(filters) < 2:
+        raise FuzzynavError("--filters needs at least two comma-separated filter names")
+    if args.mc < 1:
+        raise FuzzynavError(f"--mc must be >= 1, got {args.mc}")
+    labels, claims = claims_for(str(args.scenario))
+    return run_scenario_filters(args, filters, baseline=filters[0], claims=claims,
+                                claim_labels=labels)
 
 
 def run_scenario_filters(args, filters, baseline=None, claims=None, claim_labels=()) -> int:
