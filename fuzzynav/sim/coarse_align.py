@@ -76,18 +76,33 @@ def _speed(gnss) -> np.ndarray:
     return np.hypot(gnss.z[:, 3], gnss.z[:, 4])
 
 
-def opening_rest(imu, gnss, rest_speed_mps=0.2, margin_s=1.0, min_rest_s=2.0):
-    """The rest period at the start, ``(t0, t1)`` [s], from the GNSS speed."""
+def opening_rest(imu, gnss, rest_speed_mps=0.2, min_rest_s=2.0, block_s=0.5,
+                 min_force_mps2=0.02):
+    """The rest period at the start, ``(t0, t1)`` [s].
+
+    It ends before the first GNSS epoch faster than ``rest_speed_mps`` and, earlier, at the
+    first block of ``block_s`` whose mean specific force leaves that of the first half of
+    the rest by more than five times its block-to-block spread (at least
+    ``min_force_mps2``): a smooth start is seen by the accelerometers before the GNSS
+    speed rises above its noise.
+    """
     t0 = float(imu.time_s[0])
     speed = _speed(gnss)
-    after = (gnss.time_s >= t0) & np.isfinite(speed)
-    moving = after & (speed > rest_speed_mps)
-    t_move = gnss.time_s[moving][0] if moving.any() else float(imu.time_s[-1])
-    t1 = float(t_move) - margin_s
-    if t1 - t0 < min_rest_s:
+    moving = (gnss.time_s >= t0) & np.isfinite(speed) & (speed > rest_speed_mps)
+    t_move = float(gnss.time_s[moving][0]) if moving.any() else float(imu.time_s[-1])
+    edges = np.arange(t0, t_move, block_s)
+    if edges.size >= 5:
+        k = np.searchsorted(imu.time_s, edges)
+        f = np.add.reduceat(imu.dv_b[: k[-1]], k[:-1], axis=0) / block_s
+        ref = np.median(f[: max(2, f.shape[0] // 2)], axis=0)
+        dev = np.linalg.norm(f - ref, axis=1)
+        thr = max(5.0 * 1.4826 * np.median(dev[: max(2, f.shape[0] // 2)]), min_force_mps2)
+        out = np.flatnonzero(dev > thr)
+        t_move = float(edges[out[0]]) if out.size else float(edges[-1])
+    if t_move - t0 < min_rest_s:
         raise InputFileError(None, "initialisation", f"no rest of {min_rest_s:g} s at the "
                              f"start (moving {t_move - t0:.1f} s after the first IMU sample)")
-    return t0, t1
+    return t0, t_move
 
 
 def level(imu, t0, t1):
