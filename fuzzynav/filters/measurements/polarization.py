@@ -35,6 +35,8 @@ from fuzzynav.nav import polarization as ps
 
 MODES = {"angles": 0, "aop": 1}
 CH_HEADING, CH_PITCH, CH_AOP = 0, 1, 2
+#: largest attitude variance an imaging fix may claim and still be used [rad^2] (~6 deg)
+_MAX_VAR = 0.01
 _HDR = 5
 
 
@@ -94,14 +96,29 @@ def _imaging(C, aops, views, sun, sigma, prior_std, J, z, H, R, chan):
     if not (math.isfinite(p) and math.isfinite(h)):
         return 0
     euler_jacobian(C, J)
+    dh = _wrap(heading - h)
+    if not (0.0 < cov[0, 0] < _MAX_VAR) or not (0.0 < cov[1, 1] < _MAX_VAR):
+        # degenerate geometry (views nearly in one plane with the sun): keep at most the
+        # heading row when it alone is well determined
+        if not 0.0 < cov[1, 1] < _MAX_VAR:
+            return 0
+        z[0] = dh
+        for j in range(3):
+            H[0, j] = J[2, j]
+        R[0] = cov[1, 1]
+        chan[0] = CH_HEADING
+        return 1
     g = cov[0, 1] / cov[0, 0]  # heading row conditioned on the pitch row
+    r1 = cov[1, 1] - g * cov[0, 1]
+    if not r1 > 1e-6 * cov[1, 1]:
+        return 0
     z[0] = pitch - p
-    z[1] = _wrap(heading - h) - g * z[0]
+    z[1] = dh - g * z[0]
     for j in range(3):
         H[0, j] = J[0, j]
         H[1, j] = J[2, j] - g * J[0, j]
     R[0] = cov[0, 0]
-    R[1] = cov[1, 1] - g * cov[0, 1]
+    R[1] = r1
     chan[0], chan[1] = CH_PITCH, CH_HEADING
     return 2
 
