@@ -75,11 +75,12 @@ def test_gps_time_of_the_pos_writer():
     assert (1_700_000_000 // 60) % 60 == 13
 
 
-def test_time_alignment_recovers_the_true_clock(tmp_path):
-    t_true, _, _ = build(tmp_path)
+@pytest.mark.parametrize("crlf_stripped", [True, False])
+def test_time_alignment_recovers_the_true_clock(tmp_path, crlf_stripped):
+    t_true, _, _ = build(tmp_path, crlf_stripped=crlf_stripped)
     rec = rtklib.load_rtklib(tmp_path, imu_delay_s=LATENCY_MS / 1000.0 + EXTRA_S,
                              resample_hz=None)
-    assert rec.timing.method == "tag-fit" and rec.timing.crlf_restored
+    assert rec.timing.method == "tag-fit" and rec.timing.crlf_restored == crlf_stripped
     # 30 s of +-5 ms arrival noise determine the rate to about 1e-5
     assert rec.timing.clock_rate == pytest.approx(PC_RATE, abs=4e-5)
     assert rec.timing.clock.regular and rec.timing.clock.n_missing == 0
@@ -155,6 +156,13 @@ def test_malformed_csv_line_is_named(tmp_path):
     with pytest.raises(InputFileError) as exc:
         rtklib.load_rtklib(tmp_path)
     assert exc.value.where == "line 101" and exc.value.path == str(p)
+
+
+def test_span_outside_the_data(tmp_path):
+    build(tmp_path)
+    with pytest.raises(InputFileError, match="leaves no IMU data") as exc:
+        rtklib.load_rtklib(tmp_path, span_s=(100.0, 200.0))
+    assert exc.value.where == "span_s"
 
 
 def test_malformed_tag_and_pos(tmp_path):

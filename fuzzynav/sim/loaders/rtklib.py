@@ -308,8 +308,8 @@ def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
     rate = round(1000.0 / clock.period_ms) if resample_hz == "nominal" else resample_hz
     try:
         imu = _imu_data(data, t_s, mount, rate, span)
-    except InputFileError as exc:
-        raise InputFileError(files["imu"], exc.where, exc.what) from None
+    except InputFileError as exc:  # a span outside the data
+        raise InputFileError(directory, exc.where, exc.what) from None
     imu.meta.update(n_missing_samples=clock.n_missing, max_gap_s=clock.max_gap_ms / 1000.0,
                     tick_jitter_ms=clock.jitter_ms)
     pos = read_pos(files["pos"])
