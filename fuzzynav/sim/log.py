@@ -89,6 +89,12 @@ def _to_arrays(log: SensorLog, key: str) -> dict:
         out.update({f"{p}.kind": np.array(data.kind), f"{p}.time_s": data.time_s,
                     f"{p}.z": data.z, f"{p}.sigma": data.sigma})
         out.update({f"{p}.meta.{k}": np.asarray(v) for k, v in data.meta.items()})
+    for k, v in out.items():
+        # an object array would need a pickle, which the reader refuses: fail loudly here
+        # rather than regenerating silently on every run
+        if v.dtype == object:
+            raise TypeError(f"cannot cache {k!r}: meta values must be numbers, strings or "
+                            f"numeric arrays")
     return out
 
 

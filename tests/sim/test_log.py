@@ -121,3 +121,10 @@ def test_imu_truth_matches_the_applied_errors():
 def test_negative_seed_is_refused():
     with pytest.raises(ValueError):
         simlog.simulate(scenario(), -1)
+
+
+def test_meta_that_would_need_a_pickle_is_refused(tmp_path):
+    log = simlog.simulate(scenario(), 9)
+    log.sensors["gps"].meta["bad"] = {"a": 1}
+    with pytest.raises(TypeError, match="sensor.gps.meta.bad"):
+        simlog._to_arrays(log, "k")
