@@ -63,6 +63,8 @@ def aggregate(values: np.ndarray, agg: str) -> np.ndarray:
 def _crossings(sets, u: float, v: float) -> list[float]:
     # every set is linear on (u, v): intersect the lines pairwise
     t = np.array([u + (v - u) / 3.0, u + 2.0 * (v - u) / 3.0])
+    if not t[1] > t[0]:
+        return []
     vals = np.array([s(t) for s in sets])
     slope = (vals[:, 1] - vals[:, 0]) / (t[1] - t[0])
     icpt = vals[:, 0] - slope * t[0]

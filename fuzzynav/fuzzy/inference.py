@@ -60,11 +60,14 @@ def _prepare(fis, inputs):
         raise FisEvaluationError(f"system {fis.name!r} takes inputs {', '.join(names)}; "
                                  f"missing: {missing}, unknown: {unknown}")
     try:
-        arrays = np.broadcast_arrays(*[np.asarray(inputs[n], dtype=float) for n in names])
+        arrays = [np.asarray(inputs[n], dtype=float) for n in names]
+    except (TypeError, ValueError) as exc:
+        raise FisEvaluationError(f"inputs must be numbers or arrays of numbers: {exc}") \
+            from None
+    try:
+        arrays = np.broadcast_arrays(*arrays)
     except ValueError as exc:
         raise FisEvaluationError(f"inputs do not broadcast together: {exc}") from None
-    except TypeError as exc:
-        raise FisEvaluationError(f"inputs must be numbers or arrays: {exc}") from None
     shape = arrays[0].shape
     X = np.stack([a.ravel() for a in arrays], axis=1) if arrays[0].size else \
         np.empty((0, len(names)))

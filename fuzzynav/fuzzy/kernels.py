@@ -13,7 +13,8 @@ import numpy as np
 
 from fuzzynav.fuzzy import layout as L
 from fuzzynav.fuzzy.membership import CONSTANT, mf_scalar
-from fuzzynav.fuzzy.pwl_kernels import build_piece, envelope_defuzz, merge, probor_defuzz
+from fuzzynav.fuzzy.probor_kernels import probor_defuzz
+from fuzzynav.fuzzy.pwl_kernels import build_piece, envelope_defuzz, merge
 
 
 @numba.njit(cache=True)

@@ -10,8 +10,8 @@ only at the jumps of degenerate shoulders).  Pieces are folded into an *envelope
   inside an interval, so the envelope is exactly linear between its points;
 * sum aggregation adds (a sum of linear functions is linear);
 * probor keeps the union of breakpoints; between them the aggregate is the polynomial
-  ``1 - prod(1 - l_p(x))`` of the pieces' linear restrictions and is integrated with a
-  Gauss-Legendre rule of sufficient order (exact for that degree).
+  ``1 - prod(1 - l_p(x))`` of the pieces' linear restrictions, handled in
+  :mod:`fuzzynav.fuzzy.probor_kernels`.
 
 Every integral is then closed form.  Nothing here allocates: all storage is ``work``.
 """
@@ -84,7 +84,7 @@ def _imply(work, src, n, h, imp, dst):
 
 
 @numba.njit(cache=True)
-def _limits(work, base, n, x):
+def vertex_limits(work, base, n, x):
     """Left and right limits at ``x`` of the vertex list at ``base`` (0 outside it)."""
     if n == 0 or x < work[base] or x > work[base + 3 * (n - 1)]:
         return 0.0, 0.0
@@ -103,7 +103,7 @@ def _limits(work, base, n, x):
 @numba.njit(cache=True)
 def _truncate(work, src, n, lo, hi, dst):
     """Restrict the vertex list to [lo, hi], always starting at lo and ending at hi."""
-    left, right = _limits(work, src, n, lo)
+    left, right = vertex_limits(work, src, n, lo)
     _put(work, dst, 0, lo, left, right)
     m = 1
     for k in range(n):
@@ -111,7 +111,7 @@ def _truncate(work, src, n, lo, hi, dst):
         if lo < x < hi:
             _put(work, dst, m, x, work[src + 3 * k + 1], work[src + 3 * k + 2])
             m += 1
-    left, right = _limits(work, src, n, hi)
+    left, right = vertex_limits(work, src, n, hi)
     _put(work, dst, m, hi, left, right)
     return m + 1
 
@@ -320,140 +320,6 @@ def linear_maxima(work, e, n, method):
             x1 = work[e + 3 * (k + 1)]
             meas += x1 - x0
             mom += (x1 - x0) * 0.5 * (x0 + x1)
-    if meas > 0.0:
-        return mom / meas
-    return res
-
-
-# --------------------------------------------------------------------------- probor
-@numba.njit(cache=True)
-def _probor_prepare(work, pieces, npieces, stride, x0, x1, ab):
-    """Store each piece's linear restriction on (x0, x1) at ``ab``; return #active."""
-    act = 0
-    for p in range(npieces):
-        base = pieces + p * stride
-        nv = int(work[base])
-        a = _limits(work, base + 1, nv, x0)[1]
-        b = _limits(work, base + 1, nv, x1)[0]
-        work[ab + 2 * p] = a
-        work[ab + 2 * p + 1] = b
-        if a > 0.0 or b > 0.0:
-            act += 1
-    return act
-
-
-@numba.njit(cache=True)
-def _probor_value(work, npieces, ab, t):
-    q = 1.0
-    for p in range(npieces):
-        a = work[ab + 2 * p]
-        b = work[ab + 2 * p + 1]
-        if a > 0.0 or b > 0.0:
-            q *= 1.0 - (a + (b - a) * t)
-    return 1.0 - q
-
-
-@numba.njit(cache=True)
-def _gl_integral(fp, fgl, ngl, work, npieces, ab, t_end, weight_x, x0, d, c):
-    """Integral over t in [0, t_end] of f(t) (weight_x: times x - c) with d dx = dt."""
-    tab = fgl + ngl * (ngl - 1)
-    s = 0.0
-    for j in range(ngl):
-        t = t_end * fp[tab + 2 * j]
-        f = _probor_value(work, npieces, ab, t)
-        if weight_x:
-            f *= x0 + d * t - c
-        s += fp[tab + 2 * j + 1] * f
-    return s * t_end * d
-
-
-@numba.njit(cache=True)
-def probor_defuzz(fp, fgl, work, e, n, pieces, npieces, stride, ab, method, c):
-    """Defuzzify the probor aggregate of the pieces (breakpoints in the envelope at e)."""
-    if method == DEF_SOM or method == DEF_LOM:
-        return point_maxima(work, e, n, method)
-    if method == DEF_MOM:
-        return _probor_mom(work, e, n, pieces, npieces, stride, ab)
-    total = 0.0
-    mom = 0.0
-    for k in range(n - 1):
-        x0 = work[e + 3 * k]
-        d = work[e + 3 * (k + 1)] - x0
-        act = _probor_prepare(work, pieces, npieces, stride, x0, x0 + d, ab)
-        if act == 0 or d <= 0.0:
-            continue
-        ngl = (act + 3) // 2
-        total += _gl_integral(fp, fgl, ngl, work, npieces, ab, 1.0, False, x0, d, c)
-        if method == DEF_CENTROID:
-            mom += _gl_integral(fp, fgl, ngl, work, npieces, ab, 1.0, True, x0, d, c)
-    if not total > 0.0:
-        return math.nan
-    if method == DEF_CENTROID:
-        return c + mom / total
-    return _probor_bisector(fp, fgl, work, e, n, pieces, npieces, stride, ab, total)
-
-
-@numba.njit(cache=True)
-def _probor_bisector(fp, fgl, work, e, n, pieces, npieces, stride, ab, total):
-    half = 0.5 * total
-    cum = 0.0
-    for k in range(n - 1):
-        x0 = work[e + 3 * k]
-        d = work[e + 3 * (k + 1)] - x0
-        act = _probor_prepare(work, pieces, npieces, stride, x0, x0 + d, ab)
-        if act == 0 or d <= 0.0:
-            continue
-        ngl = (act + 3) // 2
-        a = _gl_integral(fp, fgl, ngl, work, npieces, ab, 1.0, False, x0, d, 0.0)
-        if cum + a >= half:
-            return x0 + d * _newton_fraction(fp, fgl, ngl, work, npieces, ab, d, half - cum, a)
-        cum += a
-    return work[e + 3 * (n - 1)]
-
-
-@numba.njit(cache=True)
-def _newton_fraction(fp, fgl, ngl, work, npieces, ab, d, r, a):
-    """t in [0, 1] with integral_0^t f = r (f >= 0 polynomial): safeguarded Newton."""
-    lo = 0.0
-    hi = 1.0
-    t = r / a
-    for _ in range(100):
-        g = _gl_integral(fp, fgl, ngl, work, npieces, ab, t, False, 0.0, d, 0.0) - r
-        if g > 0.0:
-            hi = t
-        else:
-            lo = t
-        slope = d * _probor_value(work, npieces, ab, t)
-        tn = t - g / slope if slope > 0.0 else 0.5 * (lo + hi)
-        if not lo < tn < hi:
-            tn = 0.5 * (lo + hi)
-        if abs(tn - t) <= 1e-16 or hi - lo <= 1e-16:
-            return tn
-        t = tn
-    return t
-
-
-@numba.njit(cache=True)
-def _probor_mom(work, e, n, pieces, npieces, stride, ab):
-    res = point_maxima(work, e, n, DEF_MOM)
-    if math.isnan(res):
-        return res
-    h = 0.0
-    for k in range(n):
-        h = max(h, work[e + 3 * k + 1], work[e + 3 * k + 2])
-    thr = h - MAX_RTOL * h
-    meas = 0.0
-    mom = 0.0
-    for k in range(n - 1):
-        x0 = work[e + 3 * k]
-        x1 = work[e + 3 * (k + 1)]
-        if work[e + 3 * k + 2] >= thr and work[e + 3 * (k + 1) + 1] >= thr:
-            # the product of linear factors is log-concave: equal ends and an equal
-            # middle mean it is constant on the interval
-            _probor_prepare(work, pieces, npieces, stride, x0, x1, ab)
-            if _probor_value(work, npieces, ab, 0.5) >= thr:
-                meas += x1 - x0
-                mom += (x1 - x0) * 0.5 * (x0 + x1)
     if meas > 0.0:
         return mom / meas
     return res

@@ -13,8 +13,8 @@ import re
 from dataclasses import dataclass, field
 from functools import cached_property
 
-from fuzzynav.fuzzy._where import fail, located
-from fuzzynav.fuzzy.membership import FUZZY_SHAPES, SHAPES, SUGENO_SHAPES, check_params
+from fuzzynav.fuzzy._where import fail
+from fuzzynav.fuzzy.membership import SHAPES, check_params
 
 NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,63}$")
 
@@ -39,7 +39,8 @@ def _check_name(name, where: str, what: str = "name"):
                     f"at most 64 characters), got {name!r}")
 
 
-def _unique(names, where: str, what: str):
+def unique(names, where: str, what: str):
+    """Fail on the first repeated name (``where[i].name``)."""
     seen = set()
     for i, n in enumerate(names):
         if n in seen:
@@ -119,7 +120,7 @@ class Variable:
         object.__setattr__(self, "terms", tuple(self.terms))
         if not self.terms:
             fail("terms", "a variable needs at least one term")
-        _unique([t.name for t in self.terms], "terms", "term")
+        unique([t.name for t in self.terms], "terms", "term")
         if self.default is not None:
             d = float(self.default)
             if not (math.isfinite(d) and lo <= d <= hi):
@@ -250,108 +251,7 @@ class FuzzySystem:
         if self.type not in ("mamdani", "sugeno"):
             fail("type", f"type must be 'mamdani' or 'sugeno', got {self.type!r}")
         self.operators.check(self.type)
-        self._check_variables()
-        self._check_rules()
-        self._check_defuzzification()
-
-    # -- validation -------------------------------------------------------------
-    def _check_variables(self):
-        if not self.inputs:
-            fail("inputs", "a system needs at least one input")
-        if not self.outputs:
-            fail("outputs", "a system needs at least one output")
-        _unique([v.name for v in self.inputs], "inputs", "input")
-        _unique([v.name for v in self.outputs], "outputs", "output")
-        in_names = {v.name for v in self.inputs}
-        for j, v in enumerate(self.outputs):
-            if v.name in in_names:
-                fail(f"outputs[{j}].name", f"{v.name!r} is already the name of an input")
-        for i, v in enumerate(self.inputs):
-            if v.default is not None:
-                fail(f"inputs[{i}].default", "'default' applies to outputs only")
-            for k, t in enumerate(v.terms):
-                if t.mf not in FUZZY_SHAPES:
-                    fail(f"inputs[{i}].terms[{k}].mf",
-                         f"'{t.mf}' is a Sugeno output shape, not an input shape")
-        for j, v in enumerate(self.outputs):
-            self._check_output_terms(j, v)
-
-    def _check_output_terms(self, j: int, v: Variable):
-        sugeno = self.type == "sugeno"
-        kinds = set()
-        for k, t in enumerate(v.terms):
-            where = f"outputs[{j}].terms[{k}]"
-            if sugeno and t.mf not in SUGENO_SHAPES:
-                fail(f"{where}.mf", f"Sugeno outputs use 'constant' or 'linear', got {t.mf!r}")
-            if not sugeno and t.mf in SUGENO_SHAPES:
-                fail(f"{where}.mf", f"'{t.mf}' is a Sugeno shape; this system is Mamdani")
-            if t.mf == "linear":
-                with located(where):
-                    check_params("linear", t.params, len(self.inputs), "params")
-            self._check_output_extent(where, v, t)
-            kinds.add("singleton" if t.mf == "singleton" else "set")
-        if len(kinds) > 1:
-            fail(f"outputs[{j}].terms", "an output mixes singleton and continuous terms; "
-                                        "use one kind per output")
-
-    @staticmethod
-    def _check_output_extent(where: str, v: Variable, t: Term):
-        lo, hi = v.range
-        p = t.params
-        if t.mf == "tri" and not p[0] < p[2]:
-            fail(f"{where}.params", "an output triangle needs a < c (non-zero width)")
-        if t.mf == "trap" and not p[0] < p[3]:
-            fail(f"{where}.params", "an output trapezoid needs a < d (non-zero width)")
-        if t.mf == "singleton" and not lo <= p[0] <= hi:
-            fail(f"{where}.params", f"singleton position {p[0]!r} outside the range "
-                                    f"[{lo!r}, {hi!r}]")
-
-    def _check_rules(self):
-        if not self.rules:
-            fail("rules", "a system needs at least one rule")
-        ins = {v.name: v for v in self.inputs}
-        outs = {v.name: v for v in self.outputs}
-        for r, rule in enumerate(self.rules):
-            seen = set()
-            for a in rule.antecedents:
-                where = f"rules[{r}].if.{a.variable}"
-                if a.variable not in ins:
-                    fail(where, f"unknown input {a.variable!r}; inputs: {', '.join(ins)}")
-                if a.variable in seen:
-                    fail(where, f"input {a.variable!r} appears twice in one rule")
-                seen.add(a.variable)
-                self._check_term(where, "input", ins[a.variable], a.term)
-            seen = set()
-            for out, term in rule.consequents:
-                where = f"rules[{r}].then.{out}"
-                if out not in outs:
-                    fail(where, f"unknown output {out!r}; outputs: {', '.join(outs)}")
-                if out in seen:
-                    fail(where, f"output {out!r} appears twice in one rule")
-                seen.add(out)
-                self._check_term(where, "output", outs[out], term)
-
-    @staticmethod
-    def _check_term(where, what, var: Variable, term: str):
-        names = [t.name for t in var.terms]
-        if term not in names:
-            fail(where, f"unknown term {term!r} of {what} {var.name!r}; terms: "
-                        f"{', '.join(names)}")
-
-    def _check_defuzzification(self):
-        if self.type != "mamdani":
-            return
-        op = self.operators
-        for j, v in enumerate(self.outputs):
-            kinds = {t.kind for t in v.terms}
-            if "singleton" in kinds and op.defuzzifier == "bisector":
-                fail("operators.defuzzifier", f"bisector is undefined for the singleton "
-                                              f"terms of output {v.name!r}")
-            if ("curved" in kinds and op.defuzzifier in ("mom", "som", "lom")
-                    and op.aggregation != "max"):
-                fail("operators.defuzzifier",
-                     f"{op.defuzzifier} with {op.aggregation} aggregation needs piecewise-"
-                     f"linear output terms (tri, trap); output {v.name!r} has curved terms")
+        check_system(self)
 
     # -- convenience --------------------------------------------------------------
     @property
@@ -420,3 +320,6 @@ class FuzzySystem:
 
         return evaluate(self, inputs, mode=mode, n_points=n_points,
                         return_info=return_info, engine=engine)
+
+
+from fuzzynav.fuzzy.validation import check_system  # noqa: E402  (uses the classes above)
