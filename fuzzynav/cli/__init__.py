@@ -13,7 +13,7 @@ import sys
 from fuzzynav.errors import FuzzynavError
 
 #: modules under ``fuzzynav.cli`` that contribute sub-commands, in help order
-COMMAND_MODULES = ("fis", "nav")
+COMMAND_MODULES = ("fis", "nav", "study")
 
 
 def build_parser() -> argparse.ArgumentParser:

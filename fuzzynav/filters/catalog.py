@@ -47,28 +47,40 @@ def bind_rule_files(paths, sensors: dict, required: bool = True) -> dict:
     """Adaptation policies from rule files, keyed by the sensor they bind to."""
     from fuzzynav.fuzzy import load_fis
 
-    out = {}
+    items = []
     for path in paths:
         path = find_rule_file(path)
-        fis = load_fis(path)
-        policy = adaptation.get((fis.binding or {}).get("adapter", ""))(fis, str(path))
+        items.append((load_fis(path), str(path)))
+    return bind_systems(items, sensors, required)
+
+
+def bind_systems(items, sensors: dict, required: bool = True) -> dict:
+    """Bind ``(fuzzy system, source)`` pairs to the run's sensors by their binding.
+
+    A system binds to the sensor named (or of the kind named) by ``binding.sensor``, else
+    to every sensor whose measurement model has all the channels its inputs read.
+    """
+    out = {}
+    for fis, source in items:
+        policy = adaptation.get((fis.binding or {}).get("adapter", ""))(fis, source)
         target = (fis.binding or {}).get("sensor")
         chans = set(policy.channels)
-        matched = [nm for nm, d in sensors.items()
-                   if (nm == target or d.kind == target) if target
-                   ] if target else [nm for nm, d in sensors.items()
-                                     if chans and chans <= set(measurements.get(d.kind).channels)]
+        if target:
+            matched = [nm for nm, d in sensors.items() if target in (nm, d.kind)]
+        else:
+            matched = [nm for nm, d in sensors.items()
+                       if chans and chans <= set(measurements.get(d.kind).channels)]
         if not matched:
             if required:
                 raise FuzzynavError(
-                    f"{path}: binding reads channels {sorted(chans) or ['all']}"
+                    f"{source}: binding reads channels {sorted(chans) or ['all']}"
                     f"{' of sensor ' + repr(target) if target else ''}; no sensor of this run "
                     f"provides them (sensors: {', '.join(sorted(sensors)) or 'none'})")
             continue
         for nm in matched:
             if nm in out:
-                raise FuzzynavError(f"{path}: sensor {nm!r} is already bound to "
-                                    f"{out[nm].source}; give one rule file per sensor")
+                raise FuzzynavError(f"{source}: sensor {nm!r} is already bound to "
+                                    f"{out[nm].source}; give one rule set per sensor")
             out[nm] = policy
     return out
 

@@ -6,11 +6,18 @@ in the rule file's binding (e.g. DoM of ``pos`` and ``vel``) feed the fuzzy syst
 
     P- = alpha^2 Phi P Phi^T + Gamma Q Gamma^T,    K = P- H^T (H P- H^T + R / alpha^2)^-1
 
-(``alpha^2`` multiplies the part of ``P-`` propagated since the last update; the process
-noise accumulated since then is not weighted).  Outputs below 1, and NaN (no statistic),
-are replaced by 1 (no weighting).  Logged per epoch: ``alpha`` and the fuzzy inputs.
+(``alpha^2`` multiplies the part of ``P-`` propagated since the last update, on the states
+the sensor measures directly; the process noise accumulated since then is not weighted).
+
+The paper's alpha is a fading factor, ``alpha >= 1``: outputs below 1 are raised to 1 —
+unless the rule file's output range itself reaches below 1, in which case alpha may go down
+to that bound (``alpha < 1`` sharpens ``P-`` and inflates ``R``: trusting measurements less,
+outside the paper's scheme, offered to the optimiser as an extension).  NaN (no statistic)
+gives 1.  Logged per epoch: ``alpha`` and the fuzzy inputs.
 """
 from __future__ import annotations
+
+import math
 
 import numba as nb
 
@@ -23,8 +30,8 @@ from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
 def alpha_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
     status, x, y = evaluate(fp, ip, st, r, HPH, R, chan, m)
     alpha = y[ip[IP_OUT]]
-    if not alpha >= 1.0:
-        alpha = 1.0
+    if not alpha >= fp[1]:  # fp[1]: the lowest alpha allowed (1, or the output range's low end)
+        alpha = fp[1] if math.isfinite(alpha) else 1.0
     out[0] = alpha * alpha
     out[1] = 1.0
     for i in range(m):
@@ -43,3 +50,9 @@ class FuzzyExponentialWeighting(FuzzyPolicy):
     kernel = alpha_kernel
     role = "alpha"
     diag_prefix = ("alpha",)
+
+    def policy_floats(self):
+        from fuzzynav.filters.adaptation.fuzzy_common import output_index
+
+        out = self.fis.outputs[output_index(self.fis, self.source, self.binding, self.role)]
+        return (min(1.0, max(out.range[0], 0.1)),)

@@ -1,0 +1,226 @@
+"""Study configuration (``studies/*.toml``): what to tune, on which data, how to score it.
+
+Layout (every key in ``docs/studies.md``)::
+
+    name = "paper000_tune"
+    description = "..."
+    [study]          sampler, seed, trials, pruner, objective (single|multi), storage, ...
+    [study.pso]      particles, iterations, inertia = [start, end], c1, c2  (sampler = "pso")
+    [objective]      weights = {pos, vel, att}, baseline = "ekf", t_start_s
+    [train]          scenarios = [...], seeds = [...]
+    [test]           scenarios, seeds, compare = [filters shown beside the tuned rules]
+    [[controllers]]  name, template (rule file), tune, partitions, free_triangles,
+                     rule_weights, window = [lo, hi] (epochs), output_range = [lo, hi]
+                     (bounds of the output's upper end), output_low = [lo, hi] (bounds of
+                     its lower end; default: the template's)
+
+Every problem is one :class:`fuzzynav.errors.InputFileError` naming the file and key.
+"""
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from fuzzynav.errors import DataMissingError, InputFileError
+from fuzzynav.sim.tomltable import Table, with_path
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+SAMPLERS = ("tpe", "random", "qmc", "cmaes", "nsga2", "pso")
+PRUNERS = ("none", "median", "wilcoxon")
+TUNE_MODES = ("both", "rules", "breakpoints")
+#: objective groups and the metric each is measured by
+GROUP_METRICS = {"pos": "rms_pos_m", "vel": "rms_vel_mps", "att": "rms_att_deg"}
+
+
+@dataclass(frozen=True)
+class ControllerConfig:
+    """How one rule file (controller) is tuned."""
+
+    name: str
+    template: Path
+    tune: str = "both"
+    partitions: dict = field(default_factory=dict)
+    free_triangles: bool = False
+    rule_weights: bool = False
+    window: tuple | None = None
+    output_range: tuple | None = None
+    output_low: tuple | None = None
+
+
+@dataclass(frozen=True)
+class PsoConfig:
+    """Particle swarm with a linearly decreasing inertia weight (paper 004)."""
+
+    particles: int = 16
+    iterations: int = 20
+    inertia: tuple = (0.9, 0.4)
+    c1: float = 1.5
+    c2: float = 1.5
+
+
+@dataclass(frozen=True)
+class StudyConfig:
+    """A parsed study file."""
+
+    name: str
+    description: str
+    path: Path | None
+    sampler: str
+    seed: int
+    trials: int
+    pruner: str
+    multi_objective: bool
+    storage: str
+    stale_after_s: float
+    pso: PsoConfig
+    weights: dict
+    baseline: str
+    t_start_s: float
+    train: tuple          # ((scenario, seed), ...)
+    test: tuple
+    compare: tuple
+    controllers: tuple
+
+    @property
+    def storage_url(self) -> str:
+        """The Optuna storage: the configured URL, or a journal file next to the config."""
+        if self.storage:
+            return self.storage
+        base = self.path.parent if self.path is not None else Path.cwd()
+        return f"journal:{base / (self.name + '.journal')}"
+
+    @property
+    def directions(self) -> list:
+        return ["minimize"] * (3 if self.multi_objective else 1)
+
+
+def _runs(t: Table) -> tuple:
+    scenarios = t.data.get("scenarios")
+    seeds = t.data.get("seeds")
+    t._used.update({"scenarios", "seeds"})
+    if not isinstance(scenarios, list) or not scenarios or \
+            not all(isinstance(s, str) for s in scenarios):
+        raise t.error("scenarios", "must be a non-empty array of scenario names or files")
+    if not isinstance(seeds, list) or not seeds or \
+            not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in seeds):
+        raise t.error("seeds", "must be a non-empty array of non-negative integers")
+    return tuple((sc, int(sd)) for sc in scenarios for sd in seeds)
+
+
+def _pair(t: Table, key, kind=float):
+    if not t.has(key):
+        t._used.add(key)
+        return None
+    lo, hi = t.vector(key, 2, broadcast=False)
+    if not lo < hi:
+        raise t.error(key, f"needs lo < hi, got [{lo}, {hi}]")
+    return (kind(lo), kind(hi))
+
+
+def _controller(t: Table, here: Path) -> ControllerConfig:
+    name = t.string("name")
+    tmpl = Path(t.string("template"))
+    if not tmpl.is_absolute():
+        tmpl = here / tmpl
+    if not tmpl.is_file():
+        raise t.error("template", f"rule file not found: {tmpl}")
+    parts = {}
+    pt = t.table("partitions", required=False)
+    if pt is not None:
+        for var, counts in pt.data.items():
+            pt._used.add(var)
+            if isinstance(counts, int) and not isinstance(counts, bool):
+                counts = [counts]
+            if not isinstance(counts, list) or not counts or not all(
+                    isinstance(c, int) and not isinstance(c, bool) and 2 <= c <= 9 for c in counts):
+                raise pt.error(var, "must be a term count in 2..9 or an array of them")
+            parts[var] = tuple(sorted(set(counts)))
+    c = ControllerConfig(name=name, template=tmpl,
+                         tune=t.string("tune", "both", choices=TUNE_MODES),
+                         partitions=parts,
+                         free_triangles=t.boolean("free_triangles", False),
+                         rule_weights=t.boolean("rule_weights", False),
+                         window=_pair(t, "window", int),
+                         output_range=_pair(t, "output_range"),
+                         output_low=_pair(t, "output_low"))
+    t.finish()
+    if c.output_low and c.output_range and not c.output_low[1] < c.output_range[0]:
+        raise t.error("output_low", "must lie below output_range (the output's low end "
+                                    "must stay under its high end)")
+    return c
+
+
+def load_study_config(path) -> StudyConfig:
+    """Read and check a study file."""
+    path = Path(path)
+    if not path.is_file():
+        raise DataMissingError(f"{path}: study file not found")
+    with with_path(str(path)):
+        try:
+            doc = tomllib.loads(path.read_text(encoding="utf-8"))
+        except UnicodeDecodeError as exc:
+            raise InputFileError(None, "", f"not UTF-8 text ({exc.reason})") from None
+        except tomllib.TOMLDecodeError as exc:
+            raise InputFileError(None, "", f"invalid TOML: {exc}") from None
+        return study_config_from_dict(doc, path)
+
+
+def study_config_from_dict(doc: dict, path: Path | None = None) -> StudyConfig:
+    """Build a :class:`StudyConfig` from a parsed TOML document."""
+    top = Table(doc)
+    here = path.parent if path is not None else Path.cwd()
+    name = top.string("name", path.stem if path is not None else "study")
+    desc = top.string("description", "")
+    st = top.table("study")
+    pso_t = st.table("pso", required=False)
+    pso = PsoConfig()
+    if pso_t is not None:
+        pso = PsoConfig(particles=pso_t.integer("particles", 16, lo=2),
+                        iterations=pso_t.integer("iterations", 20, lo=1),
+                        inertia=pso_t.vector("inertia", 2, (0.9, 0.4), lo=0.0, hi=1.0,
+                                             broadcast=False),
+                        c1=pso_t.number("c1", 1.5, lo=0.0), c2=pso_t.number("c2", 1.5, lo=0.0))
+        pso_t.finish()
+        if not pso.inertia[0] >= pso.inertia[1]:
+            raise pso_t.error("inertia", "the start weight must be >= the end weight")
+    study = dict(sampler=st.string("sampler", "tpe", choices=SAMPLERS),
+                 seed=st.integer("seed", 0, lo=0), trials=st.integer("trials", 100, lo=1),
+                 pruner=st.string("pruner", "wilcoxon", choices=PRUNERS),
+                 multi_objective=st.string("objective", "single", choices=("single", "multi"))
+                 == "multi",
+                 storage=st.string("storage", ""),
+                 stale_after_s=st.number("stale_after_s", 300.0, lo=0.0, lo_open=True))
+    st.finish()
+    ob = top.table("objective", required=False) or Table({}, "objective")
+    wt = ob.table("weights", required=False)
+    weights = {"pos": 1.0, "vel": 1.0, "att": 1.0}
+    if wt is not None:
+        weights = {g: wt.number(g, 0.0, lo=0.0) for g in GROUP_METRICS}
+        wt.finish()
+        if not sum(weights.values()) > 0:
+            raise wt.error("", "at least one weight must be positive")
+    baseline = ob.string("baseline", "ekf")
+    t_start = ob.number("t_start_s", 0.0, lo=0.0)
+    ob.finish()
+    train = _runs(top.table("train"))
+    tt = top.table("test")
+    test = _runs(tt)
+    compare = tuple(tt.data.get("compare", ["ekf", "fakf"]))
+    tt._used.add("compare")
+    tt.finish()
+    ctrls = tuple(_controller(c, here) for c in top.tables("controllers"))
+    if not ctrls:
+        raise top.error("controllers", "a study needs at least one [[controllers]] table")
+    if len({c.name for c in ctrls}) != len(ctrls):
+        raise top.error("controllers", "controller names must be unique")
+    top.finish()
+    if study["sampler"] == "pso" and study["multi_objective"]:
+        raise InputFileError(None, "study.sampler", "pso is single-objective here")
+    return StudyConfig(name=name, description=desc, path=path, pso=pso, weights=weights,
+                       baseline=baseline, t_start_s=t_start, train=train, test=test,
+                       compare=compare, controllers=ctrls, **study)

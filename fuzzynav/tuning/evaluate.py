@@ -1,0 +1,82 @@
+"""Train and held-out test tables: tuned rules beside the EKF, the paper's rules and baselines.
+
+Every filter runs on the same (scenario, seed) logs with the same initial error; per run the
+RMS position, velocity and attitude errors are divided by the baseline's (EKF), and the
+table shows the mean ratio per group with a 95 % confidence interval over the runs.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from fuzzynav.experiment import run_on_log
+from fuzzynav.metrics import mean_ci
+from fuzzynav.tuning.config import GROUP_METRICS
+
+TUNED = "tuned"
+
+
+def run_table(evaluator, systems: dict, runs, compare=()) -> pd.DataFrame:
+    """One row per (run, filter): metrics and ratios to the baseline.
+
+    ``systems`` (controller -> FuzzySystem) is run as filter ``"tuned"``; ``compare`` are named
+    filters run beside it (their failures are recorded, not raised).
+    """
+    rows = []
+    for scenario, seed in runs:
+        log = evaluator.log(scenario, seed)
+        base = evaluator.baseline(scenario, seed)
+        outcomes = {}
+        if systems:
+            _, m = evaluator.run_systems(systems, scenario, seed)
+            outcomes[TUNED] = m
+        for name in compare:
+            try:
+                outcomes[name] = run_on_log(log, name, t_start_s=evaluator.config.t_start_s).metrics
+            except Exception as exc:  # a baseline that cannot run here is reported, not fatal
+                outcomes[name] = {"error": str(exc)}
+        for name, m in outcomes.items():
+            row = {"scenario": scenario, "seed": seed, "filter": name}
+            if "error" in m:
+                row["error"] = m["error"]
+            else:
+                row.update({k: v for k, v in m.items()})
+                r = evaluator.ratios(m, scenario, seed)
+                row.update({f"{g}_ratio": r[g] for g in GROUP_METRICS})
+                row["score"] = evaluator.score(r)
+            rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def summary(df: pd.DataFrame, by=("filter",)) -> pd.DataFrame:
+    """Mean ratio (95 % CI half width) per group and filter (optionally per scenario)."""
+    cols = [f"{g}_ratio" for g in GROUP_METRICS] + ["score"]
+    out = []
+    for key, sub in df.groupby(list(by), sort=False):
+        key = key if isinstance(key, tuple) else (key,)
+        row = dict(zip(by, key))
+        for c in cols:
+            if c in sub:
+                est = mean_ci(sub[c].to_numpy(dtype=float))
+                row[c] = est.mean
+                row[c + "_ci"] = est.half_width
+        row["runs"] = len(sub)
+        out.append(row)
+    return pd.DataFrame(out)
+
+
+def format_summary(train: pd.DataFrame, test: pd.DataFrame) -> str:
+    """Plain-text train/test table (ratios to the EKF: < 1 is better than the EKF)."""
+    from fuzzynav.report import render
+
+    header = ["filter", "set", "pos ratio", "vel ratio", "att ratio", "score", "runs"]
+    rows = []
+    for label, df in (("train", train), ("test", test)):
+        if df is None or df.empty:
+            continue
+        for _, r in summary(df).iterrows():
+            rows.append([r["filter"], label] + [
+                f"{r[c]:.3f} ± {r[c + '_ci']:.3f}" if np.isfinite(r.get(c + "_ci", np.nan))
+                else f"{r.get(c, np.nan):.3f}"
+                for c in ("pos_ratio", "vel_ratio", "att_ratio", "score")] + [int(r["runs"])])
+    return render(header, rows)

@@ -1,0 +1,160 @@
+"""``fuzzynav study report``: what a study found, as a Markdown page with figures.
+
+Writes into a directory: ``trials.csv`` (pandas table of every trial), ``history.png``
+(optimisation history), ``importances.png`` (fANOVA importances of the structural
+parameters), ``pareto.png`` (multi-objective studies), ``mf_<controller>.png`` (the tuned
+membership functions), ``report.md`` (summary, rule tables, the train/test table beside the
+EKF, the paper's rules and the compared baselines).
+"""
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from fuzzynav import plots
+from fuzzynav.tuning.evaluate import format_summary, run_table
+from fuzzynav.tuning.export import choose_trial, systems_of
+from fuzzynav.tuning.objective import Evaluator
+
+plt = plots.plt
+
+
+def trials_frame(study) -> pd.DataFrame:
+    """Trials with state, values, ratios and the structural parameters."""
+    df = study.trials_dataframe(attrs=("number", "state", "value", "values", "duration",
+                                       "user_attrs"))
+    keep = [c for c in df.columns if not c.startswith("user_attrs_") or
+            c in ("user_attrs_n_runs", "user_attrs_worker", "user_attrs_retry_of")]
+    out = df[keep].copy()
+    ratios = [t.user_attrs.get("ratios") or {} for t in study.trials]
+    for g in ("pos", "vel", "att"):
+        out[f"{g}_ratio"] = [r.get(g, np.nan) for r in ratios]
+    return out
+
+
+def _history(study, path):
+    vals = [(t.number, t.value) for t in study.trials if t.value is not None]
+    if not vals:
+        return None
+    n, v = np.array(vals).T
+    fig, ax = plt.subplots(figsize=(8, 3.5))
+    ax.plot(n, v, ".", alpha=0.5, label="trial")
+    ax.plot(n, np.minimum.accumulate(v), "-", label="best so far")
+    ax.axhline(1.0, color="k", lw=0.8, ls="--", label="EKF")
+    ax.set_yscale("log")
+    ax.set_xlabel("trial")
+    ax.set_ylabel("score (ratio to EKF)")
+    ax.legend()
+    fig.tight_layout()
+    return plots.save(fig, path)
+
+
+def _importances(study, path):
+    import optuna
+
+    params = sorted({p for t in study.trials for p in t.params
+                     if ".n." in p or p.endswith((".window", ".out_hi", ".out_lo"))})
+    done = [t for t in study.trials if t.value is not None and all(p in t.params for p in params)]
+    if len(params) < 2 or len(done) < 10:
+        return None
+    try:
+        imp = optuna.importance.get_param_importances(study, params=params)
+    except (ValueError, RuntimeError):
+        return None
+    fig, ax = plt.subplots(figsize=(7, 0.4 * len(imp) + 1))
+    ax.barh(list(imp)[::-1], list(imp.values())[::-1])
+    ax.set_xlabel("fANOVA importance")
+    fig.tight_layout()
+    return plots.save(fig, path)
+
+
+def _pareto(study, cfg, path):
+    from fuzzynav.tuning.study import best_trials
+
+    if not cfg.multi_objective:
+        return None
+    pts = np.array([t.values for t in study.trials if t.values is not None])
+    front = np.array([t.values for t in best_trials(study, cfg)])
+    if pts.size == 0:
+        return None
+    fig, axs = plt.subplots(1, 3, figsize=(12, 3.5))
+    for ax, (i, j) in zip(axs, itertools.combinations(range(3), 2)):
+        ax.plot(pts[:, i], pts[:, j], ".", alpha=0.3)
+        if front.size:
+            ax.plot(front[:, i], front[:, j], "o", mfc="none")
+        names = ("pos", "vel", "att")
+        ax.set_xlabel(f"{names[i]} ratio")
+        ax.set_ylabel(f"{names[j]} ratio")
+    fig.tight_layout()
+    return plots.save(fig, path)
+
+
+def _mf_figure(fis, path):
+    variables = list(fis.inputs) + list(fis.outputs)
+    fig, axs = plt.subplots(1, len(variables), figsize=(4 * len(variables), 3))
+    for ax, v in zip(np.atleast_1d(axs), variables):
+        x = np.linspace(v.range[0], v.range[1], 400)
+        for t in v.terms:
+            a, b, c = t.params[:3]
+            y = np.clip(np.minimum((x - a) / max(b - a, 1e-12), (c - x) / max(c - b, 1e-12)), 0, 1)
+            ax.plot(x, y, label=t.name)
+        ax.set_title(v.name)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    return plots.save(fig, path)
+
+
+def rule_table(fis) -> str:
+    """The rule table as Markdown (2 inputs: a grid; otherwise a list)."""
+    if len(fis.inputs) == 2:
+        a, b = fis.inputs
+        grid = {(r.antecedents[0].term, r.antecedents[1].term): r.consequents[0][1]
+                for r in fis.rules if len(r.antecedents) == 2}
+        lines = [f"| {a.name} \\ {b.name} | " + " | ".join(t.name for t in b.terms) + " |",
+                 "|---|" + "---|" * len(b.terms)]
+        for ta in a.terms:
+            lines.append(f"| {ta.name} | " + " | ".join(grid.get((ta.name, tb.name), "—")
+                                                       for tb in b.terms) + " |")
+        return "\n".join(lines)
+    return "\n".join(f"- if {' and '.join(f'{x.variable} is {x.term}' for x in r.antecedents)}"
+                     f" then {r.consequents[0][0]} is {r.consequents[0][1]}" for r in fis.rules)
+
+
+def write_report(cfg, study, out_dir, cache_dir=None, evaluate: bool = True) -> Path:
+    """Write the report directory; returns the path of ``report.md``."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    df = trials_frame(study)
+    df.to_csv(out / "trials.csv", index=False)
+    figs = [_history(study, out / "history.png"), _importances(study, out / "importances.png"),
+            _pareto(study, cfg, out / "pareto.png")]
+    states = df["state"].value_counts().to_dict()
+    lines = [f"# Study `{cfg.name}`", "", cfg.description, "",
+             f"Sampler `{cfg.sampler}`, pruner `{cfg.pruner}`, "
+             f"{'multi' if cfg.multi_objective else 'single'}-objective; trials: "
+             + ", ".join(f"{k} {v}" for k, v in states.items()) + ".", ""]
+    lines += [f"![{p.stem}]({p.name})" for p in figs if p is not None]
+    trial = choose_trial(study, cfg)
+    systems = systems_of(cfg, trial)
+    lines += ["", f"## Best trial: {trial.number}", "",
+              f"Score {trial.values if cfg.multi_objective else trial.value} "
+              f"(ratios to {cfg.baseline}: {trial.user_attrs.get('ratios')}).", ""]
+    for name, fis in systems.items():
+        p = _mf_figure(fis, out / f"mf_{name}.png")
+        lines += [f"### Controller `{name}`", "", f"![mf_{name}]({p.name})", "",
+                  rule_table(fis), "", f"DoM window: {fis.binding.get('window')} epochs.", ""]
+    if evaluate:
+        ev = Evaluator(cfg, cache_dir)
+        compare = tuple(dict.fromkeys(cfg.compare))
+        train = run_table(ev, systems, cfg.train, compare)
+        test = run_table(ev, systems, cfg.test, compare)
+        pd.concat([train.assign(set="train"), test.assign(set="test")]).to_csv(
+            out / "runs.csv", index=False)
+        lines += ["## Train and held-out test (ratio of RMS error to the EKF; < 1 is better)",
+                  "", "```", format_summary(train, test), "```", ""]
+    path = out / "report.md"
+    path.write_text("\n".join(lines) + "\n")
+    return path

@@ -1,0 +1,37 @@
+"""One study worker process: ``python -m fuzzynav.tuning.worker CONFIG --total N ...``.
+
+Started by :func:`fuzzynav.tuning.run.run_study` (one per ``--workers``); it loads the study
+from the shared storage and runs trials until the study holds ``--total`` finished ones.
+Killing it (even with SIGKILL) loses no completed trial: its running trial is failed and
+retried by the next worker that starts a trial (see :func:`study.reap_stale`).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from fuzzynav.errors import FuzzynavError
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m fuzzynav.tuning.worker")
+    ap.add_argument("config")
+    ap.add_argument("--total", type=int, required=True)
+    ap.add_argument("--storage")
+    ap.add_argument("--index", type=int, default=0)
+    ap.add_argument("--cache")
+    args = ap.parse_args(argv)
+    from fuzzynav.tuning.config import load_study_config
+    from fuzzynav.tuning.study import run_worker
+
+    try:
+        cfg = load_study_config(args.config)
+        run_worker(cfg, args.total, args.storage, args.index, args.cache)
+    except FuzzynavError as exc:
+        print(f"fuzzynav worker {args.index}: error: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
