@@ -27,7 +27,7 @@ from fuzzynav.sim.sensors import SensorData
 from fuzzynav.sim.trajectory import Trajectory, generate
 
 #: bump when the simulation or the file layout changes (invalidates every cache file)
-DATA_VERSION = 1
+DATA_VERSION = 3
 
 _TRUTH_ARRAYS = ("time_s", "lla", "vel_n", "att", "q_bn", "dtheta_b", "dv_b", "omega_nb_b")
 _IMU_ARRAYS = ("time_s", "dtheta_b", "dv_b", "gyro_bias_rps", "accel_bias_mps2")

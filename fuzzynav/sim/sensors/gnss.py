@@ -230,6 +230,30 @@ class Spec:
         err_v[outlier] += self.outlier_vel_mps * random_directions(g_dv, k)
         return err_p, err_v, outlier
 
+    def true_sigma(self, time_s) -> np.ndarray:
+        """The 1-sigma of the simulated error's distribution at each epoch, ``(M, 6)``.
+
+        White noise (scaled inside noise windows), the Gauss-Markov and coloured parts at
+        their stationary sigma, and the outliers' share of the variance (probability times
+        the per-axis spread of a fixed length in a random direction, ``L^2 / 3``) — the noise
+        an oracle EKF (``ekf-true``) is told; it knows the distribution, not the draws.
+        ENU metres and m/s.
+        """
+        m = time_s.size
+        scale = np.ones(m)
+        col = np.zeros((m, 2))
+        for w in self.noise_windows:
+            inside = (time_s >= w.start_s) & (time_s < w.end_s)
+            scale[inside] *= w.scale
+            col[inside] += (w.coloured_pos_m ** 2, w.coloured_vel_mps ** 2)
+        var_p = ((scale[:, None] * np.asarray(self.pos_sigma_m)) ** 2
+                 + np.square(self.gm_pos_sigma_m) + col[:, :1])
+        var_v = ((scale[:, None] * np.asarray(self.vel_sigma_mps)) ** 2
+                 + np.square(self.gm_vel_sigma_mps) + col[:, 1:])
+        var_p += self.outlier_rate * self.outlier_pos_m ** 2 / 3.0
+        var_v += self.outlier_rate * self.outlier_vel_mps ** 2 / 3.0
+        return np.sqrt(np.hstack([var_p, var_v]))
+
     def simulate(self, truth, rng, start_utc=None) -> SensorData:
         """Fixes of this receiver along ``truth``.
 
@@ -246,7 +270,8 @@ class Spec:
         -------
         SensorData
             ``meta``: ``lever_arm_b`` [m], ``rate_hz``, the true errors ``err_pos_enu_m`` and
-            ``err_vel_enu_mps``, ``outlier_mask`` and ``outage_windows`` (K, 2).
+            ``err_vel_enu_mps``, ``outlier_mask``, ``outage_windows`` (K, 2) and
+            ``true_sigma`` (M, 6), the 1-sigma of the simulated noise per epoch.
         """
         idx = self.epochs(truth)
         time_s = np.asarray(truth.time_s)[idx]
@@ -265,7 +290,8 @@ class Spec:
         meta = {"lever_arm_b": np.array(self.lever_arm_b_m, dtype=float),
                 "rate_hz": float(self.rate_hz), "err_pos_enu_m": err_p[keep],
                 "err_vel_enu_mps": err_v[keep], "outlier_mask": outlier[keep],
-                "outage_windows": windows}
+                "outage_windows": windows,
+                "true_sigma": self.true_sigma(time_s)[keep]}
         return SensorData(kind="gnss", time_s=time_s[keep], z=z[keep], sigma=sigma[keep],
                           meta=meta)
 

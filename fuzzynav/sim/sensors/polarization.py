@@ -19,7 +19,8 @@ threshold; epochs with no usable view (``point``) or fewer than two (``imaging``
 or under cloud are absent.  ``meta``: ``sensor_type`` (0 point, 1 imaging), ``views_b``
 (k, 3) nominal unit view directions in the body frame, ``rate_hz``, and the truth for
 tests and plots — ``err_aop_rad`` (measured minus nominal-mounting model, so it contains
-the misalignment), ``dop`` and ``cloud_windows`` (K, 2).
+the misalignment), ``dop``, ``cloud_windows`` (K, 2) and ``true_sigma`` (the standard
+deviation of the simulated AoP error, shaped like ``sigma``).
 
 Simulated AoP (:mod:`fuzzynav.sim.skylight`, Rayleigh single scattering): the sun is rotated
 into the true sensor frame ``C_cn = C_bc^T C_bn^T`` with ``C_bc`` the small mounting
@@ -161,6 +162,14 @@ class Spec:
                              * g_out.standard_normal(shape), 0.0)
         return np.radians(err)
 
+    def true_sigma_rad(self) -> float:
+        """Standard deviation of the simulated AoP error [rad] (heavy tails and outliers)."""
+        core = self.noise_deg ** 2
+        if self.student_t_dof > 0.0:
+            core *= self.student_t_dof / (self.student_t_dof - 2.0)
+        return float(np.radians(np.sqrt(core + self.outlier_rate
+                                        * (self.outlier_scale * self.noise_deg) ** 2)))
+
     def clouds(self, t_end_s, rng) -> np.ndarray:
         """All cloudy windows up to ``t_end_s``, array (K, 2) of ``[start_s, end_s)``."""
         out = list(self.cloud_windows)
@@ -225,7 +234,9 @@ class Spec:
         meta = {"sensor_type": SENSOR_TYPES.index(self.sensor_type), "views_b": views,
                 "rate_hz": float(self.rate_hz),
                 "err_aop_rad": skylight.fold_half_pi(aop - aop_nominal)[keep],
-                "dop": dop[keep], "cloud_windows": clouds}
+                "dop": dop[keep], "cloud_windows": clouds,
+                "true_sigma": np.broadcast_to(np.hstack([np.full(k, self.true_sigma_rad()),
+                                                         np.zeros(3)]), z.shape).copy()}
         return SensorData(kind=self.kind, time_s=time_s[keep], z=z,
                           sigma=np.broadcast_to(sigma, z.shape).copy(), meta=meta)
 
