@@ -17,7 +17,7 @@ from fuzzynav.fuzzy.probor_kernels import probor_defuzz
 from fuzzynav.fuzzy.pwl_kernels import build_piece, envelope_defuzz, merge
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _clamp_inputs(fp, ip, x, work):
     status = 0
     n_in = ip[L.N_IN]
@@ -40,7 +40,7 @@ def _clamp_inputs(fp, ip, x, work):
     return status
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _fire_rules(fp, ip, work):
     """Membership degrees of every input term, then the firing strength of every rule."""
     wx = ip[L.W_X]
@@ -72,7 +72,7 @@ def _fire_rules(fp, ip, work):
         work[wfire + r] = acc * fp[fw + r]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _sugeno_output(fp, ip, o, work):
     """Weighted average (or sum) of the rule outputs of output ``o``; nan if none fired."""
     ptr = ip[L.OFF_OUTPTR]
@@ -104,7 +104,7 @@ def _sugeno_output(fp, ip, o, work):
     return num / den
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _term_levels(ip, o, work, agg):
     """Aggregate the firing strengths per output term of ``o`` (max, sum or probor)."""
     ptr = ip[L.OFF_OUTPTR]
@@ -126,7 +126,7 @@ def _term_levels(ip, o, work, agg):
             work[wl + t] = a + w - a * w
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _singleton_output(fp, ip, o, work):
     """Defuzzify the discrete set of singleton terms of output ``o``."""
     _term_levels(ip, o, work, ip[L.OP_AGG])
@@ -164,7 +164,7 @@ def _singleton_output(fp, ip, o, work):
     return best
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _collect_pieces(fp, ip, o, work):
     """Build the implied sets of output ``o`` in the piece table; return their count."""
     lo = fp[ip[L.F_OUTRANGE] + 2 * o]
@@ -196,7 +196,7 @@ def _collect_pieces(fp, ip, o, work):
     return npieces
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _mamdani_output(fp, ip, o, work):
     """Exact defuzzified value of Mamdani output ``o``; nan when its set is empty."""
     kind = ip[ip[L.OFF_OUTVAR] + 4 * o + 2]
@@ -228,7 +228,7 @@ def _mamdani_output(fp, ip, o, work):
     return envelope_defuzz(work, cur, n, ip[L.OP_DEFUZZ], c)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def eval_compiled(fparams, iparams, x, y, work):
     """Evaluate a compiled fuzzy system on one input vector, without allocating.
 
@@ -271,7 +271,7 @@ def eval_compiled(fparams, iparams, x, y, work):
     return status
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def eval_compiled_into(fparams, iparams, X, Y, status):
     """Evaluate every row of ``X`` (n, n_inputs) into ``Y`` (n, n_outputs) and ``status``.
 
@@ -287,7 +287,7 @@ def eval_compiled_into(fparams, iparams, X, Y, status):
     return n_clamped
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def eval_compiled_batch(fparams, iparams, X):
     """Evaluate every row of ``X`` (float64[n, n_inputs]).
 
@@ -303,7 +303,7 @@ def eval_compiled_batch(fparams, iparams, X):
     return Y, n_clamped
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True, parallel=True, error_model="numpy")
 def eval_compiled_parallel(fparams, iparams, X, Y, status, n_chunks):
     """Like :func:`eval_compiled_into`, split into ``n_chunks`` parallel row blocks."""
     n = X.shape[0]

@@ -239,7 +239,7 @@ def evaluate_mf(mf: str, params, x) -> np.ndarray:
 
 
 # ----------------------------------------------------------------------------- numba
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _sig_scalar(z):
     if z >= 0.0:
         return 1.0 / (1.0 + math.exp(-z))
@@ -247,7 +247,7 @@ def _sig_scalar(z):
     return ez / (1.0 + ez)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _smf_scalar(x, a, b):
     if a >= b:
         return 1.0 if x >= a else 0.0
@@ -262,12 +262,12 @@ def _smf_scalar(x, a, b):
     return 1.0 - 2.0 * u * u
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _zmf_scalar(x, a, b):
     return 1.0 - _smf_scalar(x, a, b) if a < b else (1.0 if x <= a else 0.0)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def mf_scalar(code, fp, off, x):
     """Membership degree of scalar ``x`` for the term of ``code`` with params ``fp[off:]``.
 

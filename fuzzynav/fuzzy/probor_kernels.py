@@ -17,7 +17,7 @@ from fuzzynav.fuzzy.layout import DEF_CENTROID, DEF_LOM, DEF_MOM, DEF_SOM, MAX_R
 from fuzzynav.fuzzy.pwl_kernels import vertex_limits, point_maxima
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _probor_prepare(work, pieces, npieces, stride, x0, x1, ab):
     """Store each piece's linear restriction on (x0, x1) at ``ab``; return #active."""
     act = 0
@@ -33,7 +33,7 @@ def _probor_prepare(work, pieces, npieces, stride, x0, x1, ab):
     return act
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _probor_value(work, npieces, ab, t):
     q = 1.0
     for p in range(npieces):
@@ -44,7 +44,7 @@ def _probor_value(work, npieces, ab, t):
     return 1.0 - q
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _gl_integral(fp, fgl, ngl, work, npieces, ab, t_end, weight_x, x0, d, c):
     """Integral over t in [0, t_end] of f(t) (weight_x: times x - c) with d dx = dt."""
     tab = fgl + ngl * (ngl - 1)
@@ -58,7 +58,7 @@ def _gl_integral(fp, fgl, ngl, work, npieces, ab, t_end, weight_x, x0, d, c):
     return s * t_end * d
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _probor_vertex_values(work, e, n, pieces, npieces, stride):
     # merging interpolated the running aggregate linearly, which is wrong between its
     # breakpoints for probor: recompute both limits at every point from the pieces
@@ -75,7 +75,7 @@ def _probor_vertex_values(work, e, n, pieces, npieces, stride):
         work[e + 3 * k + 2] = 1.0 - qr
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def probor_defuzz(fp, fgl, work, e, n, pieces, npieces, stride, ab, method, c):
     """Defuzzify the probor aggregate of the pieces (breakpoint union in the envelope at e)."""
     _probor_vertex_values(work, e, n, pieces, npieces, stride)
@@ -102,7 +102,7 @@ def probor_defuzz(fp, fgl, work, e, n, pieces, npieces, stride, ab, method, c):
     return _probor_bisector(fp, fgl, work, e, n, pieces, npieces, stride, ab, total)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _probor_bisector(fp, fgl, work, e, n, pieces, npieces, stride, ab, total):
     half = 0.5 * total
     cum = 0.0
@@ -120,7 +120,7 @@ def _probor_bisector(fp, fgl, work, e, n, pieces, npieces, stride, ab, total):
     return work[e + 3 * (n - 1)]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _newton_fraction(fp, fgl, ngl, work, npieces, ab, d, r, a):
     """t in [0, 1] with integral_0^t f = r (f >= 0 polynomial): safeguarded Newton."""
     lo = 0.0
@@ -142,7 +142,7 @@ def _newton_fraction(fp, fgl, ngl, work, npieces, ab, d, r, a):
     return t
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _probor_mom(work, e, n, pieces, npieces, stride, ab):
     res = point_maxima(work, e, n, DEF_MOM)
     if math.isnan(res):

@@ -27,7 +27,7 @@ from fuzzynav.fuzzy.membership import TRAP
 
 
 # ----------------------------------------------------------------------------- pieces
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, inline="always", error_model="numpy")
 def _put(work, base, k, x, left, right):
     o = base + 3 * k
     work[o] = x
@@ -35,7 +35,7 @@ def _put(work, base, k, x, left, right):
     work[o + 2] = right
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _append_raw(work, base, n, x, v):
     # consecutive vertices at the same x collapse into one with a jump (left, right)
     if n > 0 and work[base + 3 * (n - 1)] == x:
@@ -45,7 +45,7 @@ def _append_raw(work, base, n, x, v):
     return n + 1
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _raw_shape(fp, code, off, work, base):
     """Vertices of the unit tri/trap (0 outside) at ``base``; returns their count."""
     n = 0
@@ -59,7 +59,7 @@ def _raw_shape(fp, code, off, work, base):
     return n
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _imply(work, src, n, h, imp, dst):
     """Clip (min) or scale (prod) the vertices at ``src`` by level ``h`` into ``dst``."""
     m = 0
@@ -83,7 +83,7 @@ def _imply(work, src, n, h, imp, dst):
     return m
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def vertex_limits(work, base, n, x):
     """Left and right limits at ``x`` of the vertex list at ``base`` (0 outside it)."""
     if n == 0 or x < work[base] or x > work[base + 3 * (n - 1)]:
@@ -100,7 +100,7 @@ def vertex_limits(work, base, n, x):
     return 0.0, 0.0
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _truncate(work, src, n, lo, hi, dst):
     """Restrict the vertex list to [lo, hi], always starting at lo and ending at hi."""
     left, right = vertex_limits(work, src, n, lo)
@@ -116,7 +116,7 @@ def _truncate(work, src, n, lo, hi, dst):
     return m + 1
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def build_piece(fp, code, off, h, imp, lo, hi, work, scratch, dst):
     """Write the implied set of a tri/trap term at level ``h`` to ``work[dst]``.
 
@@ -131,7 +131,7 @@ def build_piece(fp, code, off, h, imp, lo, hi, work, scratch, dst):
 
 
 # --------------------------------------------------------------------------- envelope
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, inline="always", error_model="numpy")
 def _combine(a, b, agg):
     if agg == AGG_MAX:
         return max(a, b)
@@ -140,7 +140,7 @@ def _combine(a, b, agg):
     return a + b - a * b
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _interp_inside(work, base, j, x):
     # value at x strictly between vertices j - 1 and j
     if j == 0:
@@ -151,7 +151,7 @@ def _interp_inside(work, base, j, x):
     return y0 + (work[base + 3 * j + 1] - y0) * (x - x0) / (x1 - x0)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def merge(work, fo, nf, go, ng, oo, agg):
     """Aggregate two vertex lists spanning the same [lo, hi] into ``work[oo]``.
 
@@ -211,7 +211,7 @@ def merge(work, fo, nf, go, ng, oo, agg):
 
 
 # ----------------------------------------------------------------- linear envelopes
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _solve_partial(y0, y1, d, r):
     """Offset t in [0, d] where the integral of the linear y0 -> y1 from 0 reaches r."""
     s = (y1 - y0) / d
@@ -222,13 +222,13 @@ def _solve_partial(y0, y1, d, r):
     return min(max(2.0 * r / den, 0.0), d)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _area(work, e, k):
     d = work[e + 3 * (k + 1)] - work[e + 3 * k]
     return 0.5 * d * (work[e + 3 * k + 2] + work[e + 3 * (k + 1) + 1])
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def linear_centroid(work, e, n, c):
     """Centroid of the envelope at ``e`` (n points, linear between); nan if no area."""
     area = 0.0
@@ -246,7 +246,7 @@ def linear_centroid(work, e, n, c):
     return c + mom / area
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def linear_bisector(work, e, n):
     """Point splitting the envelope's area in halves (middle of a zero gap if any)."""
     total = 0.0
@@ -274,7 +274,7 @@ def linear_bisector(work, e, n):
     return work[e + 3 * (n - 1)]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def point_maxima(work, e, n, method):
     """mom / som / lom from the point values (isolated maxima only) of the envelope."""
     h = 0.0
@@ -302,7 +302,7 @@ def point_maxima(work, e, n, method):
     return s / cnt
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def linear_maxima(work, e, n, method):
     """mom (measure-weighted over plateaus, else mean of maximising points), som, lom."""
     res = point_maxima(work, e, n, method)
@@ -325,7 +325,7 @@ def linear_maxima(work, e, n, method):
     return res
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def envelope_defuzz(work, e, n, method, c):
     """Defuzzify a linear envelope (max or sum aggregation)."""
     if method == DEF_CENTROID:
