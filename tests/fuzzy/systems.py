@@ -2,8 +2,17 @@
 from __future__ import annotations
 
 import itertools
+from pathlib import Path
 
 import numpy as np
+
+ROOT = Path(__file__).resolve().parents[2]
+RULES = ROOT / "rules"
+DATA = ROOT / "tests" / "data"
+GPS = str(RULES / "paper000_gps_sins.json")
+ATT = str(RULES / "paper000_attitude.json")
+ROR = str(RULES / "paper002_ror.json")
+TIPPER = str(DATA / "matlab" / "tipper.fis")
 
 OPS = {"and": "min", "or": "max", "implication": "min", "aggregation": "max",
        "defuzzifier": "centroid"}

@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 from fuzzynav.fuzzy import FisEvaluationError, load_fis
+from tests.fuzzy.systems import ATT, GPS, ROR
 
-GPS = "rules/paper000_gps_sins.json"
 ENGINES = ("compiled", "python")
 
 
@@ -134,10 +134,10 @@ def test_paper_rule_files_reproduce_their_provenance_numbers():
     assert gps.evaluate({"dom_pos": 0.0, "dom_vel": 0.0})["alpha"] == pytest.approx(1.10)
     assert gps.evaluate({"dom_pos": -1.0, "dom_vel": 0.0})["alpha"] == pytest.approx(1 + 0.05 / 3)
     assert gps.evaluate({"dom_pos": 0.0, "dom_vel": 1.0})["alpha"] == pytest.approx(1.15 - 0.05 / 3)
-    ror = load_fis("rules/paper002_ror.json")
+    ror = load_fis(ROR)
     t = ror.evaluate({"ror": [0.0, 1.0, 2.5, 9.0]})["t"]
     np.testing.assert_allclose(t, [0.75, 1.0, 1.25, 1.25], atol=1e-14)
-    att = load_fis("rules/paper000_attitude.json")
+    att = load_fis(ATT)
     a = att.evaluate({"dom_att": [-1.0, 0.0, 1.0]})["alpha"]
     np.testing.assert_allclose(a, [1 + 0.05 / 3, 1.05, 1.1 - 0.05 / 3], atol=1e-14)
 

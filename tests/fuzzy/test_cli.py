@@ -9,8 +9,8 @@ import pytest
 
 from fuzzynav.cli import main
 from fuzzynav.fuzzy import load_fis
+from tests.fuzzy.systems import DATA, GPS, ROR
 
-GPS = "rules/paper000_gps_sins.json"
 
 
 def run(capsys, *argv):
@@ -45,7 +45,7 @@ def test_surface_csv_is_complete_and_exact(capsys):
 
 
 def test_surface_of_a_one_input_system(capsys):
-    code, out, _ = run(capsys, "fis", "surface", "rules/paper002_ror.json", "--grid", "7")
+    code, out, _ = run(capsys, "fis", "surface", ROR, "--grid", "7")
     assert code == 0
     rows = [ln.split() for ln in out.splitlines() if re.match(r"^\d", ln)]
     assert [r[0] for r in rows] == ["0", "0.5", "1", "1.5", "2", "2.5", "3"]
@@ -73,7 +73,7 @@ def test_convert_round_trip(capsys, tmp_path):
 
 @pytest.mark.parametrize("argv,fragment", [
     (["fis", "surface", "nope.json"], "nope.json: no such rule file"),
-    (["fis", "check", "tests/data/bad_fis/unsorted_params.json"],
+    (["fis", "check", str(DATA / "bad_fis" / "unsorted_params.json")],
      "$.inputs[0].terms[1].params: parameters must satisfy a <= b <= c"),
     (["fis", "surface", GPS, "--output", "beta"], "--output beta: no such output"),
     (["fis", "surface", GPS, "--at", "zzz=1"], "--at zzz: no such input"),

@@ -6,7 +6,7 @@ import pytest
 from fuzzynav.fuzzy import FisCompileError, load_fis
 from fuzzynav.fuzzy.compiled import (CompiledFIS, eval_compiled, eval_compiled_batch,
                                      eval_compiled_into)
-from tests.fuzzy.systems import free_terms, mamdani_doc, random_mamdani, random_rules
+from tests.fuzzy.systems import GPS, free_terms, mamdani_doc, random_mamdani, random_rules
 
 OPS = [{"and": a, "or": o, "implication": i, "aggregation": g, "defuzzifier": d}
        for a, o in (("min", "max"), ("prod", "probor"))
@@ -62,7 +62,7 @@ def test_kernel_agrees_with_the_python_exact_path(doc):
 
 
 def test_compiled_form_contract():
-    fis = load_fis("rules/paper000_gps_sins.json")
+    fis = load_fis(GPS)
     cf = fis.compile()
     assert isinstance(cf, CompiledFIS)
     assert cf.fparams.dtype == np.float64 and cf.fparams.ndim == 1
@@ -88,7 +88,7 @@ def _user_loop(fp, ip, X, n_out, work_size):
 
 
 def test_eval_compiled_inside_a_numba_loop_and_on_views():
-    fis = load_fis("rules/paper000_gps_sins.json")
+    fis = load_fis(GPS)
     cf = fis.compile()
     X = np.random.default_rng(0).uniform(-1.5, 1.5, (500, 2))
     total, flags = _user_loop(cf.fparams, cf.iparams, X, cf.n_outputs, cf.work_size)
@@ -103,7 +103,7 @@ def test_eval_compiled_inside_a_numba_loop_and_on_views():
 
 
 def test_batch_counts_clamped_rows_and_flags_each_row():
-    fis = load_fis("rules/paper000_gps_sins.json")
+    fis = load_fis(GPS)
     cf = fis.compile()
     X = np.array([[0.0, 0.0], [2.0, 0.0], [-3.0, -3.0], [np.nan, 0.0], [0.5, 0.5]])
     Y, n_clamped = eval_compiled_batch(cf.fparams, cf.iparams, X)

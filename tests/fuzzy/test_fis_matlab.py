@@ -6,10 +6,9 @@ import pytest
 
 from fuzzynav.fuzzy import FisError, load_fis, read_matlab_fis, write_matlab_fis
 from fuzzynav.fuzzy.fis_matlab import dropped_fields, matlab_text
-from tests.fuzzy.systems import random_mamdani
+from tests.fuzzy.systems import GPS, TIPPER, random_mamdani
 from tests.fuzzy.test_compiled import sugeno_doc
 
-TIPPER = "tests/data/matlab/tipper.fis"
 
 
 def test_reads_matlab_tipper():
@@ -55,7 +54,7 @@ def test_fis_text_is_matlab_style():
 
 
 def test_what_fis_cannot_hold_is_reported_or_refused(tmp_path):
-    gps = load_fis("rules/paper000_gps_sins.json")
+    gps = load_fis(GPS)
     dropped = write_matlab_fis(gps, tmp_path / "g.fis")
     assert dropped == dropped_fields(gps) == ["outputs.alpha.default", "binding", "provenance"]
     back = read_matlab_fis(tmp_path / "g.fis")

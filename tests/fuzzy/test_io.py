@@ -10,10 +10,10 @@ import pytest
 from fuzzynav.fuzzy import (Antecedent, FisError, FuzzySystem, Operators, Rule, Term,
                             Variable, load_fis, save_fis)
 from fuzzynav.fuzzy.io import schema, to_dict
-from tests.fuzzy.systems import random_mamdani
+from tests.fuzzy.systems import ATT, GPS, ROR, RULES, random_mamdani
 from tests.fuzzy.test_compiled import singleton_doc, sugeno_doc
 
-RULE_FILES = sorted(Path("rules").glob("paper*.json"))
+RULE_FILES = sorted(RULES.glob("paper*.json"))
 
 
 def _random_docs():
@@ -58,7 +58,7 @@ def test_schema_is_a_valid_draft_2020_12_schema():
 
 
 def test_rule_files_of_the_papers_have_the_required_structure():
-    gps = load_fis("rules/paper000_gps_sins.json")
+    gps = load_fis(GPS)
     assert gps.input_names == ("dom_pos", "dom_vel") and gps.output_names == ("alpha",)
     assert [t.name for t in gps.inputs[0].terms] == ["NS", "ZE", "PS"]
     assert [t.name for t in gps.outputs[0].terms] == ["zero", "small", "medium", "large"]
@@ -68,17 +68,17 @@ def test_rule_files_of_the_papers_have_the_required_structure():
                      ("ZE", "NS"): "small", ("ZE", "ZE"): "medium", ("ZE", "PS"): "large",
                      ("PS", "NS"): "medium", ("PS", "ZE"): "large", ("PS", "PS"): "zero"}
     assert gps.outputs[0].range[0] == 1.0 and gps.outputs[0].default == 1.0
-    att = load_fis("rules/paper000_attitude.json")
+    att = load_fis(ATT)
     assert [(r.antecedents[0].term, r.consequents[0][1]) for r in att.rules] == [
         ("NS", "XS"), ("ZE", "S"), ("PS", "M")]
-    ror = load_fis("rules/paper002_ror.json")
+    ror = load_fis(ROR)
     assert ror.binding["adapter"] == "r-scaling" and ror.binding["outputs"] == {"t": "r_scale"}
     eq = ror.outputs[0].terms[1]
     assert eq.name == "equal1" and eq.params[1] == 1.0
 
 
 def test_save_is_atomic(tmp_path, monkeypatch):
-    fis = load_fis("rules/paper002_ror.json")
+    fis = load_fis(ROR)
     path = tmp_path / "r.json"
     save_fis(fis, path)
     before = path.read_bytes()
@@ -88,16 +88,16 @@ def test_save_is_atomic(tmp_path, monkeypatch):
 
     monkeypatch.setattr(os, "replace", boom)
     with pytest.raises(OSError, match="disk full"):
-        save_fis(load_fis("rules/paper000_gps_sins.json"), path)
+        save_fis(load_fis(GPS), path)
     assert path.read_bytes() == before
     assert os.listdir(tmp_path) == ["r.json"]  # no temporary file left behind
 
 
 def test_load_from_dict_with_numpy_values():
-    doc = json.loads(Path("rules/paper002_ror.json").read_text())
+    doc = json.loads(Path(ROR).read_text())
     doc["inputs"][0]["range"] = np.array([0.0, 3.0])
     doc["outputs"][0]["terms"][0]["params"] = np.array([0.5, 0.75, 1.0])
-    assert load_fis(doc) == load_fis("rules/paper002_ror.json")
+    assert load_fis(doc) == load_fis(ROR)
 
 
 def test_programmatic_construction_and_its_errors():

@@ -7,9 +7,8 @@ import skfuzzy
 
 from fuzzynav.fuzzy import load_fis, read_matlab_fis
 from tests.fuzzy.reference import firing
-from tests.fuzzy.systems import random_mamdani
+from tests.fuzzy.systems import TIPPER, random_mamdani
 
-TIPPER = "tests/data/matlab/tipper.fis"
 
 
 @pytest.mark.parametrize("service,food,published", [
