@@ -236,7 +236,7 @@ def cmd_check(args) -> int:
     print("compiled kernel: " + ("yes" if fis.is_compilable else
                                  "no (curved output terms: adaptive quadrature in Python)"))
     notes = advisories(fis)
-    print("advisories: " + ("none" if not notes else ""))
+    print("advisories:" + (" none" if not notes else ""))
     for n in notes:
         print(f"  - {n}")
     return 0

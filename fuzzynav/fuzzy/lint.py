@@ -36,7 +36,7 @@ def _gaps(fis) -> list[str]:
         if dead.any():
             idx = np.flatnonzero(dead)
             out.append(f"input {v.name}: no term is active on part of its range "
-                       f"(e.g. near {x[idx[0]]:.6g}); no rule can fire there")
+                       f"(e.g. near {x[idx[0]]:.6g}); rules that need it cannot fire there")
     return out
 
 
