@@ -13,9 +13,11 @@ with the INS prediction resolving the 180° ambiguity, and the filter sees
   ``H = dpsi/dphi - (dpsi_pol/dpitch) dpitch/dphi - (dpsi_pol/droll) droll/dphi`` — the
   conversion uses the INS tilt, whose error therefore enters the converted heading;
   ``R = (dheading/daop)^2 sigma_aop^2``;
-* imaging sensor: pitch and heading (roll from the INS, not estimated, as in paper 000);
-  their 2x2 covariance is decorrelated (the heading row is conditioned on the pitch row)
-  so that ``R`` stays diagonal.
+* imaging sensor: pitch and heading (roll taken from the INS, as in paper 000, which does
+  not estimate it); the solution moves with the INS roll error, so the rows carry
+  ``- d(solution)/d(roll) droll/dphi`` (implicit differentiation of the least-squares fit);
+  the 2x2 covariance is decorrelated (the heading row conditioned on the pitch row) so that
+  ``R`` stays diagonal.
 
 ``aop``: the raw angles of polarization, ``z_i = aop_pred_i(INS) - aop_i`` (folded mod pi)
 with the exact Jacobian on the attitude error — no conversion, no ambiguity beyond the
@@ -89,6 +91,29 @@ def _point(C, aop, sun, sigma, J, z, H, R, chan):
 
 
 @nb.njit(cache=True)
+def _roll_sensitivity(aops, views, sun, p, roll, h):
+    """``d(pitch, heading)/d(roll)`` of the least-squares imaging solution at fixed AoPs.
+
+    The solver takes the roll from the INS, so a roll error moves the solution; implicit
+    differentiation of the normal equations gives ``-(J^T J)^-1 J^T d aop/d roll``.
+    """
+    a00 = a01 = a11 = b0 = b1 = 0.0
+    for i in range(aops.size):
+        if not math.isfinite(aops[i]):
+            continue
+        _, dp, dr, dh = ps.aop_euler_partials(views[i], sun, p, roll, h)
+        a00 += dp * dp
+        a01 += dp * dh
+        a11 += dh * dh
+        b0 += dp * dr
+        b1 += dh * dr
+    det = a00 * a11 - a01 * a01
+    if not det > 0.0:
+        return math.nan, math.nan
+    return -(a11 * b0 - a01 * b1) / det, -(a00 * b1 - a01 * b0) / det
+
+
+@nb.njit(cache=True)
 def _imaging(C, aops, views, sun, sigma, prior_std, J, z, H, R, chan):
     pitch, roll, heading = _euler(C)
     p, h, cov, k = ps.imaging_pitch_heading(aops, views, sun, roll, pitch, heading,
@@ -96,6 +121,12 @@ def _imaging(C, aops, views, sun, sigma, prior_std, J, z, H, R, chan):
     if not (math.isfinite(p) and math.isfinite(h)):
         return 0
     euler_jacobian(C, J)
+    dp_dr, dh_dr = _roll_sensitivity(aops, views, sun, p, roll, h)
+    if not (math.isfinite(dp_dr) and math.isfinite(dh_dr)):
+        return 0
+    for j in range(3):  # rows as seen through the solver: d(angle) - d(solution)/d(roll) d(roll)
+        J[0, j] -= dp_dr * J[1, j]
+        J[2, j] -= dh_dr * J[1, j]
     dh = _wrap(heading - h)
     if not (0.0 < cov[0, 0] < _MAX_VAR) or not (0.0 < cov[1, 1] < _MAX_VAR):
         # degenerate geometry (views nearly in one plane with the sun): keep at most the
