@@ -17,6 +17,45 @@ import warnings as _warnings
 
 __version__ = "0.1.0"
 
+
+def source_key(root, salt: str = "") -> str:
+    """16 hex digits identifying every ``*.py`` file (names and contents) under ``root``."""
+    import hashlib
+    from pathlib import Path
+
+    root = Path(root)
+    h = hashlib.sha256(salt.encode())
+    for path in sorted(root.rglob("*.py")):
+        h.update(path.relative_to(root).as_posix().encode())
+        h.update(path.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def _key_numba_cache() -> None:
+    """Point numba's disk cache at a directory keyed by a hash of this package's sources.
+
+    numba's cache notices changes to a function's own file only, not to the functions it
+    calls from other files (numba's caching docs): after an edit of the fuzzy engine, say, a
+    cached filter kernel would silently keep the old engine.  Keying the whole cache by the
+    package's sources (and numba's version) makes any change recompile everything once.
+    ``NUMBA_CACHE_DIR`` (if set) is used as the base; ``FUZZYNAV_NUMBA_CACHE=0`` disables this.
+    """
+    import os
+    from pathlib import Path
+
+    import numba
+
+    if os.environ.get("FUZZYNAV_NUMBA_CACHE", "1") == "0":
+        return
+    key = source_key(Path(__file__).resolve().parent, numba.__version__)
+    base = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME", os.path.join(os.path.expanduser("~"), ".cache")),
+        "fuzzynav", "numba")
+    numba.config.CACHE_DIR = os.path.join(base, key)
+
+
+_key_numba_cache()
+
 try:  # the filter loop dispatches sensors through numba first-class functions
     from numba.core.errors import NumbaExperimentalFeatureWarning as _NEFW
 

@@ -18,3 +18,19 @@ def test_readme_links_resolve():
     readme = (ROOT / "README.md").read_text()
     for target in re.findall(r"\]\(([^)#]+)\)", readme):
         assert (ROOT / target).exists(), target
+
+
+def test_numba_cache_is_keyed_by_the_sources(tmp_path):
+    import numba
+
+    import fuzzynav
+
+    pkg = Path(fuzzynav.__file__).parent
+    assert Path(numba.config.CACHE_DIR).name == fuzzynav.source_key(pkg, numba.__version__)
+    (tmp_path / "a.py").write_text("x = 1\n")
+    k1 = fuzzynav.source_key(tmp_path)
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "b.py").write_text("y = 2\n")
+    k2 = fuzzynav.source_key(tmp_path)
+    (tmp_path / "sub" / "b.py").write_text("y = 3\n")
+    assert len({k1, k2, fuzzynav.source_key(tmp_path)}) == 3
