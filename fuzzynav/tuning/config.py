@@ -7,7 +7,8 @@ Layout (every key in ``docs/studies.md``)::
     [study]          sampler, seed, trials, pruner, objective (single|multi), storage, ...
     [study.pso]      particles, iterations, inertia = [start, end], c1, c2  (sampler = "pso")
     [objective]      weights = {pos, vel, att}, baseline = "ekf", t_start_s
-    [train]          scenarios = [...], seeds = [...]
+    [train]          scenarios = [...], seeds = [...]  (built-in names, or TOML files
+                     relative to this file, like templates)
     [test]           scenarios, seeds, compare = [filters shown beside the tuned rules]
     [[controllers]]  name, template (rule file), tune, partitions, free_triangles,
                      rule_weights, window = [lo, hi] (epochs), output_range = [lo, hi]
@@ -18,11 +19,12 @@ Every problem is one :class:`fuzzynav.errors.InputFileError` naming the file and
 """
 from __future__ import annotations
 
+import re
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from fuzzynav.errors import DataMissingError, InputFileError
+from fuzzynav.errors import DataMissingError, FuzzynavError, InputFileError
 from fuzzynav.sim.tomltable import Table, with_path
 
 if sys.version_info >= (3, 11):
@@ -35,6 +37,10 @@ PRUNERS = ("none", "median", "wilcoxon")
 TUNE_MODES = ("both", "rules", "breakpoints")
 #: objective groups and the metric each is measured by
 GROUP_METRICS = {"pos": "rms_pos_m", "vel": "rms_vel_mps", "att": "rms_att_deg"}
+#: a study name becomes a file name (the journal) and an Optuna study name
+_NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,99}$")
+#: the DoM/ROR window of an adapter binding, in epochs (fuzzy_common.check_binding)
+_WINDOW = (1, 10000)
 
 
 @dataclass(frozen=True)
@@ -99,7 +105,24 @@ class StudyConfig:
         return ["minimize"] * (3 if self.multi_objective else 1)
 
 
-def _runs(t: Table) -> tuple:
+def _looks_like_path(name: str) -> bool:
+    return name.endswith(".toml") or "/" in name or "\\" in name
+
+
+def _scenario(t: Table, i: int, name: str, here: Path) -> str:
+    """A scenario name, or a file path resolved against the config's directory; checked."""
+    from fuzzynav.sim.scenario import load_scenario
+
+    if _looks_like_path(name) and not Path(name).is_absolute():
+        name = str(here / name)
+    try:
+        load_scenario(name)
+    except FuzzynavError as exc:
+        raise t.error(f"scenarios[{i}]", str(exc)) from None
+    return name
+
+
+def _runs(t: Table, here: Path) -> tuple:
     scenarios = t.data.get("scenarios")
     seeds = t.data.get("seeds")
     t._used.update({"scenarios", "seeds"})
@@ -109,17 +132,49 @@ def _runs(t: Table) -> tuple:
     if not isinstance(seeds, list) or not seeds or \
             not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in seeds):
         raise t.error("seeds", "must be a non-empty array of non-negative integers")
+    scenarios = [_scenario(t, i, sc, here) for i, sc in enumerate(scenarios)]
     return tuple((sc, int(sd)) for sc in scenarios for sd in seeds)
 
 
-def _pair(t: Table, key, kind=float):
+def _filter_name(t: Table, key: str, name) -> str:
+    from fuzzynav.filters.named import get_filter
+
+    if not isinstance(name, str):
+        raise t.error(key, f"must be a filter name, got {name!r}")
+    try:
+        get_filter(name)
+    except FuzzynavError as exc:
+        raise t.error(key, str(exc)) from None
+    return name
+
+
+def _compare(t: Table) -> tuple:
+    names = t.data.get("compare", ["ekf", "fakf"])
+    t._used.add("compare")
+    if not isinstance(names, list):
+        raise t.error("compare", "must be an array of filter names")
+    return tuple(_filter_name(t, f"compare[{i}]", n) for i, n in enumerate(names))
+
+
+def _pair(t: Table, key):
     if not t.has(key):
         t._used.add(key)
         return None
     lo, hi = t.vector(key, 2, broadcast=False)
     if not lo < hi:
         raise t.error(key, f"needs lo < hi, got [{lo}, {hi}]")
-    return (kind(lo), kind(hi))
+    return (lo, hi)
+
+
+def _window(t: Table):
+    pair = _pair(t, "window")
+    if pair is None:
+        return None
+    lo, hi = _WINDOW
+    if not all(float(v).is_integer() and lo <= v <= hi for v in pair):
+        raise t.error("window", f"must be two integer epoch counts in {lo}..{hi}, "
+                                f"got {list(pair)}")
+    return (int(pair[0]), int(pair[1]))
 
 
 def _controller(t: Table, here: Path) -> ControllerConfig:
@@ -145,13 +200,21 @@ def _controller(t: Table, here: Path) -> ControllerConfig:
                          partitions=parts,
                          free_triangles=t.boolean("free_triangles", False),
                          rule_weights=t.boolean("rule_weights", False),
-                         window=_pair(t, "window", int),
+                         window=_window(t),
                          output_range=_pair(t, "output_range"),
                          output_low=_pair(t, "output_low"))
     t.finish()
     if c.output_low and c.output_range and not c.output_low[1] < c.output_range[0]:
         raise t.error("output_low", "must lie below output_range (the output's low end "
                                     "must stay under its high end)")
+    from fuzzynav.tuning.space import check_against_template
+
+    try:
+        check_against_template(c)
+    except InputFileError as exc:
+        if exc.path is not None:  # the template itself is broken: its own error says where
+            raise
+        raise t.error(exc.where, exc.what) from None
     return c
 
 
@@ -175,6 +238,9 @@ def study_config_from_dict(doc: dict, path: Path | None = None) -> StudyConfig:
     top = Table(doc)
     here = path.parent if path is not None else Path.cwd()
     name = top.string("name", path.stem if path is not None else "study")
+    if not _NAME_RE.match(name):
+        raise top.error("name", "must be letters, digits, '_', '.' or '-' (it names the "
+                                f"journal file and the Optuna study), got {name!r}")
     desc = top.string("description", "")
     st = top.table("study")
     pso_t = st.table("pso", required=False)
@@ -204,14 +270,15 @@ def study_config_from_dict(doc: dict, path: Path | None = None) -> StudyConfig:
         wt.finish()
         if not sum(weights.values()) > 0:
             raise wt.error("", "at least one weight must be positive")
-    baseline = ob.string("baseline", "ekf")
+    baseline = _filter_name(ob, "baseline", ob.string("baseline", "ekf"))
     t_start = ob.number("t_start_s", 0.0, lo=0.0)
     ob.finish()
-    train = _runs(top.table("train"))
+    tr = top.table("train")
+    train = _runs(tr, here)
+    tr.finish()
     tt = top.table("test")
-    test = _runs(tt)
-    compare = tuple(tt.data.get("compare", ["ekf", "fakf"]))
-    tt._used.add("compare")
+    test = _runs(tt, here)
+    compare = _compare(tt)
     tt.finish()
     ctrls = tuple(_controller(c, here) for c in top.tables("controllers"))
     if not ctrls:

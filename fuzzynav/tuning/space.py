@@ -9,19 +9,21 @@ For each controller (a template rule file):
   (``{ctrl}.spread.{var}.{n}.{k}.{l|r}``);
 * one categorical consequent per antecedent cell (``{ctrl}.rule.{n1}x{n2}>{no}.{i}.{j}``:
   each structure has its own parameters, so a multivariate sampler models them jointly),
-  optional weights (``{ctrl}.weight....``);
+  optional weights (``{ctrl}.weight.{struct}.{i}.{j}``);
 * the DoM window (``{ctrl}.window``) and the ends of the output range
   (``{ctrl}.out_lo``, ``{ctrl}.out_hi``) where configured.
 
-``tune = "rules"`` keeps the template's breakpoints (evenly spread peaks for other counts),
-``"breakpoints"`` keeps the template's rule table (counts then fixed to the template's).
+``tune = "rules"`` keeps the template's terms verbatim (a strong partition with evenly spread
+peaks for another count or a tuned output range; no gap or spread parameters),
+``"breakpoints"`` keeps the template's rules verbatim (term counts and names then fixed to
+the template's; with ``rule_weights`` each rule gets a weight ``{ctrl}.weight.rule.{i}``).
 Any object with Optuna's ``suggest_int / suggest_float / suggest_categorical`` works as the
 trial (``optuna.trial.FixedTrial`` rebuilds a system from stored parameters).
 """
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -31,6 +33,39 @@ from fuzzynav.fuzzy import (Antecedent, FuzzySystem, Rule, Term, Variable, load_
 
 _GAP = (0.05, 1.0)
 _SPREAD = (0.3, 1.5)
+
+
+def check_against_template(cc) -> FuzzySystem:
+    """Load a controller's template and check that the configuration fits it.
+
+    Returns the template.  Raises :class:`InputFileError` without a file for a setting of
+    the controller that does not fit (``where`` is the key in the controller's table), or
+    the template's own error if the rule file is broken.
+    """
+    tmpl = load_fis(cc.template)
+    if tmpl.type != "mamdani" or len(tmpl.outputs) != 1:
+        raise InputFileError(None, "template", f"{cc.template}: tuning needs a Mamdani "
+                             f"system with one output (this one: {tmpl.type}, "
+                             f"{len(tmpl.outputs)} outputs)")
+    names = set(tmpl.input_names) | set(tmpl.output_names)
+    for var in cc.partitions:
+        if var not in names:
+            raise InputFileError(None, f"partitions.{var}", f"the template {cc.template} "
+                                 f"has no variable {var!r} ({', '.join(sorted(names))})")
+    if cc.tune == "breakpoints":
+        for v in tmpl.inputs + tmpl.outputs:
+            if cc.partitions.get(v.name, (len(v.terms),)) != (len(v.terms),):
+                raise InputFileError(None, f"partitions.{v.name}", "tune = 'breakpoints' "
+                                     "keeps the template's rule table, so the term count "
+                                     f"stays the template's ({len(v.terms)})")
+    lo, hi = tmpl.outputs[0].range
+    if cc.output_low is not None and cc.output_range is None and not cc.output_low[1] < hi:
+        raise InputFileError(None, "output_low", f"must lie below the template's upper end "
+                                                 f"{hi} (or set output_range)")
+    if cc.output_range is not None and cc.output_low is None and not lo < cc.output_range[0]:
+        raise InputFileError(None, "output_range", f"must lie above the template's lower "
+                                                   f"end {lo} (or set output_low)")
+    return tmpl
 
 
 @dataclass(frozen=True)
@@ -43,22 +78,7 @@ class ControllerSpace:
     @classmethod
     def from_config(cls, cc) -> "ControllerSpace":
         """Load the template and check the configuration against it."""
-        tmpl = load_fis(cc.template)
-        where = str(cc.template)
-        if tmpl.type != "mamdani" or len(tmpl.outputs) != 1:
-            raise InputFileError(where, "$", "tuning needs a Mamdani system with one output")
-        names = set(tmpl.input_names) | set(tmpl.output_names)
-        for var in cc.partitions:
-            if var not in names:
-                raise InputFileError(where, f"$.inputs/outputs",
-                                     f"the study's partitions name {var!r}, which the template "
-                                     f"does not have ({', '.join(sorted(names))})")
-        if cc.tune == "breakpoints":
-            for v in tmpl.inputs + tmpl.outputs:
-                if cc.partitions.get(v.name, (len(v.terms),)) != (len(v.terms),):
-                    raise InputFileError(where, f"$.{v.name}", "tune = 'breakpoints' keeps the "
-                                         "template's rule table, so its term counts are fixed")
-        return cls(cc, tmpl)
+        return cls(cc, check_against_template(cc))
 
     # -- building ---------------------------------------------------------------------------
     def _p(self, key):
@@ -71,20 +91,19 @@ class ControllerSpace:
         return trial.suggest_categorical(self._p(f"n.{var.name}"), list(counts))
 
     def _peaks(self, trial, var, n, lo, hi):
-        if self.config.tune == "rules":
-            return self._template_peaks(var, n, lo, hi)
         gaps = [trial.suggest_float(self._p(f"gap.{var.name}.{n}.{k}"), *_GAP)
                 for k in range(n - 1)]
         c = np.concatenate([[0.0], np.cumsum(gaps)])
-        return lo + (hi - lo) * c / c[-1]
-
-    def _template_peaks(self, var, n, lo, hi):
-        peaks = [t.params[1] for t in var.terms] if all(t.mf == "tri" for t in var.terms) else []
-        if len(peaks) == n and var.range == (lo, hi):
-            return np.asarray(peaks, float)
-        return np.linspace(lo, hi, n)
+        peaks = lo + (hi - lo) * c / c[-1]
+        peaks[-1] = hi  # lo + (hi - lo) can round one ulp past either side of hi
+        return peaks
 
     def _terms(self, trial, var, n, lo, hi, labels):
+        if self.config.tune == "rules":
+            # the template's own terms (any shape) where its count and range still hold
+            if n == len(var.terms) and var.range == (lo, hi):
+                return var.terms
+            return triangular_partition(np.linspace(lo, hi, n), labels)
         peaks = self._peaks(trial, var, n, lo, hi)
         if not self.config.free_triangles:
             return triangular_partition(peaks, labels)
@@ -114,39 +133,29 @@ class ControllerSpace:
         return Variable(var.name, (float(lo), float(hi)), tuple(terms), default)
 
     def _rules(self, trial, inputs, output):
+        if self.config.tune == "breakpoints":
+            return self._template_rules(trial)
         counts = [len(v.terms) for v in inputs]
         no = len(output.terms)
         struct = "x".join(map(str, counts)) + f">{no}"
-        table = self._template_table() if self.config.tune == "breakpoints" else None
         rules = []
         for cell in itertools.product(*[range(c) for c in counts]):
             key = ".".join(map(str, cell))
-            if table is not None:
-                if cell not in table:
-                    continue
-                out_term, weight = table[cell]
-            else:
-                k = trial.suggest_categorical(self._p(f"rule.{struct}.{key}"), list(range(no)))
-                out_term, weight = output.terms[k].name, 1.0
+            k = trial.suggest_categorical(self._p(f"rule.{struct}.{key}"), list(range(no)))
+            weight = 1.0
             if self.config.rule_weights:
                 weight = trial.suggest_float(self._p(f"weight.{struct}.{key}"), 0.0, 1.0)
             ants = tuple(Antecedent(v.name, v.terms[i].name) for v, i in zip(inputs, cell))
-            rules.append(Rule(ants, ((output.name, out_term),), weight))
+            rules.append(Rule(ants, ((output.name, output.terms[k].name),), weight))
         return tuple(rules)
 
-    def _template_table(self):
-        """Template rules as {cell index tuple: (output term, weight)} (full AND cells)."""
-        t = self.template
-        out = {}
-        for r in t.rules:
-            if r.connective != "and" or any(a.negated for a in r.antecedents):
-                continue
-            idx = {a.variable: t.inputs[t.input_names.index(a.variable)].term_index(a.term)
-                   for a in r.antecedents}
-            if set(idx) != set(t.input_names):
-                continue
-            out[tuple(idx[n] for n in t.input_names)] = (r.consequents[0][1], r.weight)
-        return out
+    def _template_rules(self, trial):
+        """The template's rules verbatim (term names and counts are kept in this mode)."""
+        rules = self.template.rules
+        if not self.config.rule_weights:
+            return rules
+        return tuple(replace(r, weight=trial.suggest_float(self._p(f"weight.rule.{i}"), 0.0, 1.0))
+                     for i, r in enumerate(rules))
 
     def build(self, trial) -> FuzzySystem:
         """The fuzzy system of a trial."""
