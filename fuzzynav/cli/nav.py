@@ -20,6 +20,7 @@ def register(sub) -> None:
     add_source_arguments(p)
     p.add_argument("--filter", default="ekf", help="named filter (see `fuzzynav scenarios`)")
     add_common_arguments(p)
+    add_recording_arguments(p)
     p.set_defaults(func=_cmd_run)
     p = sub.add_parser("compare", help="compare filters on a scenario (the papers' table layout)")
     p.add_argument("scenario", help="built-in scenario name or scenario TOML file")
@@ -34,6 +35,15 @@ def add_source_arguments(p) -> None:
     p.add_argument("scenario", nargs="?", help="built-in scenario name or scenario TOML file")
     p.add_argument("--data", metavar="KIND:DIR",
                    help="a recording instead of a scenario, e.g. rtklib:../shared/datasets/rtklib-drive")
+
+
+def add_recording_arguments(p) -> None:
+    """Options of the real-data protocol (``--data``), if that part is installed."""
+    try:
+        from fuzzynav.realdata.cli import add_arguments
+    except ImportError:  # pragma: no cover - real-data support not installed
+        return
+    add_arguments(p)
 
 
 def add_common_arguments(p) -> None:
@@ -92,6 +102,11 @@ def _cmd_run(args) -> int:
         from fuzzynav.realdata import run_recording
 
         return run_recording(args.data, args.filter, filter_options(args), args)
+    from fuzzynav.realdata.cli import unused_recording_options
+
+    if unused_recording_options(args):
+        raise FuzzynavError(f"{', '.join(unused_recording_options(args))}: only with --data "
+                            "(simulated scenarios take their settings from the scenario)")
     return run_scenario_filters(args, [args.filter], baseline=None)
 
 

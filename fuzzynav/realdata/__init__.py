@@ -1,0 +1,24 @@
+"""Filters on real recordings: data sources, the validation protocol, the ``--data`` CLI path.
+
+* :mod:`.sources` — :data:`SOURCES` (recording kinds: ``rtklib``) and ``--data KIND:DIR``;
+* :mod:`.mems` — the filter's consumer-MEMS noise model;
+* :mod:`.protocol` — the degraded feed (noise, velocity lag, outages) and its settings;
+* :mod:`.session` — initial state from the data and one named-filter run;
+* :mod:`.score` — horizontal RMS and drift at the end of each outage;
+* :mod:`.validate` — the protocol for one filter and seed;
+* :mod:`.cli` / :mod:`.figures` — ``fuzzynav run --data``: tables, JSON, plots.
+
+See ``docs/validation.md`` for the protocol, the settings and the measured figures.
+"""
+from __future__ import annotations
+
+from fuzzynav.realdata.sources import SOURCES, DataSource, parse_data_spec, register_source
+
+__all__ = ["SOURCES", "DataSource", "parse_data_spec", "register_source", "run_recording"]
+
+
+def run_recording(spec, filter_name, options, args) -> int:
+    """``fuzzynav run --data KIND:DIR`` (:func:`fuzzynav.realdata.cli.run_recording`)."""
+    from fuzzynav.realdata.cli import run_recording as _run
+
+    return _run(spec, filter_name, options, args)

@@ -1,0 +1,102 @@
+"""Start a filter on a recording: initial state from the data, then one named-filter run.
+
+The filter starts at the end of the opening rest (:func:`fuzzynav.sim.coarse_align.
+initial_state`): level from the accelerometers, heading from the GNSS course once moving
+(or by specific-force matching without a mounting), position and velocity from the fed
+fixes.  The mean gyro rate at rest (turn-on bias; earth rate removed) is subtracted from
+the angle increments beforehand, because the filter starts its sensor-error states at zero
+(:func:`fuzzynav.filters.runner.run_filter` takes no prior estimate); the filter then
+estimates what is left.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from fuzzynav.errors import InputFileError
+from fuzzynav.filters.named import FilterContext, get_filter
+from fuzzynav.filters.runner import InitialState, run_filter
+from fuzzynav.nav import attitude, earth
+from fuzzynav.realdata.mems import CONSUMER_MEMS, MemsModel
+from fuzzynav.sim import coarse_align
+from fuzzynav.sim.imu import ImuData
+
+#: the name of the GNSS stream; rule-file bindings may name it or its kind ``gnss``
+GNSS_SENSOR = "gnss"
+
+
+@dataclass(frozen=True)
+class Start:
+    """Where and how the filter starts.
+
+    Attributes
+    ----------
+    imu : ImuData
+        The increments from the start on, the rest gyro bias removed.
+    init : InitialState
+        The navigation state at ``imu.time_s[0]`` (IMU position).
+    coarse : coarse_align.InitialState
+        What the initialisation found (rest period, level, heading method, gyro bias).
+    """
+
+    imu: ImuData
+    init: InitialState
+    coarse: object
+
+
+def start_from(imu, fixes, mounting_known: bool, lever_arm_b=(0.0, 0.0, 0.0)) -> Start:
+    """Initial state from the data (``fixes``: the stream the filter will be fed).
+
+    Raises
+    ------
+    InputFileError
+        When the recording has no opening rest or no motion to find the heading.
+    """
+    s = coarse_align.initial_state(imu, fixes, forward_known=mounting_known)
+    k = int(np.searchsorted(imu.time_s, s.time_s - 1e-9))
+    if k >= imu.time_s.size - 2:
+        raise InputFileError(None, "initialisation", f"the opening rest ends at "
+                             f"{s.time_s:.2f} s, at the end of the IMU data")
+    t = imu.time_s[k:]
+    dth = imu.dtheta_b[k:] - s.gyro_bias_rps * np.diff(t)[:, None]
+    cut = ImuData(time_s=t, dtheta_b=dth, dv_b=imu.dv_b[k:], meta=dict(imu.meta))
+    q_bn = attitude.euler_to_quat(s.att)
+    # the fixes are the antenna's; the state is the IMU's
+    l_n = attitude.quat_to_dcm(q_bn) @ np.asarray(lever_arm_b, float)
+    dlat, dlon, dh = earth.enu_to_delta_lla(l_n, s.lla[0], s.lla[2])
+    lla = s.lla - np.array([dlat, dlon, dh])
+    return Start(cut, InitialState(float(t[0]), lla, np.asarray(s.vel_n, float), q_bn), s)
+
+
+def run_named(start: Start, fixes, filter_name: str, use_velocity: bool = True,
+              options=None, mems: MemsModel = CONSUMER_MEMS, init_pos_sigma_m: float = 2.0):
+    """Run a named filter (``ekf``, ``sage-husa``, ``vb``, ``fakf``, ...) from ``start``.
+
+    Parameters
+    ----------
+    start : Start
+    fixes : SensorData
+        The fed GNSS stream (kind ``gnss``), registered as sensor :data:`GNSS_SENSOR`.
+    filter_name : str
+    use_velocity : bool
+        Whether the GNSS velocities are used (else positions only).
+    options : dict, optional
+        Filter options (``rules``, ...); they override the MEMS model's initial sigmas.
+    mems : MemsModel
+    init_pos_sigma_m : float
+        Initial position uncertainty [m] (the fed fixes' noise).
+
+    Returns
+    -------
+    FilterResult
+    """
+    sensors = {GNSS_SENSOR: fixes}
+    opts = dict(mems.filter_options(init_pos_sigma_m))
+    opts.update(options or {})
+    ctx = FilterContext(imu_noise=mems.imu_noise(), sensors=sensors, options=opts)
+    setup = get_filter(filter_name).make(ctx)
+    sensor_opts = {k: dict(v) for k, v in setup.sensor_options.items()}
+    sensor_opts.setdefault(GNSS_SENSOR, {})["use_velocity"] = bool(use_velocity)
+    return run_filter(start.imu, setup.sensors_for(sensors), start.init, setup.config,
+                      setup.adapters, sensor_opts)

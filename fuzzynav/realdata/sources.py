@@ -1,0 +1,111 @@
+"""Recording kinds usable with ``--data KIND:DIR`` and the parsing of that argument.
+
+A kind is one :class:`DataSource` in :data:`SOURCES`: a description and a loader taking the
+recording directory (any copy of a recording of that kind) and returning an object with
+``imu`` (:class:`~fuzzynav.sim.imu.ImuData`), ``gnss`` (all fixes, kind ``gnss``),
+``reference`` (the untouched fixes used as truth), ``mounting`` (or ``None``) and
+``directory`` — the :class:`~fuzzynav.sim.loaders.rtklib.Recording` of the RTKLIB loader.
+Add a kind with :func:`register_source`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from fuzzynav.errors import DataMissingError, FuzzynavError, UnknownNameError
+
+
+@dataclass(frozen=True)
+class DataSource:
+    """One kind of recording.
+
+    Attributes
+    ----------
+    kind : str
+        The name before the colon of ``--data KIND:DIR``.
+    description : str
+        One line for ``fuzzynav scenarios``.
+    load : callable
+        ``load(directory, mounting="auto", imu_delay_s=None, span_s=None) -> Recording``;
+        ``None`` leaves a loader's own default.
+    """
+
+    kind: str
+    description: str
+    load: Callable
+
+
+SOURCES: dict[str, DataSource] = {}
+
+
+def register_source(kind: str, description: str):
+    """Decorator registering a loader function under ``kind``."""
+
+    def deco(fn):
+        SOURCES[kind] = DataSource(kind, description, fn)
+        return fn
+
+    return deco
+
+
+@register_source("rtklib", "RTKLIB car recording: imu_<id>.csv + .tag + gnss_<id>*.pos "
+                           "(e.g. ../shared/datasets/rtklib-drive)")
+def _load_rtklib(directory, mounting="auto", imu_delay_s=None, span_s=None):
+    from fuzzynav.sim.loaders.rtklib import load_rtklib
+
+    kw = {} if imu_delay_s is None else {"imu_delay_s": float(imu_delay_s)}
+    # velocities are loaded as recorded; the protocol decides what to do with their lag
+    return load_rtklib(directory, mounting=mounting, span_s=span_s, **kw)
+
+
+#: mounting files shipped with the package (``--mounting NAME``)
+MOUNTINGS_DIR = Path(__file__).resolve().parent / "mountings"
+
+
+def builtin_mountings() -> list[str]:
+    """Names of the shipped mounting files (``rtklib-drive``, ...)."""
+    return sorted(p.stem for p in MOUNTINGS_DIR.glob("*.toml"))
+
+
+def resolve_mounting(text):
+    """``--mounting`` value to a loader argument: ``"auto"``, ``None`` or a file path.
+
+    ``auto`` (or nothing) reads ``mounting.toml`` beside the data if present; ``none`` uses
+    the IMU frame; otherwise an existing file, else a shipped name (:func:`builtin_mountings`).
+    """
+    if text is None or text == "auto":
+        return "auto"
+    if text.lower() == "none":
+        return None
+    path = Path(text).expanduser()
+    if path.is_file():
+        return path
+    if (MOUNTINGS_DIR / f"{text}.toml").is_file():
+        return MOUNTINGS_DIR / f"{text}.toml"
+    raise DataMissingError(f"{text}: mounting file not found (nor a shipped mounting: "
+                           f"{', '.join(builtin_mountings())}; or auto, none)")
+
+
+def parse_data_spec(spec: str) -> tuple[DataSource, Path]:
+    """Split ``KIND:DIR`` and check both parts.
+
+    Raises
+    ------
+    FuzzynavError
+        Without a colon or with an empty part.
+    UnknownNameError
+        For a kind not in :data:`SOURCES`.
+    DataMissingError
+        When the directory does not exist.
+    """
+    kind, sep, directory = str(spec).partition(":")
+    if not sep or not kind or not directory:
+        raise FuzzynavError(f"--data: expected KIND:DIR (e.g. rtklib:../shared/datasets/"
+                            f"rtklib-drive), got {spec!r}")
+    if kind not in SOURCES:
+        raise UnknownNameError("data source kind", kind, SOURCES)
+    path = Path(directory).expanduser()
+    if not path.is_dir():
+        raise DataMissingError(f"{path}: recording directory not found (--data {spec})")
+    return SOURCES[kind], path

@@ -1,0 +1,106 @@
+"""Run the protocol: one filter, one noise seed, fed with and without outages, scored.
+
+Both runs of a seed see the same noisy fixes and start from the same state, so the
+difference between them is the outages alone.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from fuzzynav.realdata import protocol
+from fuzzynav.realdata.mems import CONSUMER_MEMS, MemsModel
+from fuzzynav.realdata.protocol import ProtocolSettings
+from fuzzynav.realdata.score import errors_against, outage_drifts, score
+from fuzzynav.realdata.session import Start, run_named, start_from
+
+#: feed name -> label in tables and figures
+FEEDS = {"gnss": "GNSS throughout", "outages": "with outages"}
+
+
+@dataclass(frozen=True)
+class FeedRun:
+    """One filter run on one fed stream."""
+
+    fixes: object
+    result: object
+    errors: object
+    metrics: dict
+    drifts: list
+
+
+@dataclass(frozen=True)
+class Validation:
+    """The protocol for one filter and one noise seed.
+
+    Attributes
+    ----------
+    filter : str
+    seed : int
+    settings : ProtocolSettings
+    start : Start
+    windows : ndarray (K, 2)
+        Outage windows [s] (complete or not; see :class:`~.score.OutageDrift`).
+    runs : dict
+        Feed name (:data:`FEEDS`) -> :class:`FeedRun`.
+    """
+
+    filter: str
+    seed: int
+    settings: ProtocolSettings
+    start: Start
+    windows: np.ndarray
+    runs: dict
+
+
+def validate(rec, filter_name: str, settings: ProtocolSettings = ProtocolSettings(),
+             seed: int = 0, options=None, mems: MemsModel = CONSUMER_MEMS) -> Validation:
+    """Feed ``filter_name`` a degraded copy of ``rec.gnss`` and score it on ``rec.reference``.
+
+    Parameters
+    ----------
+    rec : Recording
+        With ``imu``, ``gnss``, ``reference`` and ``mounting``.
+    filter_name : str
+        A named filter.
+    settings : ProtocolSettings
+    seed : int
+        Seed of the added noise.
+    options : dict, optional
+        Filter options (e.g. ``rules``).
+    mems : MemsModel
+    """
+    lever = np.asarray(rec.gnss.meta.get("lever_arm_b", np.zeros(3)), float)
+    noisy = protocol.degraded_fixes(rec.gnss, settings, np.random.default_rng(seed))
+    known = rec.mounting is not None
+    # the windows follow the start, and the start is found on what the filter is fed
+    first = start_from(rec.imu, noisy, known, lever)
+    t_end = float(rec.imu.time_s[-1])
+    windows = protocol.windows_after(first.init.time_s, t_end, settings)
+    feeds = {"gnss": noisy, "outages": protocol.with_outages(noisy, windows)}
+    start = start_from(rec.imu, feeds["outages"], known, lever)
+    sigma0 = float(np.hypot(settings.noise_pos_m, np.median(rec.gnss.sigma[:, :2])))
+    t0 = max(settings.t_start_s, start.init.time_s)
+    runs = {}
+    for name, fixes in feeds.items():
+        res = run_named(start, fixes, filter_name, settings.use_velocity, options, mems,
+                        sigma0)
+        err = errors_against(res, rec.reference, lever, settings.velocity_lag_s)
+        metrics = score(err, res.time_s, windows, t0)
+        metrics["completed"] = float(res.ok)
+        runs[name] = FeedRun(fixes, res, err, metrics,
+                             outage_drifts(err, res.time_s, windows))
+    return Validation(filter_name, int(seed), settings, start, windows, runs)
+
+
+def metrics_table(validations) -> pd.DataFrame:
+    """One row per (feed, seed): columns ``filter`` (the feed label), ``seed``, metrics.
+
+    The ``filter`` column holds the feed label so that :func:`fuzzynav.report.
+    comparison_rows` lays the feeds out as columns.
+    """
+    rows = [{"filter": FEEDS[name], "seed": v.seed, "filter_name": v.filter, **run.metrics}
+            for v in validations for name, run in v.runs.items()]
+    return pd.DataFrame(rows)
