@@ -1,7 +1,8 @@
 """Figures: navigation error curves and adaptation factors over time (matplotlib).
 
-Functions return the matplotlib Figure; :func:`save` writes it atomically.  The Agg backend
-is selected when no display is available, so the CLI works on servers.
+Functions return the matplotlib Figure; :func:`save` writes it atomically.  matplotlib picks
+its headless Agg backend by itself when there is no display (and Jupyter's inline backend in
+notebooks), so nothing is forced here.
 """
 from __future__ import annotations
 
@@ -9,12 +10,8 @@ import os
 import tempfile
 from pathlib import Path
 
-import matplotlib
-
-if not os.environ.get("DISPLAY") and matplotlib.get_backend().lower() not in ("agg", "pdf", "svg"):
-    matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
 _AXES = ("east", "north", "up")
 _STYLES = ("-", "--", "-.", ":")
@@ -66,6 +63,26 @@ def adaptation_curves(series: dict, title: str = "") -> plt.Figure:
     ax.legend(loc="best", fontsize=8)
     if title:
         ax.set_title(title)
+    fig.tight_layout()
+    return fig
+
+
+def membership_functions(fis, title: str = "", n_points: int = 400) -> plt.Figure:
+    """The terms of every input and output variable of a fuzzy system, one panel each."""
+    from fuzzynav.fuzzy.membership import evaluate_mf
+
+    variables = [v for v in list(fis.inputs) + list(fis.outputs)
+                 if all(t.mf not in ("constant", "linear") for t in v.terms)]
+    fig, axs = plt.subplots(1, len(variables), figsize=(4 * len(variables), 3), squeeze=False)
+    for ax, v in zip(axs[0], variables):
+        x = np.linspace(v.range[0], v.range[1], n_points)
+        for t in v.terms:
+            ax.plot(x, evaluate_mf(t.mf, t.params, x), label=t.name)
+        ax.set_title(v.name)
+        ax.set_ylim(-0.05, 1.05)
+        ax.legend(fontsize=7)
+    if title:
+        fig.suptitle(title)
     fig.tight_layout()
     return fig
 

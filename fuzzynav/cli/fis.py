@@ -15,6 +15,7 @@ import sys
 import numpy as np
 
 from fuzzynav.errors import FuzzynavError
+from fuzzynav.fuzzy.describe import rule_grid
 
 _FORMATS = {".json": "fuzzynav-fis JSON", ".fis": "MATLAB .fis"}
 
@@ -187,22 +188,6 @@ def _terms_text(v) -> str:
                      for t in v.terms)
 
 
-def _rule_table(fis):
-    if len(fis.inputs) != 2 or len(fis.outputs) != 1:
-        return None
-    a, b = fis.inputs
-    cells = {}
-    for r in fis.rules:
-        conds = {x.variable: x for x in r.antecedents}
-        if (r.connective != "and" or len(conds) != 2 or any(x.negated for x in conds.values())
-                or r.weight != 1.0):
-            return None
-        cells[(conds[a.name].term, conds[b.name].term)] = r.consequents[0][1]
-    head = [f"{a.name} \\ {b.name}"] + [t.name for t in b.terms]
-    return head, [[ta.name] + [cells.get((ta.name, tb.name), "-") for tb in b.terms]
-                  for ta in a.terms]
-
-
 def _rules_summary(fis) -> str:
     weights = sorted({r.weight for r in fis.rules})
     conn = sorted({r.connective for r in fis.rules})
@@ -224,7 +209,7 @@ def cmd_check(args) -> int:
             print(f"  {v.name} [{_fmt(v.range[0])}, {_fmt(v.range[1])}]{extra}: "
                   f"{_terms_text(v)}")
     print(_rules_summary(fis))
-    table = _rule_table(fis)
+    table = rule_grid(fis)
     if table:
         _table(*table)
     if fis.binding:
