@@ -1,0 +1,67 @@
+"""``--data`` and the recording options: one clear line and exit code 2 (no data needed)."""
+import contextlib
+import io
+
+import pytest
+
+from fuzzynav.cli import main
+
+
+def _run(*argv):
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(list(argv))
+    return code, out.getvalue(), err.getvalue()
+
+
+def test_unknown_kind_lists_the_known_ones(tmp_path):
+    code, _, err = _run("run", "--data", f"akit9:{tmp_path}")
+    assert code == 2 and "unknown data source kind 'akit9'" in err and "rtklib" in err
+
+
+def test_missing_directory_is_named(tmp_path):
+    missing = tmp_path / "nowhere"
+    code, _, err = _run("run", "--data", f"rtklib:{missing}")
+    assert code == 2 and str(missing) in err and "not found" in err
+
+
+def test_spec_without_a_directory(tmp_path):
+    for spec in ("rtklib", "rtklib:", f":{tmp_path}"):
+        code, _, err = _run("run", "--data", spec)
+        assert code == 2 and "KIND:DIR" in err
+
+
+def test_missing_files_are_named(tmp_path):
+    code, _, err = _run("run", "--data", f"rtklib:{tmp_path}")
+    assert code == 2 and "imu_*.csv" in err and str(tmp_path) in err
+    (tmp_path / "imu_7.csv").write_text("")
+    code, _, err = _run("run", "--data", f"rtklib:{tmp_path}")
+    assert code == 2 and "imu_7.csv.tag" in err
+
+
+@pytest.mark.parametrize("argv, words", [
+    (("--span", "10"), "--span"),
+    (("--span", "20,10"), "--span"),
+    (("--mounting", "no-such-mounting"), "rtklib-drive"),
+    (("--noise", "-1"), "noise_pos_m"),
+    (("--outage-period", "30"), "outage_period_s"),
+])
+def test_bad_options(tmp_path, argv, words):
+    code, _, err = _run("run", "--data", f"rtklib:{tmp_path}", *argv)
+    assert code == 2 and words in err and err.count("\n") == 1
+
+
+def test_bad_velocity_mode_is_an_argparse_error(tmp_path):
+    with pytest.raises(SystemExit) as exc, contextlib.redirect_stderr(io.StringIO()):
+        main(["run", "--data", f"rtklib:{tmp_path}", "--gnss-velocity", "late"])
+    assert exc.value.code == 2
+
+
+def test_scenarios_lists_the_recording_kinds():
+    code, out, _ = _run("scenarios")
+    assert code == 0 and "rtklib" in out and "--data KIND:DIR" in out
+
+
+def test_recording_options_are_refused_for_a_scenario():
+    code, _, err = _run("run", "paper000", "--noise", "3", "--span", "0,10")
+    assert code == 2 and "--noise, --span: only with --data" in err
