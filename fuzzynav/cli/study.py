@@ -48,11 +48,7 @@ def _load(args):
 def _open(cfg, args):
     from fuzzynav.tuning.study import open_study
 
-    try:
-        return open_study(cfg, args.storage)
-    except KeyError:
-        raise FuzzynavError(f"no study named {cfg.name!r} in "
-                            f"{args.storage or cfg.storage_url}; run it first") from None
+    return open_study(cfg, args.storage)  # a missing study: FuzzynavError, no file created
 
 
 def _cmd_run(args) -> int:
@@ -71,7 +67,11 @@ def _print_summary(cfg, study, cache):
     from fuzzynav.tuning.export import choose_trial, systems_of
     from fuzzynav.tuning.objective import Evaluator
 
-    trial = choose_trial(study, cfg)
+    try:
+        trial = choose_trial(study, cfg)
+    except FuzzynavError as exc:  # e.g. every trial so far failed or was pruned
+        print(f"no summary: {exc}")
+        return
     print(f"best trial {trial.number}: score "
           f"{trial.values if cfg.multi_objective else round(trial.value, 4)} "
           f"(ratios to {cfg.baseline}: "

@@ -3,9 +3,16 @@
 Storage: by default a journal file next to the study config (safe for many processes on one
 machine); any Optuna storage URL (``postgresql://...``) lets many machines share a study.
 Journal storage has no heartbeat, so each worker first *reaps*: a ``RUNNING`` trial whose
-worker process is gone (same host) or whose heartbeat is older than ``stale_after_s`` is
-marked ``FAIL`` and its parameters are enqueued again (once).  RDB storages use Optuna's
-heartbeat with :class:`optuna.storages.RetryHeartbeatStaleTrialCallback` instead.
+worker process is gone (same host: its pid no longer exists) or, from another host, whose
+heartbeat is older than ``stale_after_s`` is marked ``FAIL`` and its parameters are enqueued
+again (at most :data:`MAX_RETRIES` times).  RDB storages also use Optuna's heartbeat with
+:class:`optuna.storages.RetryHeartbeatStaleTrialCallback`.
+
+Totals: a worker counts the finished and running trials and starts one more only while the
+total is below the target.  On a journal file that check and the start of the trial hold an
+advisory lock (``flock`` on the journal itself), so any number of workers on one machine
+reach the total exactly; on an RDB storage shared by several machines two workers may both
+start the last trial (one trial over the total at most per extra worker).
 
 Pruning (single objective): each training run's score is reported with a stable step id in
 a per-trial shuffled order; when pruned, the trial returns the mean of the runs done so far
@@ -14,15 +21,17 @@ that ran every training run.
 """
 from __future__ import annotations
 
-import math
 import os
+import re
 import socket
 import time
+import warnings
 
 import numpy as np
 import optuna
 from optuna.trial import TrialState
 
+from fuzzynav.errors import FuzzynavError
 from fuzzynav.tuning.config import GROUP_METRICS
 from fuzzynav.tuning.objective import Evaluator
 from fuzzynav.tuning.space import ControllerSpace, build_all
@@ -30,22 +39,40 @@ from fuzzynav.tuning.space import ControllerSpace, build_all
 optuna.logging.set_verbosity(optuna.logging.WARNING)
 FINISHED = (TrialState.COMPLETE, TrialState.PRUNED)
 MAX_RETRIES = 2
+#: a worker gives up after this many failed trials in a row (a broken setup, not bad luck)
+MAX_FAILS_IN_ROW = 10
+#: user attributes a retried trial keeps (which swarm particle it is)
+_KEEP_ON_RETRY = ("pso_iteration", "particle")
 
 
 # -- storage, sampler, pruner ------------------------------------------------------------------
+def journal_path(url: str):
+    """The file of a ``journal:PATH`` storage URL (None for other storages)."""
+    return url[len("journal:"):] if url.startswith("journal:") else None
+
+
+def _hide_password(url: str) -> str:
+    return re.sub(r"://([^:/@]+):[^@]*@", r"://\1:***@", url)
+
+
 def make_storage(url: str, heartbeat: bool = True):
     """An Optuna storage from ``journal:PATH`` or an RDB URL."""
-    if url.startswith("journal:"):
+    path = journal_path(url)
+    if path is not None:
         from optuna.storages.journal import JournalFileBackend, JournalStorage
 
-        path = url[len("journal:"):]
         os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
         return JournalStorage(JournalFileBackend(path))
-    if not heartbeat:
-        return optuna.storages.RDBStorage(url)
-    return optuna.storages.RDBStorage(
-        url, heartbeat_interval=10, grace_period=60,
-        failed_trial_callback=optuna.storages.RetryFailedTrialCallback(max_retry=MAX_RETRIES))
+    kw = {}
+    if heartbeat:
+        kw = dict(heartbeat_interval=10, grace_period=60,
+                  heartbeat_stale_trial_callback=optuna.storages.
+                  RetryHeartbeatStaleTrialCallback(max_retry=MAX_RETRIES))
+    try:
+        return optuna.storages.RDBStorage(url, **kw)
+    except Exception as exc:  # sqlalchemy: bad URL, missing driver, server down
+        raise FuzzynavError(f"storage {_hide_password(url)}: cannot open it "
+                            f"({type(exc).__name__}: {str(exc).splitlines()[0]})") from None
 
 
 def make_sampler(cfg, worker: int = 0):
@@ -73,16 +100,29 @@ def make_pruner(cfg):
 
 
 def open_study(cfg, storage_url=None, worker: int = 0, create: bool = False):
-    """Create (``create=True``, in the parent) or load the study of a config."""
-    storage = make_storage(storage_url or cfg.storage_url)
-    kw = dict(study_name=cfg.name, storage=storage, sampler=make_sampler(cfg, worker),
-              pruner=make_pruner(cfg))
+    """Create (``create=True``, in the parent) or load the study of a config.
+
+    Loading a study that does not exist raises :class:`FuzzynavError` (and creates no
+    journal file).
+    """
+    url = storage_url or cfg.storage_url
+    missing = f"no study named {cfg.name!r} in {_hide_password(url)}; run it first"
+    path = journal_path(url)
+    if not create and path is not None and not os.path.isfile(path):
+        raise FuzzynavError(missing)
+    with warnings.catch_warnings():  # group=True, Wilcoxon, heartbeat: chosen knowingly
+        warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+        kw = dict(study_name=cfg.name, storage=make_storage(url),
+                  sampler=make_sampler(cfg, worker), pruner=make_pruner(cfg))
     if create:
         study = optuna.create_study(directions=cfg.directions, load_if_exists=True, **kw)
         if cfg.multi_objective:
             study.set_metric_names([f"{g}_ratio" for g in GROUP_METRICS])
         return study
-    return optuna.load_study(**kw)
+    try:
+        return optuna.load_study(**kw)
+    except KeyError:
+        raise FuzzynavError(missing) from None
 
 
 # -- bookkeeping ---------------------------------------------------------------------------------
@@ -101,25 +141,76 @@ def _alive(pid: int) -> bool:
     return True
 
 
+def _owner(t, now: float):
+    """``(host, pid, last heartbeat)`` of a running trial's worker.
+
+    Attributes older than the trial's start were inherited from the trial it retries
+    (Optuna's heartbeat retry copies them): they say nothing about this run.
+    """
+    ua = t.user_attrs
+    start = t.datetime_start.timestamp() if t.datetime_start else now
+    beat = ua.get("heartbeat")
+    if beat is None or beat < start:
+        return None, None, start
+    return ua.get("host"), ua.get("pid"), beat
+
+
 def reap_stale(study, stale_after_s: float) -> int:
-    """Fail and re-enqueue ``RUNNING`` trials whose worker is dead; returns how many."""
+    """Fail and re-enqueue ``RUNNING`` trials whose worker is gone; returns how many.
+
+    A worker on this host is gone when its process no longer exists (a live process keeps
+    its trial, however long it runs); a worker elsewhere when its heartbeat is older than
+    ``stale_after_s``.  When two workers reap the same trial, only the one whose ``FAIL``
+    lands first re-enqueues it.
+    """
     now, host, n = time.time(), socket.gethostname(), 0
     for t in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
-        ua = t.user_attrs
-        beat = ua.get("heartbeat", t.datetime_start.timestamp() if t.datetime_start else now)
-        gone = ua.get("host") == host and "pid" in ua and not _alive(int(ua["pid"]))
-        if not (gone or now - beat > stale_after_s):
+        w_host, pid, beat = _owner(t, now)
+        if w_host == host and pid is not None:
+            if _alive(int(pid)):
+                continue
+        elif now - beat <= stale_after_s:
             continue
         try:
             study.tell(t.number, state=TrialState.FAIL)
-        except Exception:  # another worker reaped it first
+        except Exception:  # another worker reaped it first (or its worker just finished)
             continue
         n += 1
-        retries = int(ua.get("retries", 0))
+        retries = int(t.user_attrs.get("retries", 0))
         if retries < MAX_RETRIES and t.params:
-            study.enqueue_trial(t.params, user_attrs={"retry_of": t.number,
+            keep = {k: t.user_attrs[k] for k in _KEEP_ON_RETRY if k in t.user_attrs}
+            study.enqueue_trial(t.params, user_attrs={**keep, "retry_of": t.number,
                                                       "retries": retries + 1})
     return n
+
+
+class _Slots:
+    """Serialises "count the trials, then start one" among the workers of a journal file.
+
+    An advisory ``flock`` on the journal file itself (Optuna's own journal lock is a
+    separate symlink, so the two never interfere, and nothing is left behind; the kernel
+    drops the lock of a killed process).  Other storages: no lock.
+    """
+
+    def __init__(self, url: str):
+        self._path = journal_path(url)
+        self._fh = None
+
+    def acquire(self) -> None:
+        if self._path is None or self._fh is not None:
+            return
+        import fcntl
+
+        self._fh = open(self._path, "ab")
+        fcntl.flock(self._fh, fcntl.LOCK_EX)
+
+    def release(self) -> None:
+        if self._fh is not None:
+            import fcntl
+
+            fcntl.flock(self._fh, fcntl.LOCK_UN)
+            self._fh.close()
+            self._fh = None
 
 
 # -- the objective -------------------------------------------------------------------------------
@@ -131,11 +222,21 @@ class Objective:
         self.spaces = [ControllerSpace.from_config(c) for c in cfg.controllers]
         self.evaluator = Evaluator(cfg, cache_dir)
         self.worker = worker
+        self.current = None       # number of the trial being run (or last run) here
+        self.last_error = None    # the exception that failed the last trial here
 
     def _beat(self, trial):
         trial.set_user_attr("heartbeat", time.time())
 
     def __call__(self, trial):
+        self.current, self.last_error = trial.number, None
+        try:
+            return self._run(trial)
+        except Exception as exc:
+            self.last_error = exc
+            raise
+
+    def _run(self, trial):
         trial.set_user_attr("host", socket.gethostname())
         trial.set_user_attr("pid", os.getpid())
         trial.set_user_attr("worker", self.worker)
@@ -163,26 +264,79 @@ class Objective:
         return float(np.mean(scores))
 
 
+def _room(study, cfg, n_total: int) -> bool:
+    """Whether another trial may start (finished + running < total; PSO: one is queued)."""
+    busy = len(study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)))
+    if n_finished(study) + busy >= n_total:
+        return False
+    return cfg.sampler != "pso" or bool(study.get_trials(deepcopy=False,
+                                                         states=(TrialState.WAITING,)))
+
+
+def _run_one(study, objective, slots) -> TrialState:
+    """Run one trial (the slot lock is released once it has started); its final state."""
+    def run(trial):
+        slots.release()
+        return objective(trial)
+
+    objective.current = None
+    try:
+        study.optimize(run, n_trials=1, catch=(FloatingPointError, ValueError))
+    except (ValueError, optuna.exceptions.UpdateFinishedTrialError):
+        # Raised by Optuna's final tell when another worker already failed this trial
+        # (its heartbeat looked stale to a worker on another host): the trial is retried
+        # there, this worker carries on.
+        if objective.current is None or _state(study, objective.current) == TrialState.RUNNING:
+            raise
+    return _state(study, objective.current) if objective.current is not None else TrialState.FAIL
+
+
+def _state(study, number: int) -> TrialState:
+    return study.get_trials(deepcopy=False)[number].state
+
+
 def run_worker(cfg, n_total: int, storage_url=None, worker: int = 0, cache_dir=None,
                progress=None) -> int:
     """Run trials until the study has ``n_total`` finished ones; returns trials run here.
 
     Trials running in other workers count towards the total, so parallel workers do not
     overshoot it; a PSO study only runs the trials the swarm enqueued.
+
+    Raises
+    ------
+    FuzzynavError
+        :data:`MAX_FAILS_IN_ROW` trials in a row failed in this worker.
     """
-    study = open_study(cfg, storage_url, worker)
+    url = storage_url or cfg.storage_url
+    study = open_study(cfg, url, worker)
     objective = Objective(cfg, cache_dir, worker)
-    done = 0
+    slots = _Slots(url)
+    done = fails = 0
     while True:
-        reap_stale(study, cfg.stale_after_s)
-        busy = len(study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)))
-        waiting = len(study.get_trials(deepcopy=False, states=(TrialState.WAITING,)))
-        if n_finished(study) + busy >= n_total or (cfg.sampler == "pso" and not waiting):
-            return done
-        study.optimize(objective, n_trials=1, catch=(FloatingPointError, ValueError))
+        slots.acquire()
+        try:
+            reap_stale(study, cfg.stale_after_s)
+            if not _room(study, cfg, n_total):
+                return done
+            state = _run_one(study, objective, slots)
+        finally:
+            slots.release()
         done += 1
+        fails = fails + 1 if state == TrialState.FAIL else 0
+        if fails >= MAX_FAILS_IN_ROW:
+            raise FuzzynavError(f"study {cfg.name!r}: {fails} trials in a row failed in worker "
+                                f"{worker}; the last with {objective.last_error!r}")
         if progress is not None:
             progress(n_finished(study))
+
+
+def pareto_front(trials) -> list:
+    """The trials no other trial dominates (every objective minimised)."""
+    if not trials:
+        return []
+    vals = np.array([t.values for t in trials], dtype=float)
+    keep = [not np.any(np.all(vals <= v, axis=1) & np.any(vals < v, axis=1)) for v in vals]
+    return [t for t, k in zip(trials, keep) if k]
 
 
 def best_trials(study, cfg):
@@ -190,7 +344,5 @@ def best_trials(study, cfg):
     full = [t for t in study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))
             if t.user_attrs.get("n_runs") == len(cfg.train)]
     if cfg.multi_objective:
-        from optuna.study._multi_objective import _get_pareto_front_trials_by_trials
-
-        return _get_pareto_front_trials_by_trials(full, study.directions)
-    return sorted(full, key=lambda t: t.value if math.isfinite(t.value) else math.inf)
+        return pareto_front(full)
+    return sorted(full, key=lambda t: t.value if np.isfinite(t.value) else np.inf)
