@@ -9,10 +9,9 @@ again (at most :data:`MAX_RETRIES` times).  RDB storages also use Optuna's heart
 :class:`optuna.storages.RetryHeartbeatStaleTrialCallback`.
 
 Totals: a worker counts the finished and running trials and starts one more only while the
-total is below the target.  On a journal file that check and the start of the trial hold an
-advisory lock (``flock`` on the journal itself), so any number of workers on one machine
-reach the total exactly; on an RDB storage shared by several machines two workers may both
-start the last trial (one trial over the total at most per extra worker).
+total is below the target; the count and the start of the trial hold a lock
+(:mod:`fuzzynav.tuning.slots`: the journal file, or a PostgreSQL advisory lock), so the
+workers reach the total exactly.
 
 Pruning (single objective): each training run's score is reported with a stable step id in
 a per-trial shuffled order; when pruned, the trial returns the mean of the runs done so far
@@ -34,6 +33,7 @@ from optuna.trial import TrialState
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.tuning.config import GROUP_METRICS
 from fuzzynav.tuning.objective import Evaluator
+from fuzzynav.tuning.slots import TrialSlots
 from fuzzynav.tuning.space import ControllerSpace, build_all
 
 optuna.logging.set_verbosity(optuna.logging.WARNING)
@@ -55,6 +55,23 @@ def _hide_password(url: str) -> str:
     return re.sub(r"://([^:/@]+):[^@]*@", r"://\1:***@", url)
 
 
+def with_driver(url: str) -> str:
+    """``postgresql://`` with the PostgreSQL driver that is installed.
+
+    SQLAlchemy 2.1 reads a bare ``postgresql://`` as psycopg 3, 2.0 as psycopg2 (which is
+    what the ``studies`` extra installs): name whichever is importable.
+    """
+    m = re.match(r"^postgres(?:ql)?://", url)
+    if not m:
+        return url
+    import importlib.util
+
+    for module, driver in (("psycopg", "psycopg"), ("psycopg2", "psycopg2")):
+        if importlib.util.find_spec(module) is not None:
+            return f"postgresql+{driver}://" + url[m.end():]
+    return url
+
+
 def make_storage(url: str, heartbeat: bool = True):
     """An Optuna storage from ``journal:PATH`` or an RDB URL."""
     path = journal_path(url)
@@ -69,7 +86,7 @@ def make_storage(url: str, heartbeat: bool = True):
                   heartbeat_stale_trial_callback=optuna.storages.
                   RetryHeartbeatStaleTrialCallback(max_retry=MAX_RETRIES))
     try:
-        return optuna.storages.RDBStorage(url, **kw)
+        return optuna.storages.RDBStorage(with_driver(url), **kw)
     except Exception as exc:  # sqlalchemy: bad URL, missing driver, server down
         raise FuzzynavError(f"storage {_hide_password(url)}: cannot open it "
                             f"({type(exc).__name__}: {str(exc).splitlines()[0]})") from None
@@ -184,35 +201,6 @@ def reap_stale(study, stale_after_s: float) -> int:
     return n
 
 
-class _Slots:
-    """Serialises "count the trials, then start one" among the workers of a journal file.
-
-    An advisory ``flock`` on the journal file itself (Optuna's own journal lock is a
-    separate symlink, so the two never interfere, and nothing is left behind; the kernel
-    drops the lock of a killed process).  Other storages: no lock.
-    """
-
-    def __init__(self, url: str):
-        self._path = journal_path(url)
-        self._fh = None
-
-    def acquire(self) -> None:
-        if self._path is None or self._fh is not None:
-            return
-        import fcntl
-
-        self._fh = open(self._path, "ab")
-        fcntl.flock(self._fh, fcntl.LOCK_EX)
-
-    def release(self) -> None:
-        if self._fh is not None:
-            import fcntl
-
-            fcntl.flock(self._fh, fcntl.LOCK_UN)
-            self._fh.close()
-            self._fh = None
-
-
 # -- the objective -------------------------------------------------------------------------------
 class Objective:
     """Callable Optuna objective of a study config (one per worker process)."""
@@ -310,7 +298,14 @@ def run_worker(cfg, n_total: int, storage_url=None, worker: int = 0, cache_dir=N
     url = storage_url or cfg.storage_url
     study = open_study(cfg, url, worker)
     objective = Objective(cfg, cache_dir, worker)
-    slots = _Slots(url)
+    slots = TrialSlots(with_driver(url), cfg.name)
+    try:
+        return _trials_until(study, cfg, n_total, objective, slots, progress)
+    finally:
+        slots.close()
+
+
+def _trials_until(study, cfg, n_total, objective, slots, progress) -> int:
     done = fails = 0
     while True:
         slots.acquire()
@@ -325,7 +320,7 @@ def run_worker(cfg, n_total: int, storage_url=None, worker: int = 0, cache_dir=N
         fails = fails + 1 if state == TrialState.FAIL else 0
         if fails >= MAX_FAILS_IN_ROW:
             raise FuzzynavError(f"study {cfg.name!r}: {fails} trials in a row failed in worker "
-                                f"{worker}; the last with {objective.last_error!r}")
+                                f"{objective.worker}; the last with {objective.last_error!r}")
         if progress is not None:
             progress(n_finished(study))
 

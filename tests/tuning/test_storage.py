@@ -22,6 +22,7 @@ from fuzzynav.sim.scenario import load_scenario
 from fuzzynav.tuning import study as study_mod
 from fuzzynav.tuning.config import load_study_config
 from fuzzynav.tuning.run import run_study
+from fuzzynav.tuning.slots import TrialSlots
 from fuzzynav.tuning.study import (MAX_FAILS_IN_ROW, Objective, open_study, reap_stale,
                                    run_worker)
 from tests.tuning.studies import ROOT, write_study
@@ -341,7 +342,7 @@ def test_the_slot_lock_is_the_journal_itself(tmp_path):
     """flock on the journal: exclusive between processes, released by a kill, no file."""
     path = tmp_path / "s.journal"
     path.write_bytes(b"")
-    slots = study_mod._Slots(f"journal:{path}")
+    slots = TrialSlots(f"journal:{path}", "s")
     slots.acquire()
     probe = ("import fcntl, sys\nf = open(sys.argv[1], 'ab')\n"
              "try:\n    fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)\nexcept OSError:\n"

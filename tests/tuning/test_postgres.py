@@ -1,0 +1,113 @@
+"""A study shared through a real PostgreSQL server: a throwaway one on loopback.
+
+The server runs from a temporary directory (``initdb``, a free port on 127.0.0.1, Unix
+socket in that directory) and is stopped and deleted at the end.  PostgreSQL refuses to run
+as root, so as root it runs as the ``postgres`` user (or ``nobody``) through ``runuser``.
+Skips, saying why, when no server binaries are installed (``.ci/run`` installs them).
+"""
+from __future__ import annotations
+
+import glob
+import os
+import pwd
+import shutil
+import socket
+import subprocess
+import tempfile
+from pathlib import Path
+
+import pytest
+from optuna.trial import TrialState
+
+from fuzzynav.tuning.config import load_study_config
+from fuzzynav.tuning.run import run_study
+from fuzzynav.tuning.study import open_study
+from tests.tuning.studies import write_study
+
+
+def server_bin_dir():
+    """The directory of ``initdb`` / ``pg_ctl`` (PATH first, then the Debian layout)."""
+    found = shutil.which("initdb")
+    if found and shutil.which("pg_ctl", path=str(Path(found).resolve().parent)):
+        return Path(found).resolve().parent
+    for d in sorted(glob.glob("/usr/lib/postgresql/*/bin"), reverse=True):
+        if os.access(Path(d) / "initdb", os.X_OK) and os.access(Path(d) / "pg_ctl", os.X_OK):
+            return Path(d)
+    return None
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _as_server_user(argv, user):
+    return ["runuser", "-u", user, "--", *argv] if user else argv
+
+
+@pytest.fixture(scope="module")
+def postgres_url():
+    bin_dir = server_bin_dir()
+    if bin_dir is None:
+        pytest.skip("no PostgreSQL server binaries (initdb, pg_ctl) on PATH or in "
+                    "/usr/lib/postgresql/*/bin; .ci/run installs the postgresql package")
+    pytest.importorskip("psycopg2", reason="the PostgreSQL driver psycopg2 is not installed "
+                                           "(pip install -e '.[studies]')")
+    user = None
+    if os.geteuid() == 0:  # postgres refuses root
+        user = next((u for u in ("postgres", "nobody") if _has_user(u)), None)
+        if user is None or not shutil.which("runuser"):
+            pytest.skip("running as root without a 'postgres' or 'nobody' user and runuser")
+    root = Path(tempfile.mkdtemp(prefix="fuzzynav-pg-"))
+    if user:
+        pw = pwd.getpwnam(user)
+        os.chown(root, pw.pw_uid, pw.pw_gid)
+    data, port = root / "data", _free_port()
+    run = dict(check=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, cwd=root)
+    subprocess.run(_as_server_user([str(bin_dir / "initdb"), "-D", str(data), "-A", "trust",
+                                    "-U", "fuzzynav", "-E", "UTF8", "--no-locale"], user),
+                   **run)
+    opts = f"-h 127.0.0.1 -p {port} -k {root} -c fsync=off -c full_page_writes=off"
+    subprocess.run(_as_server_user([str(bin_dir / "pg_ctl"), "-D", str(data), "-w", "-t", "60",
+                                    "-l", str(root / "server.log"), "-o", opts, "start"], user),
+                   **run)
+    try:
+        import psycopg2
+
+        conn = psycopg2.connect(host="127.0.0.1", port=port, user="fuzzynav",
+                                dbname="postgres")
+        conn.autocommit = True
+        conn.cursor().execute("CREATE DATABASE fuzzynav_studies")
+        conn.close()
+        yield f"postgresql://fuzzynav@127.0.0.1:{port}/fuzzynav_studies"
+    finally:
+        subprocess.run(_as_server_user([str(bin_dir / "pg_ctl"), "-D", str(data), "-m", "immediate",
+                                        "-w", "stop"], user),
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=root)
+        shutil.rmtree(root, ignore_errors=True)
+
+
+def _has_user(name) -> bool:
+    try:
+        pwd.getpwnam(name)
+    except KeyError:
+        return False
+    return True
+
+
+def test_two_workers_share_a_study_through_postgresql(tmp_path, sim_cache, postgres_url):
+    cfg = load_study_config(write_study(tmp_path, study={"trials": 8}))
+    study = run_study(cfg, workers=2, storage=postgres_url, cache_dir=sim_cache,
+                      progress=False)
+    trials = study.get_trials(deepcopy=False)
+    assert [t.state for t in trials] == [TrialState.COMPLETE] * 8
+    assert len({tuple(sorted(t.params.items())) for t in trials}) == 8
+    assert not (tmp_path / "tiny.journal").exists()  # nothing went to the default storage
+    # another process (another machine, in real use) sees and resumes the same study
+    again = run_study(cfg, trials=10, storage=postgres_url, cache_dir=sim_cache,
+                      progress=False)
+    assert [t.params for t in again.trials[:8]] == [t.params for t in trials]
+    assert len(again.trials) == 10
+    # the study opened by URL is the one the CLI's export/report would use
+    assert len(open_study(cfg, postgres_url).trials) == 10
