@@ -16,8 +16,9 @@ The white-noise figures are the ones the rtklib-drive's source configures for it
 * **Angle random walk inflated.**  In motion a consumer gyro has errors the 15-state model
   lacks (scale factor, cross-axis and acceleration sensitivity, vibration rectification —
   the engine shakes the IMU by 2.6 °/s RMS at 31 Hz even at idle).  With the datasheet ARW
-  the filter is overconfident (normalised innovation squared 4.5 per row instead of 1) and
-  turns these errors into gyro-bias estimates of several hundred °/h.  Ten times the
+  the filter is overconfident (normalised innovation squared 2.8 per row instead of 1, 4.6
+  on the velocity rows) and turns these errors into gyro-bias estimates of several hundred
+  °/h.  Ten times the
   datasheet ARW (2.3 °/√h) is the smallest factor that makes the innovations consistent
   (1.1 per row) with GNSS throughout; it was chosen on that criterion, not on the drift.
 """

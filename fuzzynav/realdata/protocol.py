@@ -111,14 +111,14 @@ def degraded_fixes(gnss: SensorData, settings: ProtocolSettings, rng) -> SensorD
     rng : numpy.random.Generator
         Source of the added noise.
     """
-    fed = degrade.add_white_noise(gnss, settings.noise_pos_m, rng,
-                                  sigma_vel_mps=settings.noise_vel_mps)
-    z, sigma = fed.z.copy(), fed.sigma.copy()
+    z, sigma = gnss.z.copy(), gnss.sigma.copy()
+    # the receiver's lag is treated first, so that the added noise stays white
     if settings.velocity == "shift":
-        z[:, 3:6] = read_later(z[:, 3:6], fed.time_s, settings.velocity_lag_s)
+        z[:, 3:6] = read_later(z[:, 3:6], gnss.time_s, settings.velocity_lag_s)
     elif settings.velocity == "inflate":
         sigma[:, 3:6] = np.hypot(sigma[:, 3:6], settings.velocity_inflate_mps)
-    return replace(fed, z=z, sigma=sigma)
+    return degrade.add_white_noise(replace(gnss, z=z, sigma=sigma), settings.noise_pos_m, rng,
+                                   sigma_vel_mps=settings.noise_vel_mps)
 
 
 def windows_after(start_s: float, end_s: float, settings: ProtocolSettings) -> np.ndarray:
@@ -135,13 +135,3 @@ def with_outages(fed: SensorData, windows: np.ndarray) -> SensorData:
     """The fixes without the epochs inside ``windows`` (``meta['outage_windows']`` set)."""
     return degrade.with_outages(fed, period_s=0.0, duration_s=0.0, windows=windows)
 
-
-def after(fixes: SensorData, t0_s: float) -> SensorData:
-    """Only the epochs at or after ``t0_s`` (per-epoch meta cut alike)."""
-    keep = fixes.time_s >= t0_s
-    m = fixes.time_s.size
-    meta = {k: (v[keep] if isinstance(v, np.ndarray) and v.ndim >= 1 and v.shape[0] == m
-                and k not in ("lever_arm_b", "outage_windows") else v)
-            for k, v in fixes.meta.items()}
-    return replace(fixes, time_s=fixes.time_s[keep], z=fixes.z[keep],
-                   sigma=fixes.sigma[keep], meta=meta)
