@@ -7,17 +7,28 @@ count when allowed), and every other parameter of that structure is a coordinate
 
     v <- w(i) v + c1 r1 (p_best - x) + c2 r2 (g_best - x),   x <- clip(x + v, 0, 1)
 
-with ``w`` decreasing linearly from ``inertia[0]`` to ``inertia[1]`` over the iterations.
+with ``w`` decreasing linearly from ``inertia[0]`` to ``inertia[1]`` over the configured
+``iterations`` (a shorter run with ``--trials`` follows the same schedule and stops early).
 Each swarm is enqueued into the Optuna study and evaluated by the same objective as the other
 samplers, by ``workers`` processes in parallel; the study then holds every evaluation, so
 ``study report`` and ``study export`` work unchanged.
+
+Resuming replays the swarm from the seed and the values already in the study (each
+particle's trial carries ``pso_iteration`` and ``particle``); only particles without a trial
+are enqueued, and a trial whose parameters differ from the replayed particle (the config
+changed) is an error rather than a silent mix of two swarms.
 """
 from __future__ import annotations
 
 import numpy as np
 from tqdm.auto import tqdm
 
+from optuna.trial import TrialState
+
+from fuzzynav.errors import FuzzynavError
 from fuzzynav.tuning.space import ControllerSpace
+
+_PENDING = (TrialState.WAITING, TrialState.RUNNING)
 
 
 class _Recorder:
@@ -25,6 +36,7 @@ class _Recorder:
 
     def __init__(self, spaces):
         self.params = []   # (name, kind, spec)
+        self.fixed = {}    # the counts the structure asked for, fixed
         self._fixed = {}
         for sp in spaces:
             t = sp.template
@@ -35,6 +47,7 @@ class _Recorder:
 
     def suggest_categorical(self, name, choices):
         if name in self._fixed:
+            self.fixed[name] = self._fixed[name]
             return self._fixed[name]
         self.params.append((name, "cat", list(choices)))
         return choices[0]
@@ -54,7 +67,7 @@ def structure(cfg):
     rec = _Recorder(spaces)
     for sp in spaces:
         sp.build(rec)
-    return rec.params, rec._fixed
+    return rec.params, rec.fixed
 
 
 def to_params(x, params, fixed) -> dict:
@@ -70,20 +83,51 @@ def to_params(x, params, fixed) -> dict:
     return out
 
 
+def inertia(cfg, it: int) -> float:
+    """Inertia weight of iteration ``it``: linear from start to end over the iterations."""
+    w0, w1 = cfg.pso.inertia
+    return w0 + (w1 - w0) * it / max(cfg.pso.iterations - 1, 1)
+
+
+def _trials_of(study, it):
+    """Particle -> trials of iteration ``it`` in the study."""
+    out = {}
+    for t in study.get_trials(deepcopy=False):
+        if t.user_attrs.get("pso_iteration") == it:
+            out.setdefault(t.user_attrs["particle"], []).append(t)
+    return out
+
+
 def _evaluate(study, cfg, swarm_params, it, workers, storage, cache_dir):
-    """Enqueue a swarm, let the workers evaluate it, return the values in particle order."""
+    """Enqueue the particles of a swarm not in the study yet, let the workers evaluate
+    every queued one, return the values in particle order (inf: failed)."""
     from fuzzynav.tuning.run import _spawn
     from fuzzynav.tuning.study import n_finished, run_worker
 
+    have = _trials_of(study, it)
+    todo = 0
     for i, p in enumerate(swarm_params):
-        study.enqueue_trial(p, user_attrs={"pso_iteration": it, "particle": i})
+        for t in have.get(i, []):  # (a queued trial shows no params yet; a killed one some)
+            if any(p.get(k) != val for k, val in t.params.items()):
+                raise FuzzynavError(
+                    f"study {cfg.name!r}: PSO iteration {it}, particle {i} in the study has "
+                    "other parameters than the swarm replayed from this config (was the "
+                    "config changed?); use a new study name")
+        states = [t.state for t in have.get(i, [])]
+        if not states:  # (a failed particle stays failed: its retries are the reaper's job)
+            study.enqueue_trial(p, user_attrs={"pso_iteration": it, "particle": i})
+            states.append(TrialState.WAITING)
+        todo += any(s in _PENDING for s in states)
+    if not todo:
+        return _recorded(study, it, len(swarm_params))
     total = n_finished(study) + len(swarm_params)
     if workers == 1:
         run_worker(cfg, total, storage, 0, cache_dir)
     else:
         procs = [_spawn(cfg, total, storage, w, cache_dir) for w in range(workers)]
-        for p in procs:
-            p.wait()
+        bad = [p.wait() for p in procs]
+        if any(bad):
+            raise FuzzynavError(f"PSO: worker(s) failed (exit codes {bad})")
     return _recorded(study, it, len(swarm_params))
 
 
@@ -97,33 +141,27 @@ def run_pso(cfg, study, total, workers=1, storage=None, cache_dir=None, progress
     v = 0.1 * rng.standard_normal((n, dim))
     pbest, pval = x.copy(), np.full(n, np.inf)
     g, gval = x[0].copy(), np.inf
-    w0, w1 = cfg.pso.inertia
-    done = max([t.user_attrs.get("pso_iteration", -1) for t in study.get_trials(deepcopy=False)]
-               + [-1]) + 1
-    bar = tqdm(total=iters, initial=min(done, iters), disable=not progress, unit="swarm",
-               desc=f"{cfg.name} (PSO)")
+    bar = tqdm(total=iters, disable=not progress, unit="swarm", desc=f"{cfg.name} (PSO)")
     for it in range(iters):
         vals = _evaluate(study, cfg, [to_params(p, params, fixed) for p in x], it, workers,
-                         storage, cache_dir) if it >= done else _recorded(study, it, n)
+                         storage, cache_dir)
         better = vals < pval
         pbest[better], pval[better] = x[better], vals[better]
         if pval.min() < gval:
             g, gval = pbest[pval.argmin()].copy(), float(pval.min())
-        w = w0 + (w1 - w0) * it / max(iters - 1, 1)
         r1, r2 = rng.random((n, dim)), rng.random((n, dim))
-        v = w * v + cfg.pso.c1 * r1 * (pbest - x) + cfg.pso.c2 * r2 * (g - x)
+        v = inertia(cfg, it) * v + cfg.pso.c1 * r1 * (pbest - x) + cfg.pso.c2 * r2 * (g - x)
         x = np.clip(x + v, 0.0, 1.0)
-        if it >= done:
-            bar.update(1)
+        bar.update(1)
     bar.close()
     return study
 
 
 def _recorded(study, it, n):
-    """Values of an iteration already in the study (resuming a PSO run)."""
+    """Values of an iteration's particles in the study (inf where none completed)."""
     vals = np.full(n, np.inf)
-    for t in study.get_trials(deepcopy=False):
-        ua = t.user_attrs
-        if ua.get("pso_iteration") == it and t.value is not None:
-            vals[ua["particle"]] = t.value
+    for i, trials in _trials_of(study, it).items():
+        done = [t.value for t in trials if t.state == TrialState.COMPLETE]
+        if done and i < n:
+            vals[i] = done[0]
     return vals
