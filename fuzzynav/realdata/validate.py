@@ -10,6 +10,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 
+from fuzzynav.errors import InputFileError
 from fuzzynav.realdata import protocol
 from fuzzynav.realdata.mems import CONSUMER_MEMS, MemsModel
 from fuzzynav.realdata.protocol import ProtocolSettings
@@ -55,6 +56,13 @@ class Validation:
     runs: dict
 
 
+def _start(rec, fixes, known, lever):
+    try:
+        return start_from(rec.imu, fixes, known, lever)
+    except InputFileError as exc:  # name the recording (no rest, no motion in a --span)
+        raise InputFileError(getattr(rec, "directory", None), exc.where, exc.what) from None
+
+
 def _for_alignment(fixes):
     """The fed fixes without the added *velocity* noise, for the coarse alignment.
 
@@ -90,11 +98,11 @@ def validate(rec, filter_name: str, settings: ProtocolSettings = ProtocolSetting
     noisy = protocol.degraded_fixes(rec.gnss, settings, np.random.default_rng(seed))
     known = rec.mounting is not None
     # the windows follow the start, and the start is found on what the filter is fed
-    first = start_from(rec.imu, _for_alignment(noisy), known, lever)
+    first = _start(rec, _for_alignment(noisy), known, lever)
     t_end = float(rec.imu.time_s[-1])
     windows = protocol.windows_after(first.init.time_s, t_end, settings)
     feeds = {"gnss": noisy, "outages": protocol.with_outages(noisy, windows)}
-    start = start_from(rec.imu, _for_alignment(feeds["outages"]), known, lever)
+    start = _start(rec, _for_alignment(feeds["outages"]), known, lever)
     sigma0 = float(np.hypot(settings.noise_pos_m, np.median(rec.gnss.sigma[:, :2])))
     t0 = max(settings.t_start_s, start.init.time_s)
     runs = {}

@@ -89,3 +89,9 @@ def test_rule_files_bind_to_the_gnss_sensor(rtklib_drive):
     code, _, err = _run("run", "--data", f"rtklib:{rtklib_drive}", *SHORT, "--filter", "fakf",
                         "--rules", "paper000_attitude.json")
     assert code == 2 and "heading" in err and "sensors: gnss" in err
+
+
+def test_a_stretch_without_motion_names_the_recording(rtklib_drive):
+    # the car drives off at 35.5 s: 25 s of data give no heading
+    code, _, err = _run("run", "--data", f"rtklib:{rtklib_drive}", "--span", "0,25")
+    assert code == 2 and str(rtklib_drive) in err and "initialisation" in err
