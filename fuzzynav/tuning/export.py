@@ -9,9 +9,13 @@ from disk) gives on the first test run — the regression tests re-run it.
 from __future__ import annotations
 
 import datetime as _dt
+import os
+import shutil
+import tempfile
 from pathlib import Path
 
 import optuna
+from optuna.trial import TrialState
 
 from fuzzynav import __version__
 from fuzzynav.errors import FuzzynavError
@@ -30,10 +34,15 @@ EXPECTED_METRICS = ("rms_pos_m", "rms_vel_mps", "rms_att_deg", "rms_pos_e_m", "r
 def choose_trial(study, cfg, trial_number=None, pareto_index=None):
     """The trial to export: a given number, a Pareto member, or the best fully run one."""
     if trial_number is not None:
-        try:
-            return study.trials[trial_number]
-        except IndexError:
-            raise FuzzynavError(f"study {cfg.name!r} has no trial {trial_number}") from None
+        trials = study.get_trials(deepcopy=False)
+        if not 0 <= trial_number < len(trials):
+            raise FuzzynavError(f"study {cfg.name!r} has no trial {trial_number} "
+                                f"(trials 0..{len(trials) - 1})")
+        trial = trials[trial_number]
+        if trial.state != TrialState.COMPLETE:
+            raise FuzzynavError(f"study {cfg.name!r}: trial {trial_number} is "
+                                f"{trial.state.name}, not COMPLETE; nothing to export")
+        return trial
     best = best_trials(study, cfg)
     if not best:
         raise FuzzynavError(f"study {cfg.name!r} has no complete trial that ran every "
@@ -70,7 +79,11 @@ def _with(fis: FuzzySystem, **blocks) -> FuzzySystem:
 
 def export_rules(cfg, study, out, trial_number=None, pareto_index=None, cache_dir=None,
                  progress=False) -> list[Path]:
-    """Write the rule files of a trial with provenance and expected metrics."""
+    """Write the rule files of a trial with provenance and expected metrics.
+
+    The files are written complete (with their ``expected`` block) into a temporary
+    directory beside ``out`` and then moved into place: an error leaves no partial file.
+    """
     trial = choose_trial(study, cfg, trial_number, pareto_index)
     systems = systems_of(cfg, trial)
     paths = _paths(out, list(systems))
@@ -78,21 +91,32 @@ def export_rules(cfg, study, out, trial_number=None, pareto_index=None, cache_di
     test = run_table(ev, systems, cfg.test)
     held_out = summary(test).iloc[0].to_dict() if not test.empty else {}
     created = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
-    for name, fis in systems.items():
-        prov = {
-            "study": cfg.name, "config": str(cfg.path) if cfg.path else None,
-            "trial": trial.number, "sampler": cfg.sampler, "controller": name,
-            "template": str(next(c.template for c in cfg.controllers if c.name == name)),
-            "objective": {"value": list(trial.values) if cfg.multi_objective else trial.value,
-                          "ratios_to_" + cfg.baseline: trial.user_attrs.get("ratios"),
-                          "weights": cfg.weights},
-            "train": [list(r) for r in cfg.train], "test": [list(r) for r in cfg.test],
-            "held_out_ratios_to_" + cfg.baseline: {k: float(v) for k, v in held_out.items()
-                                                  if k.endswith("ratio") or k == "score"},
-            "package_version": __version__, "created": created,
-        }
-        save_fis(_with(fis, provenance=prov), paths[name])
-    _write_expected(cfg, paths, ev)
+    parent = next(iter(paths.values())).parent
+    parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=".export-", dir=parent))
+    try:
+        staged = {name: tmp / p.name for name, p in paths.items()}
+        for name, fis in systems.items():
+            prov = {
+                "study": cfg.name, "config": str(cfg.path) if cfg.path else None,
+                "trial": trial.number, "sampler": cfg.sampler, "controller": name,
+                "template": str(next(c.template for c in cfg.controllers if c.name == name)),
+                "objective": {"value": list(trial.values) if cfg.multi_objective
+                              else trial.value,
+                              "ratios_to_" + cfg.baseline: trial.user_attrs.get("ratios"),
+                              "weights": cfg.weights},
+                "train": [list(r) for r in cfg.train], "test": [list(r) for r in cfg.test],
+                "held_out_ratios_to_" + cfg.baseline: {
+                    k: float(v) for k, v in held_out.items()
+                    if k.endswith("ratio") or k == "score"},
+                "package_version": __version__, "created": created,
+            }
+            save_fis(_with(fis, provenance=prov), staged[name])
+        _write_expected(cfg, staged, ev)
+        for name, p in paths.items():
+            os.replace(staged[name], p)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
     return list(paths.values())
 
 

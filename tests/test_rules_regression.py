@@ -1,0 +1,62 @@
+"""Regression tests of tuned rules: every rule file in ``rules/`` with an ``expected`` block is
+re-run (``fakf`` with the file and its ``with_rules`` companions, on its scenario and seed) and
+must reproduce its metrics.  The mechanism itself is also run on a rule file exported from a
+tiny study into a temporary directory, so this test never only skips."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from fuzzynav.experiment import run_on_log
+from fuzzynav.sim.log import simulate
+from fuzzynav.sim.scenario import load_scenario
+
+ROOT = Path(__file__).resolve().parents[1]
+RTOL = 1e-6
+EXPORTED = "exported-in-a-temp-dir"
+
+
+def rule_files_with_expected() -> list:
+    out = []
+    for path in sorted((ROOT / "rules").glob("*.json")):
+        if "expected" in json.loads(path.read_text(encoding="utf-8")):
+            out.append(path)
+    return out
+
+
+def check_expected(path: Path, cache_dir) -> dict:
+    """Re-run what a rule file's ``expected`` block describes; compare; the metrics."""
+    exp = json.loads(path.read_text(encoding="utf-8"))["expected"]
+    files = [path] + [path.parent / name for name in exp.get("with_rules", [])]
+    log = simulate(load_scenario(exp["scenario"]), int(exp["seed"]), cache_dir)
+    out = run_on_log(log, exp.get("filter", "fakf"), {"rules": [str(f) for f in files]},
+                     t_start_s=float(exp.get("t_start_s", 0.0)))
+    assert out.result.ok, out.result.status
+    assert exp["metrics"], "an expected block without metrics checks nothing"
+    for key, value in exp["metrics"].items():
+        assert out.metrics[key] == pytest.approx(value, rel=RTOL), (path.name, key)
+    return out.metrics
+
+
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory):
+    return tmp_path_factory.mktemp("regression-cache")
+
+
+@pytest.mark.parametrize("case", rule_files_with_expected() + [EXPORTED],
+                         ids=lambda c: c if isinstance(c, str) else c.name)
+def test_rule_files_reproduce_their_expected_metrics(case, cache, tmp_path):
+    if case == EXPORTED:
+        from fuzzynav.tuning.export import export_rules
+        from tests.tuning.studies import ATT_CONTROLLER, BASE, finished_study
+
+        cfg, study = finished_study(tmp_path, cache, trials=3, controllers=[
+            BASE["controllers"][0], ATT_CONTROLLER])
+        paths = export_rules(cfg, study, tmp_path / "rules" / "tuned.json", cache_dir=cache)
+        assert len(paths) == 2
+        metrics = [check_expected(p, cache) for p in paths]
+        assert metrics[0] == metrics[1]  # one fakf run with both files, recorded in both
+    else:
+        check_expected(case, cache)
