@@ -59,7 +59,7 @@ def summary(df: pd.DataFrame, by=("filter",)) -> pd.DataFrame:
             if c in sub:
                 est = mean_ci(sub[c].to_numpy(dtype=float))
                 row[c] = est.mean
-                row[c + "_ci"] = est.half_width
+                row[c + "_ci"] = est.half_width if est.n >= 2 else np.nan  # no CI from 1 run
         row["runs"] = len(sub)
         out.append(row)
     return pd.DataFrame(out)

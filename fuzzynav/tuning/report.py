@@ -1,7 +1,8 @@
 """``fuzzynav study report``: what a study found, as a Markdown page with figures.
 
 Writes into a directory: ``trials.csv`` (pandas table of every trial), ``history.png``
-(optimisation history), ``importances.png`` (fANOVA importances of the structural
+(optimisation history), ``importances.png`` (PED-ANOVA importances -- Optuna's default;
+its fANOVA needs scikit-learn -- of the structural
 parameters), ``pareto.png`` (multi-objective studies), ``mf_<controller>.png`` (the tuned
 membership functions), ``report.md`` (summary, rule tables, the train/test table beside the
 EKF, the paper's rules and the compared baselines).
@@ -9,12 +10,14 @@ EKF, the paper's rules and the compared baselines).
 from __future__ import annotations
 
 import itertools
+import warnings
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from fuzzynav import plots
+from fuzzynav.errors import FuzzynavError
 from fuzzynav.tuning.evaluate import format_summary, run_table
 from fuzzynav.tuning.export import choose_trial, systems_of
 from fuzzynav.tuning.objective import Evaluator
@@ -29,14 +32,31 @@ def trials_frame(study) -> pd.DataFrame:
     keep = [c for c in df.columns if not c.startswith("user_attrs_") or
             c in ("user_attrs_n_runs", "user_attrs_worker", "user_attrs_retry_of")]
     out = df[keep].copy()
-    ratios = [t.user_attrs.get("ratios") or {} for t in study.trials]
+    trials = study.get_trials(deepcopy=False)
+    ratios = [t.user_attrs.get("ratios") or {} for t in trials]
     for g in ("pos", "vel", "att"):
         out[f"{g}_ratio"] = [r.get(g, np.nan) for r in ratios]
+    for p in _structural_params(trials):
+        out[p] = [t.params.get(p) for t in trials]
     return out
 
 
-def _history(study, path):
-    vals = [(t.number, t.value) for t in study.trials if t.value is not None]
+def _structural_params(trials) -> list:
+    """Partition counts, windows and output-range ends (not the hundreds of rule cells)."""
+    return sorted({p for t in trials for p in t.params
+                   if ".n." in p or p.endswith((".window", ".out_hi", ".out_lo"))})
+
+
+def _score(cfg, t) -> float:
+    """A finished trial's single score (multi-objective: the weighted mean of its ratios)."""
+    if not cfg.multi_objective:
+        return t.value
+    w = [cfg.weights[g] for g in ("pos", "vel", "att")]
+    return float(np.dot(w, t.values) / sum(w))
+
+
+def _history(study, cfg, path):
+    vals = [(t.number, _score(cfg, t)) for t in study.trials if t.values is not None]
     if not vals:
         return None
     n, v = np.array(vals).T
@@ -46,27 +66,29 @@ def _history(study, path):
     ax.axhline(1.0, color="k", lw=0.8, ls="--", label="EKF")
     ax.set_yscale("log")
     ax.set_xlabel("trial")
-    ax.set_ylabel("score (ratio to EKF)")
+    ax.set_ylabel("score (ratio to EKF)" + (", weighted" if cfg.multi_objective else ""))
     ax.legend()
     fig.tight_layout()
     return plots.save(fig, path)
 
 
-def _importances(study, path):
+def _importances(study, cfg, path):
     import optuna
 
-    params = sorted({p for t in study.trials for p in t.params
-                     if ".n." in p or p.endswith((".window", ".out_hi", ".out_lo"))})
-    done = [t for t in study.trials if t.value is not None and all(p in t.params for p in params)]
+    params = _structural_params(study.trials)
+    done = [t for t in study.trials if t.values is not None and all(p in t.params for p in params)]
     if len(params) < 2 or len(done) < 10:
         return None
     try:
-        imp = optuna.importance.get_param_importances(study, params=params)
+        with warnings.catch_warnings():  # "importances of low target values": as wanted
+            warnings.simplefilter("ignore", UserWarning)
+            imp = optuna.importance.get_param_importances(study, params=params,
+                                                          target=lambda t: _score(cfg, t))
     except (ValueError, RuntimeError):
         return None
     fig, ax = plt.subplots(figsize=(7, 0.4 * len(imp) + 1))
     ax.barh(list(imp)[::-1], list(imp.values())[::-1])
-    ax.set_xlabel("fANOVA importance")
+    ax.set_xlabel("importance (PED-ANOVA)")
     fig.tight_layout()
     return plots.save(fig, path)
 
@@ -123,25 +145,11 @@ def rule_table(fis) -> str:
                      f" then {r.consequents[0][0]} is {r.consequents[0][1]}" for r in fis.rules)
 
 
-def write_report(cfg, study, out_dir, cache_dir=None, evaluate: bool = True) -> Path:
-    """Write the report directory; returns the path of ``report.md``."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    df = trials_frame(study)
-    df.to_csv(out / "trials.csv", index=False)
-    figs = [_history(study, out / "history.png"), _importances(study, out / "importances.png"),
-            _pareto(study, cfg, out / "pareto.png")]
-    states = df["state"].value_counts().to_dict()
-    lines = [f"# Study `{cfg.name}`", "", cfg.description, "",
-             f"Sampler `{cfg.sampler}`, pruner `{cfg.pruner}`, "
-             f"{'multi' if cfg.multi_objective else 'single'}-objective; trials: "
-             + ", ".join(f"{k} {v}" for k, v in states.items()) + ".", ""]
-    lines += [f"![{p.stem}]({p.name})" for p in figs if p is not None]
-    trial = choose_trial(study, cfg)
+def _best_trial_section(cfg, trial, out, cache_dir, evaluate) -> list:
     systems = systems_of(cfg, trial)
-    lines += ["", f"## Best trial: {trial.number}", "",
-              f"Score {trial.values if cfg.multi_objective else trial.value} "
-              f"(ratios to {cfg.baseline}: {trial.user_attrs.get('ratios')}).", ""]
+    lines = ["", f"## Best trial: {trial.number}", "",
+             f"Score {trial.values if cfg.multi_objective else trial.value} "
+             f"(ratios to {cfg.baseline}: {trial.user_attrs.get('ratios')}).", ""]
     for name, fis in systems.items():
         p = _mf_figure(fis, out / f"mf_{name}.png")
         lines += [f"### Controller `{name}`", "", f"![mf_{name}]({p.name})", "",
@@ -155,6 +163,30 @@ def write_report(cfg, study, out_dir, cache_dir=None, evaluate: bool = True) -> 
             out / "runs.csv", index=False)
         lines += ["## Train and held-out test (ratio of RMS error to the EKF; < 1 is better)",
                   "", "```", format_summary(train, test), "```", ""]
+    return lines
+
+
+def write_report(cfg, study, out_dir, cache_dir=None, evaluate: bool = True) -> Path:
+    """Write the report directory; returns the path of ``report.md``."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    df = trials_frame(study)
+    df.to_csv(out / "trials.csv", index=False)
+    figs = [_history(study, cfg, out / "history.png"),
+            _importances(study, cfg, out / "importances.png"),
+            _pareto(study, cfg, out / "pareto.png")]
+    states = df["state"].value_counts().to_dict() if "state" in df else {}
+    lines = [f"# Study `{cfg.name}`", "", cfg.description, "",
+             f"Sampler `{cfg.sampler}`, pruner `{cfg.pruner}`, "
+             f"{'multi' if cfg.multi_objective else 'single'}-objective; trials: "
+             + (", ".join(f"{k} {v}" for k, v in states.items()) or "none") + ".", ""]
+    lines += [f"![{p.stem}]({p.name})" for p in figs if p is not None]
+    try:
+        trial = choose_trial(study, cfg)
+    except FuzzynavError as exc:  # only pruned, failed or running trials so far
+        lines += ["", f"No best trial yet: {exc}.", ""]
+    else:
+        lines += _best_trial_section(cfg, trial, out, cache_dir, evaluate)
     path = out / "report.md"
     path.write_text("\n".join(lines) + "\n")
     return path

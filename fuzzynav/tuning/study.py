@@ -134,7 +134,9 @@ def open_study(cfg, storage_url=None, worker: int = 0, create: bool = False):
     if create:
         study = optuna.create_study(directions=cfg.directions, load_if_exists=True, **kw)
         if cfg.multi_objective:
-            study.set_metric_names([f"{g}_ratio" for g in GROUP_METRICS])
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+                study.set_metric_names([f"{g}_ratio" for g in GROUP_METRICS])
         return study
     try:
         return optuna.load_study(**kw)
