@@ -19,6 +19,7 @@ Every problem is one :class:`fuzzynav.errors.InputFileError` naming the file and
 """
 from __future__ import annotations
 
+import importlib.util
 import re
 import sys
 from dataclasses import dataclass, field
@@ -288,6 +289,9 @@ def study_config_from_dict(doc: dict, path: Path | None = None) -> StudyConfig:
     top.finish()
     if study["sampler"] == "pso" and study["multi_objective"]:
         raise InputFileError(None, "study.sampler", "pso is single-objective here")
+    if study["sampler"] == "cmaes" and importlib.util.find_spec("cmaes") is None:
+        raise InputFileError(None, "study.sampler", "'cmaes' needs the cmaes package, which "
+                                                    "is not installed (pip install cmaes)")
     return StudyConfig(name=name, description=desc, path=path, pso=pso, weights=weights,
                        baseline=baseline, t_start_s=t_start, train=train, test=test,
                        compare=compare, controllers=ctrls, **study)

@@ -28,7 +28,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from fuzzynav.errors import InputFileError
-from fuzzynav.fuzzy import (Antecedent, FuzzySystem, Rule, Term, Variable, load_fis,
+from fuzzynav.fuzzy import (Antecedent, FuzzySystem, Rule, Variable, load_fis,
                             standard_labels, triangular_partition)
 
 _GAP = (0.05, 1.0)

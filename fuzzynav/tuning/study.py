@@ -92,9 +92,17 @@ def make_storage(url: str, heartbeat: bool = True):
                             f"({type(exc).__name__}: {str(exc).splitlines()[0]})") from None
 
 
-def make_sampler(cfg, worker: int = 0):
-    """The configured sampler; each worker gets its own seed (base + index)."""
-    seed = cfg.seed + worker
+def sampler_seed(cfg, worker: int = 0, start: int = 0) -> int:
+    """Seed of worker ``worker``'s sampler in a process that starts with ``start`` trials
+    in the study: each worker draws its own numbers, and a resumed run does not redraw the
+    parameters the first run drew (Optuna keeps no sampler state in the storage)."""
+    return int(np.random.SeedSequence([cfg.seed, worker, start]).generate_state(1)[0])
+
+
+def make_sampler(cfg, worker: int = 0, start: int = 0):
+    """The configured sampler, seeded by :func:`sampler_seed` (QMC: by the config's seed,
+    so that every worker and every resumed run continues one shared sequence)."""
+    seed = cfg.seed if cfg.sampler == "qmc" else sampler_seed(cfg, worker, start)
     s = cfg.sampler
     if s == "tpe" or s == "pso":  # pso drives the study itself; tpe is never asked then
         return optuna.samplers.TPESampler(seed=seed, multivariate=True, group=True,
@@ -139,9 +147,13 @@ def open_study(cfg, storage_url=None, worker: int = 0, create: bool = False):
                 study.set_metric_names([f"{g}_ratio" for g in GROUP_METRICS])
         return study
     try:
-        return optuna.load_study(**kw)
+        study = optuna.load_study(**kw)
     except KeyError:
         raise FuzzynavError(missing) from None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+        study.sampler = make_sampler(cfg, worker, len(study.get_trials(deepcopy=False)))
+    return study
 
 
 # -- bookkeeping ---------------------------------------------------------------------------------

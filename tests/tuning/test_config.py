@@ -168,6 +168,17 @@ def test_a_sugeno_template_cannot_be_tuned(tmp_path):
         load_study_config(path)
 
 
+def test_cmaes_without_its_package_is_named(tmp_path, monkeypatch):
+    import importlib.util
+
+    find = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: None if name == "cmaes" else find(name, *a))
+    path = write_study(tmp_path, study={"sampler": "cmaes"})
+    with pytest.raises(InputFileError, match=rf"^{path}: study.sampler: .*pip install cmaes"):
+        load_study_config(path)
+
+
 def test_file_level_problems(tmp_path):
     with pytest.raises(DataMissingError, match="nope.toml: study file not found"):
         load_study_config(tmp_path / "nope.toml")

@@ -23,6 +23,7 @@ from fuzzynav.tuning import study as study_mod
 from fuzzynav.tuning.config import load_study_config
 from fuzzynav.tuning.run import run_study
 from fuzzynav.tuning.slots import TrialSlots
+from fuzzynav.tuning.space import build_all
 from fuzzynav.tuning.study import (MAX_FAILS_IN_ROW, Objective, open_study, reap_stale,
                                    run_worker)
 from tests.tuning.studies import ROOT, write_study
@@ -117,9 +118,27 @@ def test_resuming_continues_the_study(tmp_path, sim_cache):
     after = [(t.params, t.value) for t in again.trials]
     assert len(after) == 5 and after[:2] == before
     assert states(again) == {TrialState.COMPLETE: 5}
+    # the resumed process does not redraw the parameters the first one drew
+    assert len({tuple(sorted(p.items())) for p, _ in after}) == 5
     # already at the total: nothing more runs
     assert len(run_study(cfg, trials=5, cache_dir=sim_cache, progress=False).trials) == 5
     assert_clean(tmp_path)
+
+
+@pytest.mark.parametrize("sampler", ["random", "tpe", "nsga2", "qmc"])
+def test_a_resumed_study_draws_new_parameters_and_runs_are_reproducible(tmp_path, sampler,
+                                                                          monkeypatch):
+    monkeypatch.setattr(Objective, "_run",
+                        lambda self, trial: float(len(build_all(self.spaces, trial))))
+    params = []
+    for name in ("a", "b"):
+        cfg = load_study_config(write_study(tmp_path, name=name, file_name=f"{name}.toml",
+                                            study={"sampler": sampler}))
+        run_study(cfg, trials=3, progress=False)
+        study = run_study(cfg, trials=6, progress=False)
+        params.append([tuple(sorted(t.params.items())) for t in study.trials])
+    assert len(set(params[0])) == 6       # no redrawn parameter set after the resume
+    assert params[0] == params[1]         # same config, same history: same trials
 
 
 # -- killed workers -------------------------------------------------------------------------------
@@ -189,7 +208,7 @@ def test_a_worker_killed_mid_trial_loses_nothing_and_its_trial_is_retried(tmp_pa
     assert_clean(tmp_path)
 
 
-# -- the reaper -------------------------------------------------------------------------------------
+# -- the reaper ---------------------------------------------------------------------------------
 @pytest.fixture
 def bare(tmp_path):
     """A study on a journal file and a second handle on it (as another worker would have)."""
@@ -317,7 +336,7 @@ def test_a_worker_gives_up_after_repeated_failures(tmp_path, sim_cache, monkeypa
     assert states(study) == {TrialState.FAIL: MAX_FAILS_IN_ROW}
 
 
-# -- opening ----------------------------------------------------------------------------------------
+# -- opening -------------------------------------------------------------------------------------
 def test_opening_a_study_that_does_not_exist(tmp_path):
     cfg = load_study_config(write_study(tmp_path))
     with pytest.raises(FuzzynavError, match="no study named 'tiny'.*run it first"):
