@@ -1,0 +1,98 @@
+"""Numba primitives of the skylight AoP model shared by the polarization solvers.
+
+Angle folding, the elementary rotations of the Euler sequence of :mod:`fuzzynav.nav.attitude`,
+the AoP of a body view direction with its gradient on the body sun direction, and the body
+sun direction with its partials on the Euler angles.  The model and its conventions are
+described in :mod:`fuzzynav.nav.polarization`.
+"""
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+HALF_PI = 0.5 * math.pi
+TWO_PI = 2.0 * math.pi
+
+
+@nb.njit(cache=True)
+def fold_half_pi(a):
+    """Axial angle folded into [-pi/2, pi/2)."""
+    return (a + HALF_PI) % math.pi - HALF_PI
+
+
+@nb.njit(cache=True)
+def wrap_pi(a):
+    """Angle wrapped into [-pi, pi)."""
+    return (a + math.pi) % TWO_PI - math.pi
+
+
+@nb.njit(cache=True)
+def rot_z(ang, x, y, z):
+    """Active rotation by ``ang`` about z (R3)."""
+    c, s = math.cos(ang), math.sin(ang)
+    return c * x - s * y, s * x + c * y, z
+
+
+@nb.njit(cache=True)
+def rot_x(ang, x, y, z):
+    """Active rotation by ``ang`` about x (R1)."""
+    c, s = math.cos(ang), math.sin(ang)
+    return x, c * y - s * z, s * y + c * z
+
+
+@nb.njit(cache=True)
+def rot_y(ang, x, y, z):
+    """Active rotation by ``ang`` about y (R2)."""
+    c, s = math.cos(ang), math.sin(ang)
+    return c * x + s * z, y, -s * x + c * z
+
+
+@nb.njit(cache=True)
+def aop_unfolded_and_gradient(v, sx, sy, sz):
+    """AoP of view ``v`` for sun ``s`` (body frame) in (-pi, pi] and d aop / d s.
+
+    The angle is not folded: a caller forming a residual folds the difference once.
+    """
+    c = v[0] * sx + v[1] * sy + v[2] * sz
+    num = sx - v[0] * c
+    den = v[1] * sz - v[2] * sy
+    q = num * num + den * den
+    if q == 0.0:  # sun on the view axis: unpolarized, no angle
+        return np.nan, np.nan, np.nan, np.nan
+    inv_q = 1.0 / q
+    # d num/ds = e_x - v_x v ; d den/ds = (0, -v_z, v_y)
+    g0 = den * (1.0 - v[0] * v[0]) * inv_q
+    g1 = (den * (-v[0] * v[1]) + num * v[2]) * inv_q
+    g2 = (den * (-v[0] * v[2]) - num * v[1]) * inv_q
+    return math.atan2(num, den), g0, g1, g2
+
+
+@nb.njit(cache=True)
+def aop_and_gradient(v, sx, sy, sz):
+    """AoP of view ``v`` for sun ``s`` (body frame) in [-pi/2, pi/2) and d aop / d s."""
+    a, g0, g1, g2 = aop_unfolded_and_gradient(v, sx, sy, sz)
+    return fold_half_pi(a), g0, g1, g2
+
+
+@nb.njit(cache=True)
+def sun_body_partials(sun_n, pitch, roll, heading):
+    """Sun in the body frame and its partials on pitch, roll and heading (four 3-tuples).
+
+    ``s_b = R2(roll)^T R1(pitch)^T R3(heading) sun_n``, applied rotation by rotation.
+    """
+    tx, ty, tz = rot_z(heading, sun_n[0], sun_n[1], sun_n[2])
+    ux, uy, uz = rot_x(-pitch, tx, ty, tz)
+    s = rot_y(-roll, ux, uy, uz)
+    # d/dheading: R3' = [e_z x] R3 ; d/dpitch: R1(-p)' = -[e_x x] R1(-p) ; same for roll
+    ds_dh = rot_y(-roll, *rot_x(-pitch, -ty, tx, 0.0))
+    ds_dp = rot_y(-roll, 0.0, uz, -uy)
+    ds_dr = (-s[2], 0.0, s[0])
+    return s, ds_dp, ds_dr, ds_dh
+
+
+@nb.njit(cache=True)
+def dot3(g0, g1, g2, d):
+    """``(g0, g1, g2) . d`` for a 3-tuple ``d``."""
+    return g0 * d[0] + g1 * d[1] + g2 * d[2]

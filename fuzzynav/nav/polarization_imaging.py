@@ -1,0 +1,257 @@
+"""Pitch and heading from an imaging polarization sensor (several view directions), given roll.
+
+The numba kernel :func:`imaging_pitch_heading` (re-exported by :mod:`fuzzynav.nav.polarization`,
+whose docstring states the measurement model) runs at every imaging epoch inside the compiled
+filter, so it allocates nothing but its covariance output and works on plain floats: the
+smallest eigenvector of a symmetric 3x3 in closed form, the sun's body direction and its
+partials computed once per Gauss-Newton iterate and shared by all views, and a stop as soon as
+the step falls below :data:`_STEP_TOL`.
+"""
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from fuzzynav.nav.polarization_geometry import (HALF_PI, TWO_PI, aop_unfolded_and_gradient,
+                                                dot3, rot_x, rot_y, sun_body_partials,
+                                                wrap_pi)
+
+#: how far (sine of elevation) a noisy sun direction may miss the reachable elevations
+_FOLD_SLACK = 0.05
+#: Gauss-Newton stops when the step [rad] (|pitch| + |heading|), or the change it makes to
+#: the fitted AoPs (root sum of squares), is below this
+_STEP_TOL = 1e-12
+#: relative round-off of the cost: how much a nearly undamped step may raise it
+_COST_RTOL = 1e-10
+#: Levenberg damping (relative to the mean diagonal of J^T J): start, floor, give-up, and
+#: the level up to which a step counts as undamped
+_LAM_START, _LAM_MIN, _LAM_MAX, _LAM_UNDAMPED = 1e-9, 1e-12, 1e10, 1e-6
+_MAX_ITER = 200
+
+
+@nb.njit(cache=True)
+def _e_vector_scatter(aops, views_b):
+    """``sum e e^T`` (6 entries) of the measured body-frame E-vectors; count used (no NaN)."""
+    m00 = m01 = m02 = m11 = m12 = m22 = 0.0
+    k = 0
+    for i in range(aops.shape[0]):
+        if np.isnan(aops[i]):
+            continue
+        vx, vy, vz = views_b[i, 0], views_b[i, 1], views_b[i, 2]
+        # local reference: x_b projected perpendicular to v, then y = v x x_ref
+        xx, xy, xz = 1.0 - vx * vx, -vx * vy, -vx * vz
+        nx = math.sqrt(xx * xx + xy * xy + xz * xz)
+        xx, xy, xz = xx / nx, xy / nx, xz / nx
+        yx, yy, yz = vy * xz - vz * xy, vz * xx - vx * xz, vx * xy - vy * xx
+        ca, sa = math.cos(aops[i]), math.sin(aops[i])
+        ex, ey, ez = ca * xx + sa * yx, ca * xy + sa * yy, ca * xz + sa * yz
+        m00 += ex * ex
+        m01 += ex * ey
+        m02 += ex * ez
+        m11 += ey * ey
+        m12 += ey * ez
+        m22 += ez * ez
+        k += 1
+    return m00, m01, m02, m11, m12, m22, k
+
+
+@nb.njit(cache=True)
+def _smallest_eigenvector(m00, m01, m02, m11, m12, m22):
+    """Unit eigenvector (sign arbitrary) of a symmetric 3x3 for its smallest eigenvalue.
+
+    The eigenvalue in closed form (trigonometric solution of the characteristic cubic), the
+    vector as the largest cross product of two rows of ``M - lambda I`` (they span the plane
+    perpendicular to it).  If the smallest eigenvalue is double (E-vectors all parallel) the
+    rows are parallel and their cross product is still some vector of that eigenspace, as an
+    iterative solver would return; NaN only for ``M = q I`` (no preferred direction at all).
+    """
+    q = (m00 + m11 + m22) / 3.0
+    b00, b11, b22 = m00 - q, m11 - q, m22 - q
+    p2 = (b00 * b00 + b11 * b11 + b22 * b22
+          + 2.0 * (m01 * m01 + m02 * m02 + m12 * m12)) / 6.0
+    if not p2 > 0.0:
+        return np.nan, np.nan, np.nan
+    p = math.sqrt(p2)
+    det_b = (b00 * (b11 * b22 - m12 * m12) - m01 * (m01 * b22 - m12 * m02)
+             + m02 * (m01 * m12 - b11 * m02))
+    phi = math.acos(min(1.0, max(-1.0, 0.5 * det_b / (p2 * p)))) / 3.0
+    lam = q + 2.0 * p * math.cos(phi + TWO_PI / 3.0)
+    a00, a11, a22 = m00 - lam, m11 - lam, m22 - lam
+    best_x = best_y = best_z = best_n = 0.0
+    for rx, ry, rz, tx, ty, tz in ((a00, m01, m02, m01, a11, m12),
+                                   (a00, m01, m02, m02, m12, a22),
+                                   (m01, a11, m12, m02, m12, a22)):
+        cx, cy, cz = ry * tz - rz * ty, rz * tx - rx * tz, rx * ty - ry * tx
+        n = cx * cx + cy * cy + cz * cz
+        if n > best_n:
+            best_x, best_y, best_z, best_n = cx, cy, cz, n
+    if not best_n > 0.0:
+        return np.nan, np.nan, np.nan
+    inv = 1.0 / math.sqrt(best_n)
+    return best_x * inv, best_y * inv, best_z * inv
+
+
+@nb.njit(cache=True)
+def _attitude_candidate(pitch, ux, uy, uz, sun_azimuth):
+    """(pitch, heading) bringing the rolled body sun ``u`` onto the sun; NaN past +-90°."""
+    pitch = wrap_pi(pitch)
+    if abs(pitch) > HALF_PI:
+        return np.nan, np.nan
+    wx, wy, _ = rot_x(pitch, ux, uy, uz)
+    return pitch, (math.atan2(wy, wx) - sun_azimuth) % TWO_PI
+
+
+@nb.njit(cache=True)
+def _nearest_candidate(sx, sy, sz, sun_n, roll, pitch_prior, heading_prior,
+                       pitch_prior_std, heading_prior_std):
+    """Of the up to four attitudes with ``C_bn (+-s_b) = sun_n``, the nearest to the prior.
+
+    ``u = R2(roll) s_b`` must rise to the sun's elevation under ``R1(pitch)``:
+    ``rho cos(pitch - p0) = sun_U``, roots ``p0 +- d``; ``-u`` has them shifted by pi.  Near the
+    fold (sun abeam) noise can lift the sun's elevation just out of reach of any pitch; up to
+    ``_FOLD_SLACK`` the fold point itself is a candidate and Gauss-Newton refines.  Distances
+    in prior standard deviations; NaN when no candidate exists.
+    """
+    ux, uy, uz = rot_y(roll, sx, sy, sz)
+    rho = math.hypot(uy, uz)
+    if rho < 1e-12 or abs(sun_n[2]) > rho + _FOLD_SLACK:
+        return np.nan, np.nan
+    p0 = math.atan2(uy, uz)
+    d = math.acos(min(1.0, max(-1.0, sun_n[2] / rho)))
+    sun_azimuth = math.atan2(sun_n[1], sun_n[0])
+    best_p, best_h, best_d = np.nan, np.nan, np.inf
+    for sign, shift in ((1.0, 0.0), (-1.0, math.pi)):
+        for root in (p0 + shift + d, p0 + shift - d):
+            p, h = _attitude_candidate(root, sign * ux, sign * uy, sign * uz, sun_azimuth)
+            dist = ((wrap_pi(p - pitch_prior) / pitch_prior_std) ** 2
+                    + (wrap_pi(h - heading_prior) / heading_prior_std) ** 2)
+            if dist < best_d:  # False for an absent (NaN) candidate
+                best_p, best_h, best_d = p, h, dist
+    return best_p, best_h
+
+
+@nb.njit(cache=True)
+def imaging_pitch_heading(aops, views_b, sun_n, roll, pitch_prior, heading_prior,
+                          pitch_prior_std, heading_prior_std, sigma_aop):
+    """Pitch and heading from the AoPs of several view directions, given the roll.
+
+    The sun direction in the body frame is perpendicular to every E-vector: it is the
+    eigenvector of ``sum e e^T`` with the smallest eigenvalue (exact for noise-free data).
+    Its sign and the two pitch roots give up to four attitudes; the one nearest the INS
+    prior (in prior standard deviations) starts a Gauss-Newton least-squares fit of all
+    AoPs (residuals folded mod pi).  The two pitch roots can lie close together (their
+    headings then differ little), so the pitch prior does most of the choosing.
+
+    Parameters
+    ----------
+    aops : ndarray, shape (k,)
+        Measured AoPs [rad]; NaN entries (view below the DoP threshold) are skipped.
+    views_b : ndarray, shape (k, 3)
+        Unit view directions in the body frame (nominal mounting), none along +-x_b.
+    sun_n : ndarray, shape (3,)
+    roll : float
+        Roll taken from the INS [rad] (not estimated, as in paper 000).
+    pitch_prior, heading_prior : float
+        INS prediction [rad], resolves the ambiguities.
+    pitch_prior_std, heading_prior_std : float
+        1-sigma of that prediction [rad] (e.g. from the filter covariance): weights of the
+        distance to the candidates.
+    sigma_aop : float
+        1-sigma AoP noise [rad] for the covariance.
+
+    Returns
+    -------
+    pitch, heading : float
+        [rad]; heading in [0, 2 pi).  NaN if fewer than two valid views or no attitude
+        fits.
+    cov : ndarray, shape (2, 2)
+        Covariance of (pitch, heading) [rad^2], ``sigma^2 (J^T J)^-1``; NaN when failed.
+    n_used : int
+        Number of views used.
+    """
+    cov = np.full((2, 2), np.nan)
+    m00, m01, m02, m11, m12, m22, k = _e_vector_scatter(aops, views_b)
+    if k < 2:
+        return np.nan, np.nan, cov, k
+    sx, sy, sz = _smallest_eigenvector(m00, m01, m02, m11, m12, m22)
+    p, h = _nearest_candidate(sx, sy, sz, sun_n, roll, pitch_prior, heading_prior,
+                              pitch_prior_std, heading_prior_std)
+    if np.isnan(p):
+        return np.nan, np.nan, cov, k
+    p, h, n00, n01, n11 = _gauss_newton(aops, views_b, sun_n, roll, p, h)
+    det = n00 * n11 - n01 * n01
+    if not det > 0.0:
+        return np.nan, np.nan, cov, k
+    s2 = sigma_aop * sigma_aop / det
+    cov[0, 0], cov[1, 1] = s2 * n11, s2 * n00
+    cov[0, 1] = cov[1, 0] = -s2 * n01
+    return p, h % TWO_PI, cov, k
+
+
+@nb.njit(cache=True)
+def _fold_residual(a):
+    """Axial residual folded into [-pi/2, pi/2]: cheaper than ``%``; either end will do."""
+    return a - math.pi * math.floor(a / math.pi + 0.5)
+
+
+@nb.njit(cache=True)
+def _normal_equations(aops, views_b, sun_n, roll, p, h):
+    """``J^T J`` (3 entries), ``J^T r`` and the cost ``r^T r`` of the AoP residuals."""
+    # the sun's body direction and its partials are the same for every view
+    s, ds_dp, _, ds_dh = sun_body_partials(sun_n, p, roll, h)
+    n00 = n01 = n11 = g0 = g1 = cost = 0.0
+    for i in range(aops.shape[0]):
+        if np.isnan(aops[i]):
+            continue
+        a, ga, gb, gc = aop_unfolded_and_gradient(views_b[i], s[0], s[1], s[2])
+        dp, dh = dot3(ga, gb, gc, ds_dp), dot3(ga, gb, gc, ds_dh)
+        r = _fold_residual(aops[i] - a)
+        n00 += dp * dp
+        n01 += dp * dh
+        n11 += dh * dh
+        g0 += dp * r
+        g1 += dh * r
+        cost += r * r
+    return n00, n01, n11, g0, g1, cost
+
+
+@nb.njit(cache=True)
+def _gauss_newton(aops, views_b, sun_n, roll, p, h):
+    """Least-squares (pitch, heading) of the AoP residuals and ``J^T J`` (3 entries) there.
+
+    Gauss-Newton with Levenberg damping: the start can sit on the fold where J^T J is
+    singular (noisy sun abeam); the damping steps off it and fades as the fit converges.
+    Near the minimum a Gauss-Newton step changes the cost by less than the cost's round-off,
+    so a nearly undamped step is accepted unless it raises the cost by more than
+    ``_COST_RTOL`` (rejecting it would only inflate the damping and stall the fit short of the
+    minimum); damped steps must lower the cost.  A fit whose minimum lies on the fold itself
+    creeps along a flat valley until the damped steps vanish (tens of iterations, at most
+    ``_MAX_ITER``); its covariance then says the attitude is undetermined.
+    """
+    n00, n01, n11, g0, g1, cost = _normal_equations(aops, views_b, sun_n, roll, p, h)
+    lam = _LAM_START
+    for _ in range(_MAX_ITER):
+        damp = lam * 0.5 * (n00 + n11)
+        d00, d11 = n00 + damp, n11 + damp
+        det = d00 * d11 - n01 * n01
+        if not det > 0.0:
+            break
+        step_p = (d11 * g0 - n01 * g1) / det
+        step_h = (d00 * g1 - n01 * g0) / det
+        # |J step|^2: how far the step would move the fitted AoPs
+        moved = step_p * (n00 * step_p + 2.0 * n01 * step_h) + n11 * step_h * step_h
+        if abs(step_p) + abs(step_h) < _STEP_TOL or moved < _STEP_TOL * _STEP_TOL:
+            break
+        trial = _normal_equations(aops, views_b, sun_n, roll, p + step_p, h + step_h)
+        slack = _COST_RTOL if lam <= _LAM_UNDAMPED else 0.0
+        if trial[5] <= cost * (1.0 + slack):
+            p, h = p + step_p, h + step_h
+            n00, n01, n11, g0, g1, cost = trial
+            lam = max(lam * 0.1, _LAM_MIN)
+        else:
+            lam *= 10.0
+            if lam > _LAM_MAX:
+                break
+    return p, h, n00, n01, n11
