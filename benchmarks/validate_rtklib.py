@@ -79,6 +79,22 @@ def filters_table(rec, velocity="shift"):
           "(the last one runs past the end of the data and is not scored).")
 
 
+def constraints_table(rec):
+    """Non-holonomic constraints (zero lateral/vertical body velocity, 10 Hz) against none."""
+    print("\n### Non-holonomic constraints (ekf, 10 noise seeds; mean ± 95 % CI)\n")
+    print("| constraint sigma | horizontal RMS, GNSS throughout (m) | with outages (m) | "
+          "drift, outage 1 (m) | drift, outage 2 (m) | drift RMS (m) |")
+    print("|---|---|---|---|---|---|")
+    for sigma in (0.0, 1.0, 0.3, 0.1):
+        vals = _runs(rec, "ekf", ProtocolSettings(nhc_sigma_mps=sigma))
+        label = "none" if sigma == 0.0 else f"{sigma:g} m/s"
+        print(f"| {label} | {_cell(_col(vals, 'gnss', 'rms_pos_h_m'))} | "
+              f"{_cell(_col(vals, 'outages', 'rms_pos_h_m'))} | "
+              f"{_cell(_col(vals, 'outages', 'drift_h_m_1'), '{:.1f}')} | "
+              f"{_cell(_col(vals, 'outages', 'drift_h_m_2'), '{:.1f}')} | "
+              f"{_cell(_col(vals, 'outages', 'drift_h_rms_m'), '{:.1f}')} |")
+
+
 def velocity_modes(rec):
     """What to do with the lagging receiver velocities (ekf)."""
     print("\n### GNSS velocity: shift, raw, inflate, positions only (ekf, 10 seeds)\n")
@@ -126,16 +142,16 @@ def phase_sweep(rec):
     print("| velocities | outages | error after 10 s (median) | after 30 s (median) | "
           "drift at end: median | RMS | min | max |")
     print("|---|---|---|---|---|---|---|---|")
-    for mode in ("shift", "off"):
+    for mode, nhc in (("shift", 0.0), ("off", 0.0), ("shift", 0.3)):
         e10, e30, end = [], [], []
         for first in range(60, 301, 20):
             v = validate(rec, "ekf", ProtocolSettings(first_outage_s=float(first),
-                                                      velocity=mode), 0)
+                                                      velocity=mode, nhc_sigma_mps=nhc), 0)
             e10 += _elapsed(v, 10.0)
             e30 += _elapsed(v, 30.0)
             end += [d.drift_h_m for d in v.runs["outages"].drifts if d.complete]
         end = np.array(end)
-        print(f"| {mode} | {end.size} | {np.median(e10):.1f} m | {np.median(e30):.1f} m | "
+        print(f"| {mode}{', constraints 0.3 m/s' if nhc else ''} | {end.size} | {np.median(e10):.1f} m | {np.median(e30):.1f} m | "
               f"{np.median(end):.0f} m | {np.sqrt(np.mean(end**2)):.0f} m | "
               f"{end.min():.0f} m | {end.max():.0f} m |")
 
@@ -245,6 +261,7 @@ def main(argv):
     rec = _load(directory)
     filters_table(rec)
     filters_table(rec, "off")
+    constraints_table(rec)
     velocity_modes(rec)
     noise_levels(rec)
     phase_sweep(rec)

@@ -18,7 +18,7 @@ from fuzzynav.errors import FuzzynavError
 _SETTINGS = {"noise": "noise_pos_m", "vel_noise": "noise_vel_mps",
              "outage_period": "outage_period_s", "outage_duration": "outage_duration_s",
              "first_outage": "first_outage_s", "gnss_velocity": "velocity",
-             "velocity_lag": "velocity_lag_s"}
+             "velocity_lag": "velocity_lag_s", "nhc": "nhc_sigma_mps"}
 
 
 def add_arguments(p) -> None:
@@ -39,6 +39,9 @@ def add_arguments(p) -> None:
                         "recorded (raw), with inflated sigma (inflate) or unused (off)")
     g.add_argument("--velocity-lag", type=float, metavar="S",
                    help="how late the receiver's velocities are [s] (default 0.14)")
+    g.add_argument("--nhc", type=float, metavar="MPS",
+                   help="feed non-holonomic constraints (zero lateral/vertical body "
+                        "velocity) with this 1-sigma [m/s] at 10 Hz (default 0 = none)")
     g.add_argument("--mounting", default="auto", metavar="auto|none|NAME|FILE",
                    help="mounting TOML (IMU to body, lever arm) or a shipped one by name "
                         "(rtklib-drive); auto = mounting.toml beside the data if any, else "

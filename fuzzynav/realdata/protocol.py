@@ -57,6 +57,11 @@ class ProtocolSettings:
         Added in quadrature to the velocity sigma in ``inflate`` mode [m/s].
     t_start_s : float
         Scoring starts here [s on the recording's clock] (or at the filter's start if later).
+    nhc_sigma_mps : float
+        1-sigma of the non-holonomic constraints (zero lateral and vertical body velocity,
+        :mod:`fuzzynav.filters.measurements.nhc`) fed at ``nhc_rate_hz``; 0 = none.
+    nhc_rate_hz : float
+        Rate of the constraint pseudo-measurements [Hz].
     """
 
     noise_pos_m: float = 2.0
@@ -68,13 +73,15 @@ class ProtocolSettings:
     velocity_lag_s: float = 0.14
     velocity_inflate_mps: float = 0.16
     t_start_s: float = 0.0
+    nhc_sigma_mps: float = 0.0
+    nhc_rate_hz: float = 10.0
 
     def __post_init__(self):
         if self.velocity not in VELOCITY_MODES:
             raise FuzzynavError(f"velocity mode {self.velocity!r}: expected one of "
                                 f"{', '.join(VELOCITY_MODES)}")
         for name in ("noise_pos_m", "noise_vel_mps", "outage_duration_s",
-                     "velocity_inflate_mps"):
+                     "velocity_inflate_mps", "nhc_sigma_mps"):
             if not getattr(self, name) >= 0.0:
                 raise FuzzynavError(f"{name} must be >= 0, got {getattr(self, name)}")
         if self.outage_duration_s > 0.0 and not (self.outage_period_s > self.outage_duration_s):
@@ -82,6 +89,9 @@ class ProtocolSettings:
                                 f"outage_duration_s ({self.outage_duration_s})")
         if self.first_outage_s is not None and not self.first_outage_s >= 0.0:
             raise FuzzynavError(f"first_outage_s must be >= 0, got {self.first_outage_s}")
+
+        if not self.nhc_rate_hz > 0.0:
+            raise FuzzynavError(f"nhc_rate_hz must be > 0, got {self.nhc_rate_hz}")
 
     @property
     def use_velocity(self) -> bool:

@@ -69,8 +69,19 @@ def start_from(imu, fixes, mounting_known: bool, lever_arm_b=(0.0, 0.0, 0.0)) ->
     return Start(cut, InitialState(float(t[0]), lla, np.asarray(s.vel_n, float), q_bn), s)
 
 
+def constraints_for(start: Start, sigma_mps: float, rate_hz: float):
+    """Non-holonomic constraint epochs over the run (kind ``nhc``), or ``None`` if off."""
+    if not sigma_mps > 0.0:
+        return None
+    from fuzzynav.sim.sensors import SensorData
+
+    t = np.arange(start.imu.time_s[0] + 1.0 / rate_hz, start.imu.time_s[-1], 1.0 / rate_hz)
+    return SensorData("nhc", t, np.zeros((t.size, 2)), np.full((t.size, 2), float(sigma_mps)))
+
+
 def run_named(start: Start, fixes, filter_name: str, use_velocity: bool = True,
-              options=None, mems: MemsModel = CONSUMER_MEMS, init_pos_sigma_m: float = 2.0):
+              options=None, mems: MemsModel = CONSUMER_MEMS, init_pos_sigma_m: float = 2.0,
+              constraints=None):
     """Run a named filter (``ekf``, ``sage-husa``, ``vb``, ``fakf``, ...) from ``start``.
 
     Parameters
@@ -86,12 +97,16 @@ def run_named(start: Start, fixes, filter_name: str, use_velocity: bool = True,
     mems : MemsModel
     init_pos_sigma_m : float
         Initial position uncertainty [m] (the fed fixes' noise).
+    constraints : SensorData, optional
+        Non-holonomic constraint epochs (:func:`constraints_for`), sensor ``nhc``.
 
     Returns
     -------
     FilterResult
     """
     sensors = {GNSS_SENSOR: fixes}
+    if constraints is not None:
+        sensors["nhc"] = constraints
     opts = dict(mems.filter_options(init_pos_sigma_m))
     opts.update(options or {})
     ctx = FilterContext(imu_noise=mems.imu_noise(), sensors=sensors, options=opts)

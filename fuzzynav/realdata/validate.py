@@ -15,7 +15,7 @@ from fuzzynav.realdata import protocol
 from fuzzynav.realdata.mems import CONSUMER_MEMS, MemsModel
 from fuzzynav.realdata.protocol import ProtocolSettings
 from fuzzynav.realdata.score import errors_against, outage_drifts, score
-from fuzzynav.realdata.session import Start, run_named, start_from
+from fuzzynav.realdata.session import Start, constraints_for, run_named, start_from
 
 #: feed name -> label in tables and figures
 FEEDS = {"gnss": "GNSS throughout", "outages": "with outages"}
@@ -106,9 +106,10 @@ def validate(rec, filter_name: str, settings: ProtocolSettings = ProtocolSetting
     sigma0 = float(np.hypot(settings.noise_pos_m, np.median(rec.gnss.sigma[:, :2])))
     t0 = max(settings.t_start_s, start.init.time_s)
     runs = {}
+    nhc = constraints_for(start, settings.nhc_sigma_mps, settings.nhc_rate_hz)
     for name, fixes in feeds.items():
         res = run_named(start, fixes, filter_name, settings.use_velocity, options, mems,
-                        sigma0)
+                        sigma0, nhc)
         err = errors_against(res, rec.reference, lever, settings.velocity_lag_s)
         metrics = score(err, res.time_s, windows, t0)
         metrics["completed"] = float(res.ok)

@@ -98,3 +98,16 @@ def test_polarization_residual_and_jacobian(kw, mode):
     Hn = _numeric_H(model, nav, row, par, m, [1e-5] * 3 + [1e-3] * 6)
     np.testing.assert_allclose(H[:, :3], Hn[:, :3], atol=2e-4 * max(1.0, np.abs(Hn).max()))
     np.testing.assert_allclose(H[:, 3:9], 0.0)
+
+
+def test_nonholonomic_constraint_residual_and_jacobian():
+    model = get("nhc")
+    C = attitude.euler_to_dcm(ATT)
+    vel = C @ np.array([0.0, 14.0, 0.0])          # moving along the body's forward axis
+    nav = strapdown.make_nav(LLA, vel, attitude.euler_to_quat(ATT))
+    row = np.array([0.0, 0.0, 0.1, 0.2])
+    par = np.zeros(1)
+    m, z, H, R, chan = _call(model, nav, row, par)
+    assert m == 2 and np.allclose(z, 0.0, atol=1e-12) and np.allclose(R, [0.01, 0.04])
+    Hn = _numeric_H(model, nav, row, par, m, [1e-6] * 3 + [1e-3] * 3 + [1.0] * 3)
+    np.testing.assert_allclose(H[:, :9], Hn, atol=1e-6)

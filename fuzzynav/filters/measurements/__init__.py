@@ -78,7 +78,7 @@ class MeasurementModel:
 MODELS: dict[str, MeasurementModel] = {}
 #: order of the kernels in the tuple handed to the loop (index = kernel id)
 _ORDER: list[str] = []
-BUILTIN_MODULES = ("gnss", "polarization")
+BUILTIN_MODULES = ("gnss", "polarization", "nhc")
 
 
 def register(model: MeasurementModel) -> MeasurementModel:

@@ -1,0 +1,58 @@
+"""Non-holonomic constraints: a land vehicle (or a ship, paper 003) does not slide sideways
+or lift off, so its body-frame lateral and vertical velocities are zero (plus noise).
+
+Data row: ``[v_x, v_z, sigma_x, sigma_z]`` — the pseudo-measured body velocities (normally
+0) and their 1-sigma [m/s], body RFU (x right, z up).  Residual (INS minus constraint)::
+
+    z = (C_bn^T v_n)_{x,z} - v_{x,z},     H = [ -C_nb [v_n x]   C_nb   0 ]  (rows x and z)
+
+from ``C_calc^T = C_true^T (I + [phi x])``.  Channel: ``constraint``.  The IMU is taken to
+be at the vehicle's non-slipping point; lever arms to the rear axle are neglected.
+"""
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
+
+
+@nb.njit(MEAS_SIG, cache=True)
+def nhc_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
+    ve, vn, vu = nav[4], nav[5], nav[6]
+    m = 0
+    for k, axis in ((0, 0), (1, 2)):
+        sig = row[2 + k]
+        if not (sig > 0.0 and math.isfinite(row[k])):
+            continue
+        cx, cy, cz = C_bn[0, axis], C_bn[1, axis], C_bn[2, axis]  # row of C_nb
+        z[m] = cx * ve + cy * vn + cz * vu - row[k]
+        # c . (phi x v) = phi . (v x c)
+        H[m, 0] = vn * cz - vu * cy
+        H[m, 1] = vu * cx - ve * cz
+        H[m, 2] = ve * cy - vn * cx
+        H[m, 3], H[m, 4], H[m, 5] = cx, cy, cz
+        R[m] = sig * sig
+        chan[m] = 0
+        m += 1
+    return m
+
+
+def _pack(data, options) -> np.ndarray:
+    return np.zeros(1)
+
+
+MODEL = register(MeasurementModel(kind="nhc", kernel=nhc_kernel, max_rows=2,
+                                  channels=("constraint",), pack=_pack))
+
+
+def constraint_stream(time_s, sigma_mps=(0.1, 0.1)):
+    """A ``SensorData``-like stream of zero lateral/vertical body velocity at ``time_s``."""
+    from types import SimpleNamespace
+
+    t = np.asarray(time_s, float)
+    z = np.zeros((t.size, 2))
+    sig = np.tile(np.asarray(sigma_mps, float), (t.size, 1))
+    return SimpleNamespace(kind="nhc", time_s=t, z=z, sigma=sig, meta={})
