@@ -17,6 +17,7 @@ import numpy as np
 import pandas as pd
 
 from fuzzynav import plots
+from fuzzynav.fuzzy.describe import rule_markdown
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.tuning.evaluate import format_summary, run_table
 from fuzzynav.tuning.export import choose_trial, systems_of
@@ -114,46 +115,15 @@ def _pareto(study, cfg, path):
     return plots.save(fig, path)
 
 
-def _mf_figure(fis, path):
-    variables = list(fis.inputs) + list(fis.outputs)
-    fig, axs = plt.subplots(1, len(variables), figsize=(4 * len(variables), 3))
-    for ax, v in zip(np.atleast_1d(axs), variables):
-        x = np.linspace(v.range[0], v.range[1], 400)
-        for t in v.terms:
-            a, b, c = t.params[:3]
-            y = np.clip(np.minimum((x - a) / max(b - a, 1e-12), (c - x) / max(c - b, 1e-12)), 0, 1)
-            ax.plot(x, y, label=t.name)
-        ax.set_title(v.name)
-        ax.legend(fontsize=7)
-    fig.tight_layout()
-    return plots.save(fig, path)
-
-
-def rule_table(fis) -> str:
-    """The rule table as Markdown (2 inputs: a grid; otherwise a list)."""
-    if len(fis.inputs) == 2:
-        a, b = fis.inputs
-        grid = {(r.antecedents[0].term, r.antecedents[1].term): r.consequents[0][1]
-                for r in fis.rules if len(r.antecedents) == 2}
-        lines = [f"| {a.name} \\ {b.name} | " + " | ".join(t.name for t in b.terms) + " |",
-                 "|---|" + "---|" * len(b.terms)]
-        for ta in a.terms:
-            lines.append(f"| {ta.name} | " + " | ".join(grid.get((ta.name, tb.name), "—")
-                                                       for tb in b.terms) + " |")
-        return "\n".join(lines)
-    return "\n".join(f"- if {' and '.join(f'{x.variable} is {x.term}' for x in r.antecedents)}"
-                     f" then {r.consequents[0][0]} is {r.consequents[0][1]}" for r in fis.rules)
-
-
 def _best_trial_section(cfg, trial, out, cache_dir, evaluate) -> list:
     systems = systems_of(cfg, trial)
     lines = ["", f"## Best trial: {trial.number}", "",
              f"Score {trial.values if cfg.multi_objective else trial.value} "
              f"(ratios to {cfg.baseline}: {trial.user_attrs.get('ratios')}).", ""]
     for name, fis in systems.items():
-        p = _mf_figure(fis, out / f"mf_{name}.png")
+        p = plots.save(plots.membership_functions(fis, name), out / f"mf_{name}.png")
         lines += [f"### Controller `{name}`", "", f"![mf_{name}]({p.name})", "",
-                  rule_table(fis), "", f"DoM window: {fis.binding.get('window')} epochs.", ""]
+                  rule_markdown(fis), "", f"DoM window: {fis.binding.get('window')} epochs.", ""]
     if evaluate:
         ev = Evaluator(cfg, cache_dir)
         compare = tuple(dict.fromkeys(cfg.compare))

@@ -126,7 +126,7 @@ class ControllerSpace:
             lo = trial.suggest_float(self._p("out_lo"), *self.config.output_low)
         keep_names = self.config.tune == "breakpoints" or n == len(var.terms)
         labels = [t.name for t in var.terms] if keep_names else \
-            standard_labels(n, "magnitude" if is_output else "signed")
+            standard_labels(n, "magnitude" if is_output or lo >= 0.0 else "signed")
         terms = self._terms(trial, var, n, lo, hi, labels)
         default = min(max(var.default if var.default is not None else lo, lo), hi) \
             if is_output else None
