@@ -7,6 +7,8 @@ import platform
 import tempfile
 from pathlib import Path
 
+from fuzzynav.fileio import publish
+
 DOC = Path(__file__).resolve().parents[1] / "docs" / "benchmarks.md"
 HEADER = """# Benchmarks
 
@@ -49,4 +51,4 @@ def write_section(name: str, body: str) -> None:
     fd, tmp = tempfile.mkstemp(dir=DOC.parent, prefix=".benchmarks.", suffix=".md")
     with os.fdopen(fd, "w") as fh:
         fh.write(text)
-    os.replace(tmp, DOC)
+    publish(tmp, DOC)

@@ -13,6 +13,8 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
+from fuzzynav.fileio import publish
+
 _AXES = ("east", "north", "up")
 _STYLES = ("-", "--", "-.", ":")
 
@@ -95,7 +97,7 @@ def save(fig: plt.Figure, path) -> Path:
     os.close(fd)
     try:
         fig.savefig(tmp, dpi=110)
-        os.replace(tmp, path)
+        publish(tmp, path)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)

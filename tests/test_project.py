@@ -34,3 +34,22 @@ def test_numba_cache_is_keyed_by_the_sources(tmp_path):
     k2 = fuzzynav.source_key(tmp_path)
     (tmp_path / "sub" / "b.py").write_text("y = 3\n")
     assert len({k1, k2, fuzzynav.source_key(tmp_path)}) == 3
+
+
+def test_written_files_get_the_ordinary_mode(tmp_path):
+    import os
+    import stat
+
+    from fuzzynav import plots
+    from fuzzynav.fuzzy import load_fis, save_fis
+
+    mask = os.umask(0o022)
+    try:
+        save_fis(load_fis(ROOT / "rules" / "paper002_ror.json"), tmp_path / "r.json")
+        fig = plots.plt.figure()
+        plots.save(fig, tmp_path / "f.png")
+    finally:
+        os.umask(mask)
+    for name in ("r.json", "f.png"):
+        mode = stat.S_IMODE((tmp_path / name).stat().st_mode)
+        assert mode & 0o044, f"{name} is not readable by others: {oct(mode)}"

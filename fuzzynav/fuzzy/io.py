@@ -316,6 +316,9 @@ def write_text_atomic(path, text: str) -> None:
             fh.write(text)
             fh.flush()
             os.fsync(fh.fileno())
+        mask = os.umask(0)
+        os.umask(mask)
+        os.chmod(tmp, 0o666 & ~mask)  # mkstemp makes 0600: give the file the usual mode
         os.replace(tmp, p)
     except BaseException:
         try:

@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fuzzynav.fileio import publish
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.sim.scenario import Scenario
 from fuzzynav.sim.sensors import SensorData
@@ -138,7 +139,7 @@ def _write_cache(path: Path, arrays: dict):
     try:
         with os.fdopen(fd, "wb") as f:
             np.savez(f, **arrays)
-        os.replace(tmp, path)
+        publish(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
