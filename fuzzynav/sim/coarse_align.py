@@ -93,7 +93,9 @@ def opening_rest(imu, gnss, rest_speed_mps=0.2, min_rest_s=2.0, block_s=0.5,
     edges = np.arange(t0, t_move, block_s)
     if edges.size >= 5:
         k = np.searchsorted(imu.time_s, edges)
-        f = np.add.reduceat(imu.dv_b[: k[-1]], k[:-1], axis=0) / block_s
+        # divide by each block's own length: float edges may give 49 or 51 samples a block
+        span = np.diff(imu.time_s[k])[:, None]
+        f = np.add.reduceat(imu.dv_b[: k[-1]], k[:-1], axis=0) / span
         ref = np.median(f[: max(2, f.shape[0] // 2)], axis=0)
         dev = np.linalg.norm(f - ref, axis=1)
         thr = max(5.0 * 1.4826 * np.median(dev[: max(2, f.shape[0] // 2)]), min_force_mps2)
