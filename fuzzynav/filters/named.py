@@ -13,7 +13,7 @@ from typing import Callable
 import numpy as np
 
 from fuzzynav import units
-from fuzzynav.errors import UnknownNameError
+from fuzzynav.registry import Registry
 from fuzzynav.filters.config import FilterConfig
 
 
@@ -64,39 +64,27 @@ class NamedFilter:
     make: Callable
 
 
-FILTERS: dict[str, NamedFilter] = {}
-BUILTIN_MODULES: tuple = ("catalog",)
+FILTERS = Registry("filter", "fuzzynav.filters", ("catalog",))
 
 
 def register_filter(name: str, description: str):
     """Decorator registering ``make(context) -> FilterSetup`` under ``name``."""
 
     def deco(fn):
-        FILTERS[name] = NamedFilter(name, description, fn)
+        FILTERS.add(name, NamedFilter(name, description, fn))
         return fn
 
     return deco
 
 
-def _load_builtins():
-    import importlib
-
-    for mod in BUILTIN_MODULES:
-        importlib.import_module(f"fuzzynav.filters.{mod}")
-
-
 def get_filter(name: str) -> NamedFilter:
     """The named filter ``name`` (clear error listing the known names)."""
-    _load_builtins()
-    try:
-        return FILTERS[name]
-    except KeyError:
-        raise UnknownNameError("filter", name, FILTERS) from None
+    return FILTERS.lookup(name)
 
 
 def list_filters() -> list[NamedFilter]:
     """All registered named filters, sorted by name."""
-    _load_builtins()
+    FILTERS.load()
     return [FILTERS[k] for k in sorted(FILTERS)]
 
 

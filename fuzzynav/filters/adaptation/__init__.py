@@ -25,7 +25,7 @@ import numba as nb
 import numpy as np
 from numba import types
 
-from fuzzynav.errors import UnknownNameError
+from fuzzynav.registry import Registry
 
 ADAPT_SIG = types.int64(types.float64[:], types.int64[:], types.float64[:], types.float64[:],
                         types.float64[:, :], types.float64[:], types.int64[:], types.int64,
@@ -85,39 +85,24 @@ class NoAdaptation(Adapter):
     kernel = none_kernel
 
 
-ADAPTERS: dict[str, type] = {}
-_ORDER: list[str] = []
-BUILTIN_MODULES: tuple = ("fuzzy_alpha", "fuzzy_rscale", "classical")
+ADAPTERS = Registry("adaptation policy", __name__,
+                    ("fuzzy_alpha", "fuzzy_rscale", "classical"))
 
 
 def register(cls):
     """Class decorator registering an :class:`Adapter` subclass under ``cls.name``."""
-    if cls.name not in ADAPTERS:
-        _ORDER.append(cls.name)
-    ADAPTERS[cls.name] = cls
-    return cls
+    return ADAPTERS.add(cls.name, cls)
 
 
 register(NoAdaptation)
 
 
-def _load_builtins():
-    import importlib
-
-    for mod in BUILTIN_MODULES:
-        importlib.import_module(f"{__name__}.{mod}")
-
-
 def get(name: str) -> type:
     """The adapter class registered as ``name``."""
-    _load_builtins()
-    try:
-        return ADAPTERS[name]
-    except KeyError:
-        raise UnknownNameError("adaptation policy", name, ADAPTERS) from None
+    return ADAPTERS.lookup(name)
 
 
 def kernel_table():
     """``(tuple of kernels, {name: index})`` for the filter loop."""
-    _load_builtins()
-    return tuple(ADAPTERS[k].kernel for k in _ORDER), {k: i for i, k in enumerate(_ORDER)}
+    index = ADAPTERS.index()
+    return tuple(ADAPTERS[k].kernel for k in index), index

@@ -22,7 +22,7 @@ import math
 import numba as nb
 
 from fuzzynav.filters.adaptation import ADAPT_SIG, register
-from fuzzynav.filters.adaptation.fuzzy_common import IP_OUT, evaluate
+from fuzzynav.filters.adaptation.fuzzy_common import IP_OUT, evaluate, log_inputs
 from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
 
 
@@ -37,8 +37,7 @@ def alpha_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
     for i in range(m):
         out[2 + i] = 1.0 / (alpha * alpha)
     diag[0] = alpha
-    for j in range(min(x.size, diag.size - 1)):
-        diag[1 + j] = x[j]
+    log_inputs(diag, 1, x)
     return status
 
 

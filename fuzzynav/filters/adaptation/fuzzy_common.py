@@ -107,3 +107,10 @@ def evaluate(fp, ip, st, r, HPH, R, chan, m):
 def scalars(st):
     """The policy's persistent scalars (a view of the last entries of ``st``)."""
     return st[st.size - N_SCALARS:]
+
+
+@nb.njit(cache=True)
+def log_inputs(diag, first, x):
+    """Write the fuzzy inputs into ``diag`` from index ``first`` (as many as fit)."""
+    for j in range(min(x.size, diag.size - first)):
+        diag[first + j] = x[j]

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numba as nb
 
 from fuzzynav.filters.adaptation import ADAPT_SIG, register
-from fuzzynav.filters.adaptation.fuzzy_common import IP_OUT, evaluate, scalars
+from fuzzynav.filters.adaptation.fuzzy_common import IP_OUT, evaluate, log_inputs, scalars
 from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
 
 S_MIN, S_MAX = 1e-3, 1e3
@@ -39,8 +39,7 @@ def rscale_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
         out[2 + i] = s
     diag[0] = s
     diag[1] = t
-    for j in range(min(x.size, diag.size - 2)):
-        diag[2 + j] = x[j]
+    log_inputs(diag, 2, x)
     return status
 
 

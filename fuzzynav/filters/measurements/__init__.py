@@ -26,6 +26,7 @@ import numpy as np
 from numba import types
 
 from fuzzynav.errors import UnknownNameError
+from fuzzynav.registry import Registry
 
 MEAS_SIG = types.int64(types.float64[:], types.float64[:, :], types.float64[:],
                        types.float64[:], types.float64[:], types.float64,
@@ -75,37 +76,20 @@ class MeasurementModel:
                                    self.channels + ("all",)) from None
 
 
-MODELS: dict[str, MeasurementModel] = {}
-#: order of the kernels in the tuple handed to the loop (index = kernel id)
-_ORDER: list[str] = []
-BUILTIN_MODULES = ("gnss", "polarization", "nhc")
+MODELS = Registry("measurement model", __name__, ("gnss", "polarization", "nhc"))
 
 
 def register(model: MeasurementModel) -> MeasurementModel:
     """Register a measurement model under its sensor kind."""
-    if model.kind not in MODELS:
-        _ORDER.append(model.kind)
-    MODELS[model.kind] = model
-    return model
-
-
-def _load_builtins():
-    import importlib
-
-    for mod in BUILTIN_MODULES:
-        importlib.import_module(f"{__name__}.{mod}")
+    return MODELS.add(model.kind, model)
 
 
 def get(kind: str) -> MeasurementModel:
     """The model registered for sensor ``kind``."""
-    _load_builtins()
-    try:
-        return MODELS[kind]
-    except KeyError:
-        raise UnknownNameError("measurement model", kind, MODELS) from None
+    return MODELS.lookup(kind)
 
 
 def kernel_table():
     """``(tuple of kernels, {kind: index})`` for the filter loop."""
-    _load_builtins()
-    return tuple(MODELS[k].kernel for k in _ORDER), {k: i for i, k in enumerate(_ORDER)}
+    index = MODELS.index()
+    return tuple(MODELS[k].kernel for k in index), index

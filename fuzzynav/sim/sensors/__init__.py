@@ -6,7 +6,8 @@ A sensor kind is one module here defining a frozen ``Spec`` dataclass with
   :class:`fuzzynav.errors.InputFileError` with ``where`` (the TOML key path) on bad input;
 * ``spec.simulate(truth: Trajectory, rng: numpy.random.Generator, start_utc) -> SensorData``;
 
-and registering it with :func:`register`.  The filter side pairs each kind with a
+and registering it with :func:`register` (and naming its module in
+``SENSOR_KINDS.builtin_modules`` for built-ins).  The filter side pairs each kind with a
 measurement model of the same name (:mod:`fuzzynav.filters.measurements`).
 """
 from __future__ import annotations
@@ -15,42 +16,33 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fuzzynav.errors import UnknownNameError
+from fuzzynav.registry import Registry
 
 #: kind name -> Spec class
-SENSOR_KINDS: dict[str, type] = {}
+SENSOR_KINDS = Registry("sensor kind", __name__, ("gnss", "polarization"))
 
 
 def register(kind: str):
     """Class decorator registering a sensor ``Spec`` under ``kind``."""
 
     def deco(cls):
-        SENSOR_KINDS[kind] = cls
         cls.kind = kind
-        return cls
+        return SENSOR_KINDS.add(kind, cls)
 
     return deco
 
 
 def spec_class(kind: str) -> type:
     """The ``Spec`` class registered for ``kind`` (clear error when unknown)."""
-    _load_builtin_kinds()
-    try:
-        return SENSOR_KINDS[kind]
-    except KeyError:
-        raise UnknownNameError("sensor kind", kind, SENSOR_KINDS) from None
+    return SENSOR_KINDS.lookup(kind)
 
 
-def _load_builtin_kinds():
-    """Import the built-in sensor modules so that they register themselves."""
-    import importlib
-
-    for mod in BUILTIN_MODULES:
-        importlib.import_module(f"fuzzynav.sim.sensors.{mod}")
-
-
-#: modules of this package that register built-in sensor kinds
-BUILTIN_MODULES: tuple[str, ...] = ("gnss", "polarization")
+def epoch_indices(truth, start_s: float, rate_hz: float) -> np.ndarray:
+    """Indices of the IMU samples nearest to a sensor's epochs ``start_s + k / rate_hz``."""
+    t = np.asarray(truth.time_s)
+    t_meas = np.arange(start_s, t[-1] + 1e-9, 1.0 / rate_hz)
+    idx = np.round((t_meas - t[0]) * truth.imu_rate_hz).astype(np.int64)
+    return np.unique(idx[(idx >= 0) & (idx < t.size)])
 
 
 @dataclass(frozen=True)

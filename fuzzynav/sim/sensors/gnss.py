@@ -31,7 +31,7 @@ import numpy as np
 from fuzzynav.errors import InputFileError
 from fuzzynav.nav import attitude, earth
 from fuzzynav.sim.gauss_markov import gauss_markov_series
-from fuzzynav.sim.sensors import SensorData, register
+from fuzzynav.sim.sensors import SensorData, epoch_indices, register
 from fuzzynav.sim.tomltable import Table
 
 _ZERO3 = (0.0, 0.0, 0.0)
@@ -197,10 +197,7 @@ class Spec:
     # -- simulation ---------------------------------------------------------------------
     def epochs(self, truth) -> np.ndarray:
         """Indices of the IMU samples at which fixes are taken."""
-        t = np.asarray(truth.time_s)
-        t_fix = np.arange(self.start_s, t[-1] + 1e-9, 1.0 / self.rate_hz)
-        idx = np.round((t_fix - t[0]) * truth.imu_rate_hz).astype(np.int64)
-        return np.unique(idx[(idx >= 0) & (idx < t.size)])
+        return epoch_indices(truth, self.start_s, self.rate_hz)
 
     def _errors(self, time_s, rng):
         """ENU position [m] and velocity [m/s] errors and the outlier mask."""

@@ -39,7 +39,7 @@ import numpy as np
 from fuzzynav.errors import InputFileError
 from fuzzynav.nav import attitude
 from fuzzynav.sim import skylight, sun
-from fuzzynav.sim.sensors import SensorData, register
+from fuzzynav.sim.sensors import SensorData, epoch_indices, register
 from fuzzynav.sim.tomltable import Table
 
 SENSOR_TYPES = ("point", "imaging")
@@ -143,10 +143,7 @@ class Spec:
 
     def epochs(self, truth) -> np.ndarray:
         """Indices of the IMU samples at which the sensor reads."""
-        t = np.asarray(truth.time_s)
-        t_meas = np.arange(self.start_s, t[-1] + 1e-9, 1.0 / self.rate_hz)
-        idx = np.round((t_meas - t[0]) * truth.imu_rate_hz).astype(np.int64)
-        return np.unique(idx[(idx >= 0) & (idx < t.size)])
+        return epoch_indices(truth, self.start_s, self.rate_hz)
 
     # -- errors -------------------------------------------------------------------------
     def aop_errors(self, shape, rng) -> np.ndarray:
