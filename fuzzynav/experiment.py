@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from fuzzynav.filters.named import FilterContext, FilterSetup, get_filter
+from fuzzynav.filters.named import FilterContext, FilterSetup, get_filter, parse_filter_spec
 from fuzzynav.filters.runner import InitialState, run_filter
 from fuzzynav.metrics import errors_vs_trajectory, improvement_ci, mean_ci, rms_metrics
 from fuzzynav.nav import attitude, earth
@@ -69,8 +69,9 @@ def monte_carlo(scenario, filters, seeds, options=None, cache_dir=None, t_start_
     scenario : Scenario or str
         A scenario object, a built-in name or a TOML path.
     filters : sequence of str
-        Named filters; per-filter options may be given as ``options[name]`` (a dict) in
-        addition to shared options.
+        Named filters, or ``NAME@RULES[+RULES]`` (a named filter with its own rule files);
+        per-filter options may be given as ``options[name]`` (a dict) in addition to shared
+        options.
     seeds : sequence of int
     options : dict, optional
         Shared filter options; ``options[filter_name]`` (dict) overrides per filter.
@@ -85,9 +86,11 @@ def monte_carlo(scenario, filters, seeds, options=None, cache_dir=None, t_start_
     for seed in seeds:
         log = simulate(scn, int(seed), cache_dir)
         for name in filters:
+            base, own = parse_filter_spec(name)
             opts = {k: v for k, v in options.items() if not isinstance(v, dict)}
             opts.update(options.get(name, {}) if isinstance(options.get(name), dict) else {})
-            out = run_on_log(log, name, opts, t_start_s)
+            opts.update(own)
+            out = run_on_log(log, base, opts, t_start_s)
             rows.append({"scenario": scn.name, "filter": name, "seed": int(seed), **out.metrics})
             bar.update(1)
     bar.close()

@@ -25,8 +25,9 @@ def register(sub) -> None:
     p = sub.add_parser("compare", help="compare filters on a scenario (the papers' table layout)")
     p.add_argument("scenario", help="built-in scenario name or scenario TOML file")
     p.add_argument("--filters", default="ekf,fakf",
-                   help="comma-separated named filters; the first is the baseline of the "
-                        "improvement column (default: %(default)s)")
+                   help="comma-separated named filters (NAME@RULES[+RULES] runs a filter with "
+                        "its own rule files); the first is the baseline of the improvement "
+                        "column (default: %(default)s)")
     add_common_arguments(p)
     p.set_defaults(func=_cmd_compare, data=None)
 
@@ -167,11 +168,15 @@ def _json_summary(df, scn, filters, seeds) -> dict:
 def _plot_first_seed(scn, filters, seed, args) -> None:
     from fuzzynav import plots
     from fuzzynav.experiment import run_on_log
+    from fuzzynav.filters.named import parse_filter_spec
     from fuzzynav.metrics import errors_vs_trajectory
     from fuzzynav.sim.log import simulate
 
     log = simulate(scn, seed, args.cache)
-    outs = {f: run_on_log(log, f, filter_options(args)) for f in filters}
+    outs = {}
+    for f in filters:
+        name, own = parse_filter_spec(f)
+        outs[f] = run_on_log(log, name, {**filter_options(args), **own})
     errs = {f: errors_vs_trajectory(o.result, log.truth) for f, o in outs.items()}
     out_dir = Path(args.plot)
     path = plots.save(plots.error_curves(errs, f"{scn.name}, seed {seed}"),

@@ -77,6 +77,16 @@ def register_filter(name: str, description: str):
     return deco
 
 
+def parse_filter_spec(spec: str):
+    """``NAME`` or ``NAME@RULES[+RULES...]`` -> ``(name, options)``.
+
+    The second form runs a named filter with its own rule files, so that one comparison can
+    hold, say, ``fakf`` (the paper's rules) and ``fakf@rules/paper000_rscale_tuned.json``.
+    """
+    name, _, rules = spec.partition("@")
+    return name, ({"rules": [r for r in rules.split("+") if r]} if rules else {})
+
+
 def get_filter(name: str) -> NamedFilter:
     """The named filter ``name`` (clear error listing the known names)."""
     return FILTERS.lookup(name)

@@ -64,3 +64,12 @@ def test_malformed_scenario_file_names_file_and_key(capsys, tmp_path, sim_cache)
     bad.write_text("this is = = not toml")
     code, _, err = _run(capsys, "run", str(bad), "--cache", str(sim_cache))
     assert code == 2 and "invalid TOML" in err
+
+
+def test_compare_a_filter_with_its_own_rule_files(capsys, sim_cache):
+    code, out, _ = _run(capsys, "compare", "paper000-nominal", "--filters",
+                        "ekf,fakf@rules/paper002_ror_gnss.json", "--cache", str(sim_cache))
+    assert code == 0 and "fakf@rules/paper002_ror_gnss.json vs ekf" in out
+    code, _, err = _run(capsys, "compare", "paper000-nominal", "--filters",
+                        "ekf,fakf@rules/none.json", "--cache", str(sim_cache))
+    assert code == 2 and "none.json" in err
