@@ -50,21 +50,23 @@ def error_curves(errors: dict, title: str = "") -> plt.Figure:
 
 
 def adaptation_curves(series: dict, title: str = "") -> plt.Figure:
-    """Adaptation diagnostics (alpha, DoM, R scale, ...) against time.
+    """Adaptation diagnostics (alpha, DoM, R scale, ...) against time, one panel each.
 
     Parameters
     ----------
     series : dict
-        Label -> ``(time_s, values)``.
+        Label -> ``(time_s, values)``; each gets its own panel (their scales differ by
+        orders of magnitude: alpha near 1, DoM down to -100, R factors up to 1000).
     """
-    fig, ax = plt.subplots(figsize=(9, 3.5))
-    for j, (label, (t, v)) in enumerate(series.items()):
-        ax.plot(t, v, _STYLES[j % len(_STYLES)], lw=0.9, label=label)
-    ax.set_xlabel("time (s)")
-    ax.grid(alpha=0.3)
-    ax.legend(loc="best", fontsize=8)
+    n = max(len(series), 1)
+    fig, axs = plt.subplots(n, 1, figsize=(9, 1.6 * n + 0.8), sharex=True, squeeze=False)
+    for ax, (label, (t, v)) in zip(axs[:, 0], series.items()):
+        ax.plot(t, v, lw=0.9)
+        ax.set_ylabel(label, rotation=0, ha="right", va="center", fontsize=8)
+        ax.grid(alpha=0.3)
+    axs[-1, 0].set_xlabel("time (s)")
     if title:
-        ax.set_title(title)
+        fig.suptitle(title)
     fig.tight_layout()
     return fig
 
