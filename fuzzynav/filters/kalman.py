@@ -88,7 +88,7 @@ def cholesky(S, m, L):
 
 @nb.njit(cache=True)
 def chol_solve_vec(L, m, b, out):
-    """Solve ``L L^T out = b`` for a vector (first ``m`` entries)."""
+    """Solve ``L L^T out = b`` for a vector (first ``m`` entries); ``out`` may be ``b``."""
     for i in range(m):
         s = b[i]
         for k in range(i):
@@ -117,21 +117,10 @@ def nis(L, m, r, work):
 @nb.njit(cache=True)
 def gain(L, m, PHt, K, work):
     """``K = PHt S^-1`` (rows of PHt solved against the Cholesky factor of S)."""
-    n = PHt.shape[0]
-    for i in range(n):
+    for i in range(PHt.shape[0]):
         for r in range(m):
             work[r] = PHt[i, r]
-        # solve S k = PHt[i, :]^T, S symmetric
-        for a in range(m):
-            s = work[a]
-            for k in range(a):
-                s -= L[a, k] * work[k]
-            work[a] = s / L[a, a]
-        for a in range(m - 1, -1, -1):
-            s = work[a]
-            for k in range(a + 1, m):
-                s -= L[k, a] * work[k]
-            work[a] = s / L[a, a]
+        chol_solve_vec(L, m, work, work)  # safe in place: see chol_solve_vec
         for r in range(m):
             K[i, r] = work[r]
 
