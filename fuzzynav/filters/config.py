@@ -6,7 +6,7 @@ Datasheet units at this edge (deg, °/h, µg, °/√h, µg/√Hz); :meth:`Filter
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -62,7 +62,6 @@ class FilterConfig:
     gate_probability: float | None = None
     max_prop_dt_s: float = 1.0
     out_rate_hz: float = 10.0
-    extras: dict = field(default_factory=dict, compare=False)
 
     def with_(self, **changes) -> "FilterConfig":
         """A copy with some fields changed."""
