@@ -216,9 +216,7 @@ def discretize(F, q_diag, dt, Phi, Qd, work):
     """
     n = F.shape[0]
     # work = F @ F (F is sparse: skip zero entries)
-    for i in range(n):
-        for j in range(n):
-            work[i, j] = 0.0
+    work[:, :] = 0.0
     for i in range(n):
         for k in range(n):
             fik = F[i, k]

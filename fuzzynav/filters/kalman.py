@@ -22,9 +22,7 @@ import numba as nb
 def propagate(P, Phi, Qd, work):
     """In place ``P <- Phi P Phi^T + Qd`` (``work`` is an n x n scratch array)."""
     n = P.shape[0]
-    for i in range(n):
-        for j in range(n):
-            work[i, j] = 0.0
+    work[:, :] = 0.0
     for i in range(n):
         for k in range(n):
             a = Phi[i, k]
@@ -43,17 +41,24 @@ def propagate(P, Phi, Qd, work):
 
 
 @nb.njit(cache=True)
-def innovation_cov(P, H, m, PHt, HPH):
-    """``PHt[:, :m] = P H^T`` and ``HPH[:m, :m] = H P H^T`` for the first ``m`` rows of H."""
-    n = P.shape[0]
+def times_Ht(A, H, m, out):
+    """``out[:, :m] = A H^T`` for the first ``m`` rows of H, skipping H's zeros."""
+    n = A.shape[0]
     for i in range(n):
         for r in range(m):
             s = 0.0
             for k in range(n):
                 h = H[r, k]
                 if h != 0.0:
-                    s += P[i, k] * h
-            PHt[i, r] = s
+                    s += A[i, k] * h
+            out[i, r] = s
+
+
+@nb.njit(cache=True)
+def innovation_cov(P, H, m, PHt, HPH):
+    """``PHt[:, :m] = P H^T`` and ``HPH[:m, :m] = H P H^T`` for the first ``m`` rows of H."""
+    n = P.shape[0]
+    times_Ht(P, H, m, PHt)
     for a in range(m):
         for b in range(a, m):
             s = 0.0
@@ -144,15 +149,7 @@ def joseph_update(P, H, R, m, r, PHt, K, x, AP, APHt):
             for a in range(m):
                 s -= K[i, a] * PHt[j, a]
             AP[i, j] = s
-    # (A P) H^T
-    for i in range(n):
-        for a in range(m):
-            s = 0.0
-            for k in range(n):
-                h = H[a, k]
-                if h != 0.0:
-                    s += AP[i, k] * h
-            APHt[i, a] = s
+    times_Ht(AP, H, m, APHt)
     # P = A P - (A P H^T) K^T + K R K^T, symmetrised
     for i in range(n):
         for j in range(i, n):

@@ -190,10 +190,7 @@ def run_loop(dth, dv, time_s, nav0, xs0, P0, q_diag, blk_start, blk_kind, blk_in
             if out_a[0] != 1.0:
                 kalman.scale_predicted(P, Qacc, out_a[0], H, m, x)
                 kalman.innovation_cov(P, H, m, PHt, HPH)
-                for i in range(m):
-                    for j in range(m):
-                        S[i, j] = HPH[i, j]
-                    S[i, i] += R[i]
+                _form_S(HPH, R, m, S)
                 kalman.cholesky(S, m, L)
             kalman.gain(L, m, PHt, K, wv)
             kalman.joseph_update(P, H, R, m, z, PHt, K, x, AP, APHt)
@@ -214,12 +211,19 @@ def run_loop(dth, dv, time_s, nav0, xs0, P0, q_diag, blk_start, blk_kind, blk_in
 
 
 @nb.njit(cache=True)
-def _innovation(HPH, R, m, S, L, z, wv, ev_r, ev_S, ev_nis, e):
-    """Form S = HPH + R, factor it and log the residual, S diagonal and NIS."""
+def _form_S(HPH, R, m, S):
+    """``S[:m, :m] = HPH + diag(R)``."""
     for i in range(m):
         for j in range(m):
             S[i, j] = HPH[i, j]
         S[i, i] += R[i]
+
+
+@nb.njit(cache=True)
+def _innovation(HPH, R, m, S, L, z, wv, ev_r, ev_S, ev_nis, e):
+    """Form S = HPH + R, factor it and log the residual, S diagonal and NIS."""
+    _form_S(HPH, R, m, S)
+    for i in range(m):
         ev_r[e, i] = z[i]
         ev_S[e, i] = S[i, i]
     if not kalman.cholesky(S, m, L):
