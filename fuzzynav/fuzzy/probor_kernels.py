@@ -13,8 +13,8 @@ import math
 
 import numba
 
-from fuzzynav.fuzzy.layout import DEF_CENTROID, DEF_LOM, DEF_MOM, DEF_SOM, MAX_RTOL
-from fuzzynav.fuzzy.pwl_kernels import vertex_limits, point_maxima
+from fuzzynav.fuzzy.layout import DEF_CENTROID, DEF_LOM, DEF_MOM, DEF_SOM
+from fuzzynav.fuzzy.pwl_kernels import maximum_threshold, point_maxima, vertex_limits
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -147,10 +147,7 @@ def _probor_mom(work, e, n, pieces, npieces, stride, ab):
     res = point_maxima(work, e, n, DEF_MOM)
     if math.isnan(res):
         return res
-    h = 0.0
-    for k in range(n):
-        h = max(h, work[e + 3 * k + 1], work[e + 3 * k + 2])
-    thr = h - MAX_RTOL * h
+    thr = maximum_threshold(work, e, n)
     meas = 0.0
     mom = 0.0
     for k in range(n - 1):

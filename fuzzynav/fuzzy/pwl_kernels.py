@@ -275,14 +275,20 @@ def linear_bisector(work, e, n):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def point_maxima(work, e, n, method):
-    """mom / som / lom from the point values (isolated maxima only) of the envelope."""
+def maximum_threshold(work, e, n):
+    """Lowest envelope value counted as the maximum: its peak less MAX_RTOL relative."""
     h = 0.0
     for k in range(n):
         h = max(h, work[e + 3 * k + 1], work[e + 3 * k + 2])
-    if not h > 0.0:
+    return h - MAX_RTOL * h
+
+
+@numba.njit(cache=True, error_model="numpy")
+def point_maxima(work, e, n, method):
+    """mom / som / lom from the point values (isolated maxima only) of the envelope."""
+    thr = maximum_threshold(work, e, n)
+    if not thr > 0.0:  # the envelope's peak is zero: nothing fired
         return math.nan
-    thr = h - MAX_RTOL * h
     first = math.nan
     last = math.nan
     s = 0.0
@@ -308,10 +314,7 @@ def linear_maxima(work, e, n, method):
     res = point_maxima(work, e, n, method)
     if method != DEF_MOM or math.isnan(res):
         return res
-    h = 0.0
-    for k in range(n):
-        h = max(h, work[e + 3 * k + 1], work[e + 3 * k + 2])
-    thr = h - MAX_RTOL * h
+    thr = maximum_threshold(work, e, n)
     meas = 0.0
     mom = 0.0
     for k in range(n - 1):
