@@ -191,7 +191,10 @@ def run_loop(dth, dv, time_s, nav0, xs0, P0, q_diag, blk_start, blk_kind, blk_in
                 kalman.scale_predicted(P, Qacc, out_a[0], H, m, x)
                 kalman.innovation_cov(P, H, m, PHt, HPH)
                 _form_S(HPH, R, m, S)
-                kalman.cholesky(S, m, L)
+                if not kalman.cholesky(S, m, L):  # the weighted S broke: skip the update
+                    ev_flag[e] = EV_BAD_S
+                    e += 1
+                    continue
             kalman.gain(L, m, PHt, K, wv)
             kalman.joseph_update(P, H, R, m, z, PHt, K, x, AP, APHt)
             Qacc[:, :] = 0.0
