@@ -216,20 +216,29 @@ def r_scaling_reference(fis, epochs):
     return np.array(rows)
 
 
-def test_r_scaling_matches_paper002_with_the_adapted_r_in_the_statistic():
-    path = "rules/paper002_ror_gnss.json"
-    fis = load_fis(path)
+def _fuzzy_case(policy, rule_file, reference):
+    """Drive ``policy`` bound to ``rule_file``; its diagnostics against ``reference``'s rows."""
+    fis = load_fis(rule_file)
     epochs = _sequence(CONSISTENT_THEN_NOISY)
-    got = drive(FuzzyRScaling(fis, path), epochs)
-    ref = r_scaling_reference(fis, epochs)
+    got = drive(policy(fis, rule_file), epochs)
+    ref = reference(fis, epochs)
+    np.testing.assert_allclose(np.array([g[1][:ref.shape[1]] for g in got]), ref, rtol=RTOL)
+    return epochs, got, ref
+
+
+def _assert_every_row_scaled(got, factor):
+    """Every one of the m rows of R multiplied by this epoch's ``factor``."""
+    np.testing.assert_allclose(_r_factors(got), np.repeat(factor[:, None], M, axis=1), rtol=RTOL)
+
+
+def test_r_scaling_matches_paper002_with_the_adapted_r_in_the_statistic():
+    epochs, got, ref = _fuzzy_case(FuzzyRScaling, "rules/paper002_ror_gnss.json",
+                                   r_scaling_reference)          # diag: s, t, ROR
     s, t, ror = ref.T
     # the sequence makes the running factor matter: R(k-1) departs from the nominal R by far
     # more than the tolerance, and ROR stays on the sloped part of the rule file (0 .. 2)
     assert s.min() < 0.6 and ror.max() < 2.0 and t.min() < 1.0 < t.max()
-    np.testing.assert_allclose(_column(got, 1, 2), ror, rtol=RTOL)
-    np.testing.assert_allclose(_column(got, 1, 1), t, rtol=RTOL)
-    np.testing.assert_allclose(_column(got, 1, 0), s, rtol=RTOL)
-    np.testing.assert_allclose(_r_factors(got), np.repeat(s[:, None], M, axis=1), rtol=RTOL)
+    _assert_every_row_scaled(got, s)
     for (_, _, R_after), (_, _, _, R) in zip(got, epochs):   # the loop's R is left as given
         # the kernel scales R by s for the statistic and back: (R s) / s, to rounding
         np.testing.assert_allclose(R_after, R, rtol=ULP_RTOL)
@@ -256,15 +265,10 @@ def exponential_weighting_reference(fis, epochs):
 
 
 def test_exponential_weighting_matches_paper000():
-    path = "rules/paper000_gps_sins.json"
-    fis = load_fis(path)
-    epochs = _sequence(CONSISTENT_THEN_NOISY)
-    got = drive(FuzzyExponentialWeighting(fis, path), epochs)
-    ref = exponential_weighting_reference(fis, epochs)
+    _, got, ref = _fuzzy_case(FuzzyExponentialWeighting, "rules/paper000_gps_sins.json",
+                              exponential_weighting_reference)   # diag: alpha, DoM pos, vel
     alpha = ref[:, 0]
     assert np.ptp(alpha) > 0.02 and (ref[:, 1:] < 0.0).any() and (ref[:, 1:] > 0.0).any()
-    np.testing.assert_allclose(np.array([g[1][:3] for g in got]), ref, rtol=RTOL)
     np.testing.assert_allclose(_column(got, 0, 0), alpha ** 2, rtol=RTOL)
-    np.testing.assert_allclose(_r_factors(got), np.repeat(1.0 / alpha[:, None] ** 2, M, axis=1),
-                               rtol=RTOL)
+    _assert_every_row_scaled(got, 1.0 / alpha ** 2)
     assert all(g[0][1] == 1.0 for g in got)               # Q is not weighted
