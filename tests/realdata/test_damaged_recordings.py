@@ -56,17 +56,19 @@ def _edit_fields(d, name, line_no, column, value):
     _write(d, name, lines)
 
 
-def _map_csv(d, fn):
-    """Apply ``fn`` to the float fields of every complete CSV line."""
-    lines = _lines(d, CSV)
+def _map_csv_named(d, name, fn):
+    """Apply ``fn`` to the float fields of every CSV line (a cut one is left alone)."""
     out = []
-    for line in lines:
-        if line:
-            v = np.array(line.split(","), dtype=float)
-            v = fn(v)
+    for line in _lines(d, name):
+        if line.count(",") == 6 and not line.endswith(","):
+            v = fn(np.array(line.split(","), dtype=float))
             line = ",".join(f"{x:.6f}" for x in v[:6]) + f",{v[6]:.10g}"
         out.append(line)
-    _write(d, CSV, out)
+    _write(d, name, out)
+
+
+def _map_csv(d, fn):
+    _map_csv_named(d, CSV, fn)
 
 
 def _cut(d, name, fraction=None, size=None):
@@ -186,3 +188,75 @@ def test_damaged_recording_is_refused_in_one_line(drive, tmp_path, damage, name,
     assert err.count("\n") == 1 and err.startswith("fuzzynav: error: ") and \
         "Traceback" not in err, err
     assert str(d / name) in err and field in err, err
+
+
+# -- what is repaired, not refused ------------------------------------------------------------
+def _load(d, **kw):
+    from fuzzynav.sim.loaders.rtklib import load_rtklib
+
+    return load_rtklib(d, mounting=None, **kw)
+
+
+def test_blank_and_comment_lines_are_skipped(drive, tmp_path):
+    d = tmp_path / "rec"
+    shutil.copytree(drive, d)
+    lines = _lines(d, CSV)
+    for at, extra in ((3000, ""), (2000, "# logger restarted"), (1000, "  "), (10, "\r")):
+        lines.insert(at, extra)
+    _write(d, CSV, lines)
+    rec, ref = _load(d, resample_hz=None), _load(drive, resample_hz=None)
+    # the same samples; the skipped bytes (26, counted as logged) move the later lines past
+    # the record that covered them (records fall on line ends here): at most one record
+    # interval (15.5 ms) later
+    assert rec.timing.method == "tag-fit"
+    shift = rec.imu.time_s - ref.imu.time_s
+    assert np.all((shift > -1e-3) & (shift < 0.0155))
+    np.testing.assert_allclose(rec.imu.dv_b, ref.imu.dv_b, rtol=1e-3, atol=1e-6)
+
+
+def test_logging_stopped_inside_a_line_and_a_tag_record(drive, tmp_path):
+    """The tag's last record cut (as an interrupted write leaves it), the CSV cut 20 bytes
+    after the last line that record counted: both cut pieces are dropped, the rest kept."""
+    from fuzzynav.sim.loaders.timetag import read_timetag
+
+    d = tmp_path / "rec"
+    shutil.copytree(drive, d)
+    _cut(d, TAG, size=(d / TAG).stat().st_size - 5)
+    logged = int(read_timetag(d / TAG).fpos[-1])         # CR LF line ends, as logged
+    n_lines = int(np.searchsorted(np.cumsum([len(x) + 2 for x in _lines(d, CSV)]), logged)) + 1
+    _cut(d, CSV, size=logged - n_lines + 20)
+    rec, ref = _load(d, resample_hz=None), _load(drive, resample_hz=None)
+    assert rec.timing.method == "tag-fit"
+    # samples = complete lines less the first (always dropped)
+    assert rec.imu.time_s.size == n_lines - 1 and ref.imu.time_s.size > n_lines
+    np.testing.assert_allclose(rec.imu.time_s, ref.imu.time_s[:n_lines - 1], atol=1e-3)
+
+
+def test_limits_can_be_widened_for_an_unusual_sensor(drive, tmp_path):
+    from fuzzynav.errors import InputFileError
+    from fuzzynav.sim.loaders.checks import Limits
+
+    d = tmp_path / "rec"
+    shutil.copytree(drive, d)
+    _map_csv(d, lambda v: v + np.r_[np.zeros(3), 10.0, np.zeros(3)])   # a 10-deg/s bias
+    with pytest.raises(InputFileError, match="gyro_rest_max_rps"):
+        _load(d)
+    assert _load(d, limits=Limits(gyro_rest_max_rps=0.2)).imu.n_samples > 0
+
+
+# -- a copy of the real drive ------------------------------------------------------------------
+REAL = ("imu_1934.csv", "imu_1934.csv.tag", "gnss_1934_sf.pos")
+
+
+@pytest.mark.parametrize("damage, name, field", [
+    (lambda d: _cut(d, "imu_1934.csv", 0.5), "imu_1934.csv", "end of file"),
+    (lambda d: _cut(d, "imu_1934.csv.tag", 0.7), "imu_1934.csv.tag", "record"),
+    (lambda d: _map_csv_named(d, "imu_1934.csv", _swap), "imu_1934.csv", "swapped"),
+], ids=["csv-cut-at-half", "tag-cut", "acc-gyro-swapped"])
+def test_damaged_copy_of_the_real_drive(rtklib_drive, tmp_path, damage, name, field):
+    for f in REAL:
+        shutil.copy(rtklib_drive / f, tmp_path / f)
+    damage(tmp_path)
+    code, out, err = run_cli(tmp_path)
+    assert code == 2 and out == "" and err.count("\n") == 1, err
+    assert str(tmp_path / name) in err and field in err, err
