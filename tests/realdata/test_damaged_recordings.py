@@ -142,6 +142,12 @@ CASES = [
      CSV, "columns gyro x,y,z"),
     ("csv-acc-spike", lambda d: _edit_fields(d, CSV, 3000, 2, "80.0"), CSV,
      "line 3000, columns acc x,y,z"),
+    ("csv-empty", lambda d: (d / CSV).write_bytes(b""), CSV, "lines"),
+    ("csv-binary-garbage", lambda d: (d / CSV).write_bytes(bytes(range(256)) * 40), CSV,
+     "line 2"),
+    ("csv-is-a-directory", lambda d: ((d / CSV).unlink(), (d / CSV).mkdir()), CSV,
+     "not a regular file"),
+    ("tag-empty", lambda d: (d / TAG).write_bytes(b""), TAG, "header"),
     ("tag-cut-in-header", lambda d: _cut(d, TAG, size=70), TAG, "header"),
     ("tag-cut-at-half", lambda d: _cut(d, TAG, 0.5), TAG, "record"),
     ("tag-not-a-tag", lambda d: (d / TAG).write_bytes(b"NOTATAG" + (d / TAG).read_bytes()[7:]),
@@ -164,6 +170,9 @@ CASES = [
     ("pos-epochs-out-of-order", lambda d: _write(d, POS, (lambda x: x[:40] + [x[41], x[40]]
                                                          + x[42:])(_lines(d, POS))),
      POS, "line 42"),
+    ("pos-empty", lambda d: (d / POS).write_bytes(b""), POS, "lines"),
+    ("pos-is-a-directory", lambda d: ((d / POS).unlink(), (d / POS).mkdir()), POS,
+     "not a regular file"),
     ("pos-no-header", lambda d: _write(d, POS, [x for x in _lines(d, POS)
                                                if not x.startswith("%")]), POS, "header"),
 ]

@@ -166,10 +166,10 @@ def clock_rate(csv_path, tag_path, tag, method: str, rate: float, csv_bytes: int
                              f"the file holds {csv_bytes} bytes ({samples_s:.1f} s of samples) "
                              f"but its tag logged {logged} bytes over {tag.duration_s:.1f} s: "
                              f"the CSV is truncated; {stretch}")
-    raise InputFileError(tag_path, f"record {tag.fpos.size}", f"the last record counts "
-                         f"{logged} bytes at {tag.duration_s:.1f} s but {Path(csv_path).name} holds {csv_bytes} "
-                         f"bytes ({samples_s:.1f} s of samples): the tag is truncated or "
-                         f"belongs to another file; {stretch}")
+    raise InputFileError(tag_path, f"record {tag.fpos.size}",
+                         f"the last record counts {logged} bytes at {tag.duration_s:.1f} s but "
+                         f"{Path(csv_path).name} holds {csv_bytes} bytes ({samples_s:.1f} s of "
+                         f"samples): the tag is truncated or belongs to another file; {stretch}")
 
 
 # -- physics ------------------------------------------------------------------------------------

@@ -149,6 +149,10 @@ def find_files(directory, session=None) -> dict:
         raise DataMissingError(f"{tag}: time-tag file of {imu.name} not found")
     session_id = imu.stem[len("imu_"):]
     pos = _one(directory, f"gnss_{session_id}*.pos", "GNSS solution")
+    for what, path in (("IMU file", imu), ("time-tag file", tag), ("GNSS solution", pos)):
+        if not path.is_file():
+            raise InputFileError(path, "", f"not a regular file (a directory?); the {what} "
+                                           "must be one")
     return {"imu": imu, "tag": tag, "pos": pos}
 
 

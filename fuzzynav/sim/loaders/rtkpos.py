@@ -125,7 +125,8 @@ def read_pos(path) -> PosFile:
             t_frac.append(tf)
             linenos.append(lineno)
     if not rows:
-        raise InputFileError(path, "", "no solutions in the file")
+        raise InputFileError(path, "lines", "no solution epochs in the file (only header "
+                                            "or blank lines)")
     data = np.array(rows, dtype=float)
     columns = {name: data[:, j] for j, name in enumerate(index)}
     _check_values(path, columns, linenos)
