@@ -32,7 +32,7 @@ MIN_IMU_SAMPLES = 100
 #: samples over the tag (fallback), must run at its ticks' rate within this fraction.
 #: Crystal clocks are off by ppm (the rtklib-drive's IMU by 13 ppm); the stretch fallback
 #: also absorbs the first sample's arrival latency (0.15 s: 0.03 % of the drive, 0.5 % of
-#: 30 s).  A CSV or tag cut by more than 1 % of its length is therefore refused.
+#: 30 s).  Ticks in another unit than ms fail this by far.
 CLOCK_RATE_TOLERANCE = 0.01
 #: the stretch fallback (a tag whose byte counts do not fit the CSV) puts the first sample at
 #: the tag's start and the last at its last record: the tag may outlast the samples by the
