@@ -13,6 +13,14 @@ from tests.sim.rtklib_files import drive_samples
 P = "rec/imu_1.csv"
 
 
+def expect(ok, match, check, *args):
+    """Run ``check(*args)``: it must pass if ``ok``, else refuse with ``match`` in the text."""
+    if ok:
+        return check(*args)
+    with pytest.raises(InputFileError, match=match):
+        check(*args)
+
+
 def _ticks(rate_hz, n=500, gap_s=0.0):
     t = 1000.0 + np.arange(n) * 1000.0 / rate_hz
     t[n // 2:] += gap_s * 1000.0
@@ -22,12 +30,8 @@ def _ticks(rate_hz, n=500, gap_s=0.0):
 @pytest.mark.parametrize("rate_hz, ok", [(1.0, True), (100.0, True), (2000.0, True),
                                          (0.9, False), (2100.0, False)])
 def test_sample_rate_range(rate_hz, ok):
-    lines = np.arange(500) + 2
-    if ok:
-        assert checks.imu_ticks(P, _ticks(rate_hz), lines) == pytest.approx(rate_hz)
-    else:
-        with pytest.raises(InputFileError, match="column tick"):
-            checks.imu_ticks(P, _ticks(rate_hz), lines)
+    rate = expect(ok, "column tick", checks.imu_ticks, P, _ticks(rate_hz), np.arange(500) + 2)
+    assert not ok or rate == pytest.approx(rate_hz)
 
 
 def test_gap_limit_names_the_line():
@@ -47,12 +51,7 @@ def _at_rest(f_g=1.0, w_dps=0.2, n=3000):
 
 @pytest.mark.parametrize("f_g, ok", [(0.91, True), (1.09, True), (0.89, False), (1.11, False)])
 def test_gravity_band(f_g, ok):
-    acc, gyro, lines = _at_rest(f_g)
-    if ok:
-        checks.imu_physics(P, acc, gyro, lines, 100.0)
-    else:
-        with pytest.raises(InputFileError, match="gravity_band"):
-            checks.imu_physics(P, acc, gyro, lines, 100.0)
+    expect(ok, "gravity_band", checks.imu_physics, P, *_at_rest(f_g), 100.0)
 
 
 def test_swapped_columns_and_units_are_named():
@@ -65,12 +64,7 @@ def test_swapped_columns_and_units_are_named():
 
 @pytest.mark.parametrize("w_dps, ok", [(5.5, True), (6.0, False)])      # limit 5.73 deg/s
 def test_gyro_at_rest(w_dps, ok):
-    acc, gyro, lines = _at_rest(w_dps=w_dps)
-    if ok:
-        checks.imu_physics(P, acc, gyro, lines, 100.0)
-    else:
-        with pytest.raises(InputFileError, match="gyro_rest_max_rps"):
-            checks.imu_physics(P, acc, gyro, lines, 100.0)
+    expect(ok, "gyro_rest_max_rps", checks.imu_physics, P, *_at_rest(w_dps=w_dps), 100.0)
 
 
 def test_full_scale_names_the_first_line_beyond_it():
@@ -91,12 +85,8 @@ TAG = SimpleNamespace(fpos=np.array([100, 400_000]), tick_ms=np.array([130, 60_3
     ("endpoints", 60.3 / 59.7, 59.7, False),         # 0.6 s
 ])
 def test_clock_rate_and_stretch(method, rate, samples_s, ok):
-    args = (P, "rec/imu_1.csv.tag", TAG, method, rate, 396_000, 6_000, samples_s)
-    if ok:
-        checks.clock_rate(*args)
-    else:
-        with pytest.raises(InputFileError, match="clock_rate_tolerance|max_stretch_s"):
-            checks.clock_rate(*args)
+    expect(ok, "clock_rate_tolerance|max_stretch_s", checks.clock_rate, P, "rec/imu_1.csv.tag",
+           TAG, method, rate, 396_000, 6_000, samples_s)
 
 
 @pytest.mark.parametrize("n_fixed, span_s, ok", [(10, 51.0, True), (9, 51.0, False),
@@ -106,12 +96,7 @@ def test_gnss_overlap(n_fixed, span_s, ok):
     t = 1e9 + np.linspace(0.0, span_s, 204)
     q = np.ones(204)
     q[n_fixed - 1:-1] = 2
-    imu = (1e9, 1e9 + 100.0)
-    if ok:
-        checks.gnss_overlap("g.pos", t, q, imu)
-    else:
-        with pytest.raises(InputFileError, match="column (Q|GPST)"):
-            checks.gnss_overlap("g.pos", t, q, imu)
+    expect(ok, "column (Q|GPST)", checks.gnss_overlap, "g.pos", t, q, (1e9, 1e9 + 100.0))
 
 
 def test_gyro_course_gain_of_a_drive_and_of_gyros_in_the_wrong_unit():
