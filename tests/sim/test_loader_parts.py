@@ -1,6 +1,5 @@
 """Pieces of the real-data path: increments, time tags, mounting, alignment, degradation."""
 import math
-import struct
 
 import numpy as np
 import pytest
@@ -15,6 +14,7 @@ from fuzzynav.sim.loaders.mounting import Mounting, passive_rpy_matrix
 from fuzzynav.sim.log import simulate
 from fuzzynav.sim.scenario import scenario_from_dict
 from fuzzynav.sim.sensors import SensorData
+from tests.sim.rtklib_files import tag_bytes
 
 ALPHA = 1e-6
 
@@ -57,11 +57,6 @@ def test_grid_bounds_are_whole_multiples():
 
 
 # -- time tags ------------------------------------------------------------------------------------
-def tag_bytes(records, start=(1752003261, 0.854)):
-    head = b"TIMETAG RTKLIB demo5".ljust(60, b"\0") + struct.pack("<IId", 7, *start)
-    return head + b"".join(struct.pack("<II", *r) for r in records)
-
-
 def test_timetag_parse(tmp_path):
     p = tmp_path / "x.tag"
     p.write_bytes(tag_bytes([(131, 37), (146, 99), (162, 180)]) + b"\x00\x01\x02")

@@ -1,12 +1,12 @@
 """The RTKLIB loader on a synthetic recording whose true timing and rates are known."""
 import math
-import struct
 
 import numpy as np
 import pytest
 
 from fuzzynav.errors import DataMissingError, InputFileError
 from fuzzynav.sim.loaders import rtklib, timetag
+from tests.sim.rtklib_files import csv_lines, write_imu, write_pos
 
 START_INT, START_FRAC = 1_700_000_000, 0.25     # GPST of the tag file (seconds since 1970)
 TICK0, N = 5000, 3001                          # IMU tick of the first line, lines
@@ -33,41 +33,23 @@ def build(tmp_path, crlf_stripped=True, tag_ok=True):
     t_imu = n * 0.010                                          # true sample instants, IMU clock
     ticks = TICK0 + np.floor(n * 10.0 + rng.uniform(0, 1.9, N)).astype(int)  # jittered
     w, f = rates(t_imu)
-    lines = [f"{f[i, 0]:.6f},{f[i, 1]:.6f},{f[i, 2]:.6f},{w[i, 0]:.6f},{w[i, 1]:.6f},"
-             f"{w[i, 2]:.6f},{ticks[i]}" for i in range(N)]
-    logged = "".join(line + "\r\n" for line in lines).encode()
-    stored = logged.replace(b"\r\n", b"\n") if crlf_stripped else logged
-    (tmp_path / "imu_1.csv").write_bytes(stored)
-    # arrival on the PC clock, ms since tag start; records at chunk boundaries
+    # arrival on the PC clock, ms since tag start
     sample_pc_ms = PC_RATE * t_imu * 1000.0
     # lines arrive in order, after a fixed latency and a random buffering delay
     arrival = np.maximum.accumulate(LATENCY_MS + sample_pc_ms + rng.uniform(0.0, 10.0, N))
-    ends = np.cumsum([len(line) + 2 for line in lines])
-    chunks = np.arange(130.0, arrival[-1] + CHUNK_MS, CHUNK_MS)
-    fpos = [int(ends[arrival <= c].max(initial=0)) for c in chunks]
-    if not tag_ok:
-        fpos = [p // 2 for p in fpos]
-    head = b"TIMETAG RTKLIB demo5".ljust(60, b"\0") + struct.pack("<IId", 123, START_INT,
-                                                                  START_FRAC)
-    body = b"".join(struct.pack("<II", int(c), p) for c, p in zip(chunks, fpos))
-    (tmp_path / "imu_1.csv.tag").write_bytes(head + body + b"\x01\x02")  # partial record
-    write_pos(tmp_path / "gnss_1_sf.pos", START_INT - 2, 40)
+    write_imu(tmp_path, csv_lines(f, w, ticks), arrival, start=(START_INT, START_FRAC),
+              crlf_stripped=crlf_stripped, chunk_ms=CHUNK_MS, fpos_scale=1.0 if tag_ok else 0.5)
+    write_static_pos(tmp_path / "gnss_1_sf.pos", START_INT - 2, 40)
     return START_FRAC + sample_pc_ms / 1000.0, t_imu, ticks
 
 
-def write_pos(path, first_int, seconds):
-    hdr = ("%  GPST          latitude(deg) longitude(deg)  height(m)   Q  ns   sdn(m)   sde(m)"
-           "   sdu(m)  sdne(m)  sdeu(m)  sdun(m) age(s)  ratio    vn(m/s)    ve(m/s)    "
-           "vu(m/s)      sdvn     sdve     sdvu    sdvne    sdveu    sdvun\n")
-    rows = []
-    for k in range(seconds * 4):
-        t = first_int + k * 0.25
-        sec = t % 60
-        tm = f"2023/11/14 22:{int(t // 60) % 60:02d}:{sec:06.3f}"
-        q = 1 if k % 10 else 2
-        rows.append(f"{tm} 40.000000{k % 10} -105.0000000 1600.000 {q} 20 0.010 0.011 0.02 0 0 0"
-                    f" 0.0 0.0 1.000 2.000 0.100 0.05 0.06 0.07 0 0 0\n")
-    path.write_text("% program : test\n% obs start : 2023/11/14 GPST\n" + hdr + "".join(rows))
+def write_static_pos(path, first_int, seconds):
+    """4-Hz fixes jittering by 1e-7 deg about one point, every tenth a float (Q = 2)."""
+    k = np.arange(seconds * 4)
+    lla = np.column_stack([40.0 + (k % 10) * 1e-7, np.full(k.size, -105.0),
+                           np.full(k.size, 1600.0)])
+    vel = np.tile([2.0, 1.0, 0.1], (k.size, 1))
+    write_pos(path, first_int + k * 0.25, lla, vel, np.where(k % 10 == 0, 2, 1))
 
 
 def test_gps_time_of_the_pos_writer():
@@ -155,7 +137,7 @@ def test_malformed_csv_line_is_named(tmp_path):
     p.write_bytes(b"\n".join(lines))
     with pytest.raises(InputFileError) as exc:
         rtklib.load_rtklib(tmp_path)
-    assert exc.value.where == "line 101" and exc.value.path == str(p)
+    assert exc.value.where == "line 101, column acc z" and exc.value.path == str(p)
 
 
 def test_span_outside_the_data(tmp_path):

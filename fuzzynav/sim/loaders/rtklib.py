@@ -40,7 +40,7 @@ import numpy as np
 from fuzzynav import units
 from fuzzynav.errors import DataMissingError, InputFileError
 from fuzzynav.sim.imu import ImuData
-from fuzzynav.sim.loaders import increments, timetag
+from fuzzynav.sim.loaders import checks, increments, timetag
 from fuzzynav.sim.loaders.mounting import Mounting
 from fuzzynav.sim.loaders.rtkpos import read_pos
 from fuzzynav.sim.sensors import SensorData
@@ -48,6 +48,8 @@ from fuzzynav.sim.sensors import SensorData
 #: sample-to-fitted-arrival delay of the rtklib-drive IMU [s] (see the module docstring)
 DEFAULT_IMU_DELAY_S = 0.21
 _CSV_COLUMNS = 7
+_CSV_NAMES = ("acc x", "acc y", "acc z", "gyro x", "gyro y", "gyro z", "tick")
+_CSV_LAYOUT = "acc x,y,z [g], gyro x,y,z [deg/s], tick [ms]"
 
 
 @dataclass(frozen=True)
@@ -147,11 +149,55 @@ def find_files(directory, session=None) -> dict:
         raise DataMissingError(f"{tag}: time-tag file of {imu.name} not found")
     session_id = imu.stem[len("imu_"):]
     pos = _one(directory, f"gnss_{session_id}*.pos", "GNSS solution")
+    for what, path in (("IMU file", imu), ("time-tag file", tag), ("GNSS solution", pos)):
+        if not path.is_file():
+            raise InputFileError(path, "", f"not a regular file (a directory?); the {what} "
+                                           "must be one")
     return {"imu": imu, "tag": tag, "pos": pos}
 
 
+def _data_lines(lines, first: int, last: int) -> np.ndarray:
+    """0-based indices of lines ``first .. last-1`` that hold data.
+
+    Blank lines and whole-line ``#`` comments (an edited or concatenated copy) are skipped;
+    their bytes still count in the offsets matched against the tag.
+    """
+    return np.array([i for i in range(first, last)
+                     if lines[i].strip() and not lines[i].lstrip().startswith(b"#")],
+                    dtype=np.int64)
+
+
+def _refuse_line(path, lineno: int, line: bytes):
+    """Raise the error naming what is wrong in one line that did not parse."""
+    fields = line.split(b",")
+    if len(fields) != _CSV_COLUMNS:
+        raise InputFileError(path, f"line {lineno}", f"{len(fields)} fields, expected "
+                                                     f"{_CSV_COLUMNS}: {_CSV_LAYOUT}")
+    for name, field in zip(_CSV_NAMES, fields):
+        text = field.strip().decode("ascii", "replace")[:24]
+        try:
+            value = float(field)
+        except ValueError:
+            raise InputFileError(path, f"line {lineno}, column {name}",
+                                 f"{text!r} is not a number ({_CSV_LAYOUT})") from None
+        if not np.isfinite(value):
+            raise InputFileError(path, f"line {lineno}, column {name}",
+                                 f"{text!r} is not a finite number")
+
+
+def _check_ticks_increase(path, tick, kept):
+    step = np.diff(tick)
+    bad = np.flatnonzero(step <= 0)
+    if bad.size:
+        k = bad[0]
+        what = (f"repeats the previous tick {tick[k]:.0f}" if step[k] == 0 else
+                f"{tick[k + 1]:.0f} after {tick[k]:.0f}")
+        raise InputFileError(path, f"line {kept[k + 1] + 1}, column tick",
+                             f"{what}: ticks must increase")
+
+
 def read_imu_csv(path):
-    """Rows of an IMU CSV with partial first/last lines dropped.
+    """Rows of an IMU CSV with partial first/last lines, blank and comment lines dropped.
 
     Returns
     -------
@@ -168,27 +214,19 @@ def read_imu_csv(path):
     if raw.endswith(b"\n"):
         lines = lines[:-1]
     last = len(lines) if raw.endswith(b"\n") else len(lines) - 1
-    kept = np.arange(1, last)
+    kept = _data_lines(lines, 1, last)
     if kept.size < 2:
-        raise InputFileError(path, "", "fewer than two complete sample lines")
-    body = b"\n".join(lines[1:last])
+        raise InputFileError(path, "lines", "fewer than two complete sample lines")
+    body = b"\n".join(lines[i] for i in kept)
     try:
-        data = np.loadtxt(io.BytesIO(body), delimiter=",", ndmin=2)
+        data = np.loadtxt(io.BytesIO(body), delimiter=",", ndmin=2, comments=None)
     except ValueError:
         data = None
     if data is None or data.shape[1] != _CSV_COLUMNS or not np.all(np.isfinite(data)):
         for i in kept:
-            fields = lines[i].split(b",")
-            try:
-                ok = len(fields) == _CSV_COLUMNS and all(np.isfinite(float(f)) for f in fields)
-            except ValueError:
-                ok = False
-            if not ok:
-                raise InputFileError(path, f"line {i + 1}", "expected 7 numbers: acc x,y,z [g], "
-                                     "gyro x,y,z [deg/s], tick [ms]")
-    bad = np.flatnonzero(np.diff(data[:, 6]) <= 0)
-    if bad.size:
-        raise InputFileError(path, f"line {kept[bad[0] + 1] + 1}", "tick does not increase")
+            _refuse_line(path, i + 1, lines[i])
+        raise InputFileError(path, "", f"not a CSV of {_CSV_LAYOUT}")  # parsed line by line
+    _check_ticks_increase(path, data[:, 6], kept)
     return data, kept, np.array([len(x) for x in lines], dtype=np.int64), len(raw)
 
 
@@ -265,7 +303,7 @@ def _fixes(pos, epoch: int, t_lo: float, t_hi: float, lever_arm_b, fixed_only: b
 
 def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
                 resample_hz="nominal", span_s=None, session=None,
-                gnss_velocity_lag_s=0.0) -> Recording:
+                gnss_velocity_lag_s=0.0, limits=None) -> Recording:
     """Load an RTKLIB-logged IMU + GNSS recording.
 
     Parameters
@@ -289,18 +327,32 @@ def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
         ``gnss`` (not of ``reference``) are moved back by this much (by interpolation).
         RTKLIB's on the rtklib-drive lag the positions by about 0.14 s
         (:func:`fuzzynav.sim.loaders.sync.velocity_lag`).
+    limits : checks.Limits, optional
+        Thresholds of the plausibility checks (:mod:`.checks`; default: its constants).
 
     Returns
     -------
     Recording
+
+    Raises
+    ------
+    DataMissingError
+        A directory or file is missing.
+    InputFileError
+        A file is malformed or the recording fails a check of :mod:`.checks`.
     """
     directory = Path(directory)
     files = find_files(directory, session)
     mount = _resolve_mounting(mounting, directory, files)
     tag = timetag.read_timetag(files["tag"])
     data, kept, lengths, size = read_imu_csv(files["imu"])
+    limits = checks.DEFAULT_LIMITS if limits is None else limits
+    rate_hz = checks.imu_ticks(files["imu"], data[:, 6], kept + 1, limits)
+    checks.imu_physics(files["imu"], data[:, 0:3], data[:, 3:6], kept + 1, rate_hz, limits)
     clock = increments.regular_sample_times(data[:, 6])
     offset_s, timing = align_time(tag, clock, kept, lengths, size, imu_delay_s)
+    checks.clock_rate(files["imu"], files["tag"], tag, timing.method, timing.clock_rate, size,
+                      lengths.size, np.ptp(clock.time_ms) / 1000.0, limits)
     frac0 = tag.start_frac_s + offset_s[0]
     epoch = tag.start_int_s + int(np.floor(frac0))
     t_s = (tag.start_frac_s - (epoch - tag.start_int_s)) + offset_s
@@ -313,9 +365,12 @@ def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
     imu.meta.update(n_missing_samples=clock.n_missing, max_gap_s=clock.max_gap_ms / 1000.0,
                     tick_jitter_ms=clock.jitter_ms)
     pos = read_pos(files["pos"])
+    checks.gnss_overlap(files["pos"], pos.time_int_s + pos.time_frac_s, pos.columns["q"],
+                        (epoch + imu.time_s[0], epoch + imu.time_s[-1]), limits)
     lever = np.zeros(3) if mount is None else mount.gnss_lever_arm_b_m
     t_lo, t_hi = imu.time_s[0], imu.time_s[-1]
+    reference = _fixes(pos, epoch, t_lo, t_hi, lever, True)
+    checks.gyro_scale(files["imu"], imu, reference, limits)
     return Recording(directory=directory, files=files, epoch_gpst_s=int(epoch), imu=imu,
                      gnss=_fixes(pos, epoch, t_lo, t_hi, lever, False, gnss_velocity_lag_s),
-                     reference=_fixes(pos, epoch, t_lo, t_hi, lever, True),
-                     mounting=mount, timing=timing)
+                     reference=reference, mounting=mount, timing=timing)

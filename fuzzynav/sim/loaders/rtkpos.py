@@ -25,6 +25,10 @@ _COLUMNS = {"latitude(deg)": "lat_deg", "longitude(deg)": "lon_deg", "height(m)"
             "vu(m/s)": "vel_u", "sdvn": "sd_vn", "sdve": "sd_ve", "sdvu": "sd_vu"}
 _REQUIRED = ("lat_deg", "lon_deg", "h_m", "q", "sd_n", "sd_e", "sd_u")
 _VELOCITY = ("vel_e", "vel_n", "vel_u", "sd_ve", "sd_vn", "sd_vu")
+_HEADER = {ours: theirs for theirs, ours in _COLUMNS.items()}
+#: our name -> (lowest, highest) value a solution can hold; NaN is refused in these columns
+_RANGES = {"lat_deg": (-90.0, 90.0), "lon_deg": (-180.0, 360.0), "h_m": (-1e5, 1e8),
+           "q": (1, 6), "sd_n": (0.0, np.inf), "sd_e": (0.0, np.inf), "sd_u": (0.0, np.inf)}
 
 
 @dataclass(frozen=True)
@@ -72,10 +76,25 @@ def _parse_time(path, lineno, date: str, clock: str):
                              f"bad GPST date-time {date} {clock!r}") from None
 
 
+def _check_values(path, columns: dict, linenos) -> None:
+    """Refuse NaN, infinite or impossible values in the columns the loader uses."""
+    for name, (lo, hi) in _RANGES.items():
+        v = columns[name]
+        bad = np.flatnonzero(~((v >= lo) & (v <= hi)))
+        if name == "q":
+            bad = np.union1d(bad, np.flatnonzero(v != np.round(v)))
+        if bad.size:
+            k = bad[0]
+            what = (f"{v[k]:g} is not a finite number" if not np.isfinite(v[k]) else
+                    f"{v[k]:g} is outside {lo:g} .. {hi:g}"
+                    + (" (RTKLIB quality flags: whole numbers 1-6)" if name == "q" else ""))
+            raise InputFileError(path, f"line {linenos[k]}, column {_HEADER[name]}", what)
+
+
 def read_pos(path) -> PosFile:
     """Parse an RTKLIB ``.pos`` file (llh, GPST)."""
     path = Path(path)
-    index, rows, t_int, t_frac, linenos = None, [], [], [], []
+    index, n_fields, rows, t_int, t_frac, linenos = None, 0, [], [], [], []
     with open(path, encoding="ascii", errors="replace") as f:
         for lineno, line in enumerate(f, start=1):
             if line.startswith("%"):
@@ -83,6 +102,7 @@ def read_pos(path) -> PosFile:
                 if len(tokens) >= 4 and (tokens[0] in ("GPST", "UTC", "JST")
                                          or "latitude(deg)" in tokens):
                     index = _header_columns(path, line)
+                    n_fields = len(tokens) + 1       # the date-time is two fields
                 continue
             if not line.strip():
                 continue
@@ -90,19 +110,26 @@ def read_pos(path) -> PosFile:
                 raise InputFileError(path, "header", "no column header line ('%  GPST ...') "
                                                      "before the first solution")
             fields = line.split()
+            cut = "" if line.endswith("\n") else " (the file ends inside it: truncated?)"
+            if len(fields) < n_fields:
+                raise InputFileError(path, f"line {lineno}", f"{len(fields)} fields, the header "
+                                     f"names {n_fields}{cut}")
             try:
                 rows.append([float(fields[k]) for k in index.values()])
-            except (ValueError, IndexError):
-                raise InputFileError(path, f"line {lineno}",
-                                     f"expected {max(index.values()) + 1} numeric fields") from None
+            except ValueError:
+                raise InputFileError(path, f"line {lineno}", f"expected numbers in the "
+                                     f"columns {', '.join(_HEADER[n] for n in index)}{cut}") \
+                    from None
             ti, tf = _parse_time(path, lineno, fields[0], fields[1])
             t_int.append(ti)
             t_frac.append(tf)
             linenos.append(lineno)
     if not rows:
-        raise InputFileError(path, "", "no solutions in the file")
+        raise InputFileError(path, "lines", "no solution epochs in the file (only header "
+                                            "or blank lines)")
     data = np.array(rows, dtype=float)
     columns = {name: data[:, j] for j, name in enumerate(index)}
+    _check_values(path, columns, linenos)
     for name in _VELOCITY + ("ns", "age_s", "ratio"):
         columns.setdefault(name, np.full(data.shape[0], np.nan))
     t_int, t_frac = np.array(t_int, dtype=np.int64), np.array(t_frac)

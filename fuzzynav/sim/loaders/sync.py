@@ -42,6 +42,38 @@ def _best_lag(cost_of, lags):
     return float(lags[j] + shift * (lags[1] - lags[0]))
 
 
+def _course_changes(imu, gnss, up_b, min_speed_mps, margin_s, t_range=None):
+    """Chord midpoints, usable pairs, course changes over them [rad] and the gyro heading
+    integral at the IMU instants [rad] (up: ``up_b`` or the mean specific force)."""
+    if up_b is None:
+        up_b = imu.dv_b.sum(0)
+    up_b = np.asarray(up_b, dtype=float) / np.linalg.norm(up_b)
+    psi = np.concatenate([[0.0], np.cumsum(-(imu.dtheta_b @ up_b))])
+    mid, course, speed, regular = _chord_courses(gnss)
+    ok = (regular[:-1] & regular[1:] & (speed[:-1] >= min_speed_mps)
+          & (speed[1:] >= min_speed_mps) & (mid[:-1] - margin_s > imu.time_s[0])
+          & (mid[1:] + margin_s < imu.time_s[-1]))
+    if t_range is not None:
+        ok &= (mid[:-1] >= t_range[0]) & (mid[1:] <= t_range[1])
+    return mid, ok, np.diff(course)[ok], psi
+
+
+def gyro_course_gain(imu, gnss, min_speed_mps=3.0, min_turn_rad=np.pi / 2):
+    """How many times the gyro heading turns as much as the GNSS course (1 if all is right).
+
+    The least-squares factor ``k`` in ``course change = k x gyro heading change`` over the
+    intervals between consecutive chords while moving (regressing the course on the gyro
+    leaves the course's position noise unbiased).  ``None`` when the car did not move or
+    turn enough (fewer than 20 intervals, or less than ``min_turn_rad`` of turning).
+    """
+    mid, ok, d_course, psi = _course_changes(imu, gnss, None, min_speed_mps, 0.0)
+    if ok.sum() < 20 or np.sum(np.abs(d_course)) < min_turn_rad:
+        return None
+    d_psi = np.diff(np.interp(mid, imu.time_s, psi))[ok]
+    den = float(np.sum(d_psi * d_psi))
+    return float(np.sum(d_psi * d_course) / den) if den > 0.0 else float("inf")
+
+
 def course_rate_lag(imu, gnss, up_b=None, t_range=None, min_speed_mps=3.0, max_lag_s=0.5,
                     step_s=0.0025):
     """The shift [s] to add to IMU times for the gyro heading to follow the GNSS course.
@@ -64,20 +96,10 @@ def course_rate_lag(imu, gnss, up_b=None, t_range=None, min_speed_mps=3.0, max_l
     -------
     float
     """
-    if up_b is None:
-        up_b = imu.dv_b.sum(0)
-    up_b = np.asarray(up_b, dtype=float) / np.linalg.norm(up_b)
-    psi = np.concatenate([[0.0], np.cumsum(-(imu.dtheta_b @ up_b))])
-    mid, course, speed, regular = _chord_courses(gnss)
-    ok = (regular[:-1] & regular[1:] & (speed[:-1] >= min_speed_mps)
-          & (speed[1:] >= min_speed_mps) & (mid[:-1] - max_lag_s > imu.time_s[0])
-          & (mid[1:] + max_lag_s < imu.time_s[-1]))
-    if t_range is not None:
-        ok &= (mid[:-1] >= t_range[0]) & (mid[1:] <= t_range[1])
+    mid, ok, d_course, psi = _course_changes(imu, gnss, up_b, min_speed_mps, max_lag_s, t_range)
     if ok.sum() < 20:
         raise InputFileError(None, "time alignment", "too few moving GNSS intervals to "
                                                      "measure the IMU lag")
-    d_course = np.diff(course)[ok]
 
     def cost(lag):
         return np.sum((np.diff(np.interp(mid - lag, imu.time_s, psi))[ok] - d_course) ** 2)
