@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fuzzynav.errors import InputFileError, UnknownNameError
+from fuzzynav.errors import DataMissingError, InputFileError, UnknownNameError
 from fuzzynav.sim.imu import ImuSpec
 from fuzzynav.sim.scenario_checks import check_scenario
 from fuzzynav.sim.segments import SEGMENT_KINDS, Profile, Segment
@@ -251,7 +251,11 @@ def _load(name_or_path, depth=0) -> Scenario:
                     raise InputFileError(None, "base", "a built-in derives from built-ins only")
                 base = _base_path(base, here)
             doc.setdefault("name", stem)
-            doc = _merge(_load(base, depth + 1).to_dict(), doc)
+            try:
+                parent = _load(base, depth + 1)
+            except (UnknownNameError, DataMissingError) as exc:  # name this file and key
+                raise InputFileError(None, "base", str(exc)) from None
+            doc = _merge(parent.to_dict(), doc)
         return scenario_from_dict(doc, default_name=stem)
 
 
@@ -266,7 +270,7 @@ def load_scenario(name_or_path) -> Scenario:
     ------
     UnknownNameError
         Not a built-in name (and not a path).
-    fuzzynav.errors.DataMissingError
+    DataMissingError
         The file does not exist.
     InputFileError
         The file is not valid TOML or not a valid scenario (file, key path, problem): a
