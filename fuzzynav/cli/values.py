@@ -12,9 +12,10 @@ def check_count(option: str, value, lo: int = 1, hi: int | None = None) -> None:
     """Refuse an integer option outside ``lo..hi`` (``None``: not given, accepted)."""
     if value is None:
         return
-    if value < lo or (hi is not None and value > hi):
-        rng = f">= {lo}" if hi is None else f"in {lo}..{hi}"
-        raise FuzzynavError(f"{option} must be {rng}, got {value}")
+    if value < lo:
+        raise FuzzynavError(f"{option} must be >= {lo}, got {value}")
+    if hi is not None and value > hi:
+        raise FuzzynavError(f"{option} must be <= {hi}, got {value}")
 
 
 def check_t_start(value: float, duration_s: float, option: str = "--t-start") -> None:

@@ -46,8 +46,8 @@ def _one_line(err):
     (["run", TINY, "--t-start", "60"], "at or after the end of the run (60 s)"),
     (["study", "run", QUICKSTART, "--trials", "0"], "--trials must be >= 1"),
     (["study", "run", QUICKSTART, "--trials", "-5"], "--trials must be >= 1"),
-    (["study", "run", QUICKSTART, "--workers", "0"], "--workers must be in 1.."),
-    (["study", "run", QUICKSTART, "--workers", "100000"], "--workers must be in 1.."),
+    (["study", "run", QUICKSTART, "--workers", "0"], "--workers must be >= 1"),
+    (["study", "run", QUICKSTART, "--workers", "100000"], "--workers must be <= "),
 ])
 def test_meaningless_option_values_are_refused_before_any_work(capsys, tmp_path, argv,
                                                                fragment):
