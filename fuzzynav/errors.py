@@ -47,3 +47,15 @@ class UnknownNameError(FuzzynavError, KeyError):
 
 class DataMissingError(FuzzynavError, FileNotFoundError):
     """A recording or data file the user named is not there."""
+
+
+class OutputError(FuzzynavError):
+    """A result could not be written (read-only place, full disk, a file where a directory
+    should be); the old file, if any, is left as it was and no temporary file remains."""
+
+
+class RunDivergedError(FuzzynavError):
+    """A filter run gave non-finite metrics: no table is printed, the CLI exits with
+    :attr:`exit_code` (3, to tell a diverged run from bad input, which exits with 2)."""
+
+    exit_code = 3

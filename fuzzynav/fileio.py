@@ -6,7 +6,12 @@ user writes.  :func:`publish` sets that mode and moves the temporary file into p
 """
 from __future__ import annotations
 
+import hashlib
 import os
+import re
+from contextlib import contextmanager
+
+from fuzzynav.errors import OutputError
 
 
 def _umask() -> int:
@@ -23,3 +28,35 @@ def publish(tmp, path) -> None:
     """Give ``tmp`` the ordinary file mode and ``os.replace`` it onto ``path``."""
     os.chmod(tmp, FILE_MODE)
     os.replace(tmp, path)
+
+
+#: longest name part a derived file name takes from a user-given name (file systems allow
+#: 255 bytes per name; the rest carries seeds, hashes and suffixes)
+MAX_STEM = 64
+
+
+def safe_stem(name: str, max_len: int = MAX_STEM) -> str:
+    """``name`` as a file-name part: letters, digits, ``-``, ``_`` and ``.``, at most
+    ``max_len`` characters (a long name is cut and given a hash of the whole, so two
+    long names stay apart)."""
+    stem = re.sub(r"[^A-Za-z0-9_.-]", "_", name).lstrip(".") or "_"
+    if len(stem) <= max_len:
+        return stem
+    digest = hashlib.sha256(name.encode("utf-8", "surrogatepass")).hexdigest()[:8]
+    return f"{stem[:max_len - 9]}~{digest}"
+
+
+@contextmanager
+def output_errors(path, what: str):
+    """Turn an ``OSError`` while writing ``path`` into one-line :class:`OutputError`.
+
+    Disk full, a read-only file system, no permission, a file where a directory should
+    be, a name too long: the message names the file, what it is and the system's reason.
+    """
+    try:
+        yield
+    except OutputError:
+        raise
+    except OSError as exc:
+        reason = exc.strerror or str(exc)
+        raise OutputError(f"{path}: cannot write the {what}: {reason}") from None

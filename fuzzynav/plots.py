@@ -13,7 +13,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from fuzzynav.fileio import publish
+from fuzzynav.fileio import output_errors, publish
 
 _AXES = ("east", "north", "up")
 _STYLES = ("-", "--", "-.", ":")
@@ -92,16 +92,24 @@ def membership_functions(fis, title: str = "", n_points: int = 400) -> plt.Figur
 
 
 def save(fig: plt.Figure, path) -> Path:
-    """Write a figure atomically (format from the suffix) and close it."""
+    """Write a figure atomically (format from the suffix) and close it.
+
+    A full disk, a read-only directory or a file where the directory should be raises
+    :class:`fuzzynav.errors.OutputError`; an older figure at ``path`` is then left as it was.
+    """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
-    os.close(fd)
     try:
-        fig.savefig(tmp, dpi=110)
-        publish(tmp, path)
+        with output_errors(path, "figure"):
+            path.parent.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.",
+                                       suffix=path.suffix)
+            os.close(fd)
+            try:
+                fig.savefig(tmp, dpi=110)
+                publish(tmp, path)
+            finally:
+                if os.path.exists(tmp):
+                    os.unlink(tmp)
     finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
         plt.close(fig)
     return path

@@ -2,7 +2,8 @@
 
 Each command group lives in its own module with a ``register(subparsers)`` function;
 add a module name to :data:`COMMAND_MODULES` to add commands.  Errors caused by user
-input (:class:`fuzzynav.errors.FuzzynavError`) print one line and exit with code 2.
+input (:class:`fuzzynav.errors.FuzzynavError`) print one line and exit with code 2; a
+filter run that diverged (non-finite metrics) prints one line and exits with code 3.
 """
 from __future__ import annotations
 
@@ -40,7 +41,7 @@ def main(argv=None) -> int:
         return int(args.func(args) or 0)
     except FuzzynavError as exc:
         print(f"fuzzynav: error: {exc}", file=sys.stderr)
-        return 2
+        return getattr(exc, "exit_code", 2)  # 3: a run diverged (RunDivergedError)
     except KeyboardInterrupt:  # pragma: no cover - interactive
         print("fuzzynav: interrupted", file=sys.stderr)
         return 130

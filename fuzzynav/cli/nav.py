@@ -5,7 +5,11 @@ import json
 import os
 from pathlib import Path
 
-from fuzzynav.errors import FuzzynavError
+import numpy as np
+
+from fuzzynav.cli.values import check_count, check_t_start, write_stdout
+from fuzzynav.errors import FuzzynavError, RunDivergedError
+from fuzzynav.fileio import safe_stem
 
 
 def default_cache_dir() -> Path:
@@ -94,11 +98,16 @@ def filter_options(args) -> dict:
     return opts
 
 
+def check_common(args) -> None:
+    """Refuse meaningless values of the options every run shares."""
+    check_count("--mc", args.mc)
+    check_count("--seed", args.seed, lo=0)
+
+
 def _cmd_run(args) -> int:
     if (args.scenario is None) == (args.data is None):
         raise FuzzynavError("give either a SCENARIO or --data KIND:DIR")
-    if args.mc < 1:
-        raise FuzzynavError(f"--mc must be >= 1, got {args.mc}")
+    check_common(args)
     if args.data:
         from fuzzynav.realdata import run_recording
 
@@ -117,8 +126,7 @@ def _cmd_compare(args) -> int:
     filters = [f.strip() for f in args.filters.split(",") if f.strip()]
     if len(filters) < 2:
         raise FuzzynavError("--filters needs at least two comma-separated filter names")
-    if args.mc < 1:
-        raise FuzzynavError(f"--mc must be >= 1, got {args.mc}")
+    check_common(args)
     labels, claims = claims_for(str(args.scenario))
     return run_scenario_filters(args, filters, baseline=filters[0], claims=claims,
                                 claim_labels=labels)
@@ -131,25 +139,52 @@ def run_scenario_filters(args, filters, baseline=None, claims=None, claim_labels
     from fuzzynav.sim.scenario import load_scenario
 
     scn = load_scenario(args.scenario)
+    check_t_start(args.t_start, scn.duration_s)
     seeds = list(range(args.seed, args.seed + args.mc))
     df = monte_carlo(scn, filters, seeds, filter_options(args), args.cache, args.t_start,
                      progress=not args.json and args.mc > 1)
+    check_finite_metrics(df)  # a diverged run: no table at all, exit 3
     if args.json:
-        print(json.dumps(_json_summary(df, scn, filters, seeds), indent=2))
+        write_stdout(json.dumps(_json_summary(df, scn, filters, seeds), indent=2,
+                                allow_nan=False), "JSON output")
     else:
-        print(f"scenario {scn.name} ({scn.duration_s:.0f} s), seeds {seeds[0]}..{seeds[-1]}"
-              + (" — mean ± 95 % CI over seeds" if len(seeds) > 1 else ""))
         header = ["RMS error", *filters]
         if baseline is not None:
             header += [f"{f} vs {baseline}" for f in filters if f != baseline]
         header += list(claim_labels)
-        print(render(header, comparison_rows(df, filters, baseline, claims=claims)))
         bad = df[df["completed"] < 1]
-        if len(bad):
-            print(f"warning: {len(bad)} run(s) stopped early (covariance lost)")
+        write_stdout(f"scenario {scn.name} ({scn.duration_s:.0f} s), seeds "
+                     f"{seeds[0]}..{seeds[-1]}"
+                     + (" — mean ± 95 % CI over seeds" if len(seeds) > 1 else "") + "\n"
+                     + render(header, comparison_rows(df, filters, baseline, claims=claims))
+                     + (f"\nwarning: {len(bad)} run(s) stopped early (covariance lost)"
+                        if len(bad) else ""), "results table")
     if args.plot:
         _plot_first_seed(scn, filters, seeds[0], args)
     return 0
+
+
+def check_finite_metrics(df) -> None:
+    """Refuse a Monte-Carlo table with a non-finite metric (a diverged filter run).
+
+    Raises
+    ------
+    RunDivergedError
+        Naming the first such run's filter, scenario and seed and how many there are.
+    """
+    metrics = [c for c in df.columns if c.startswith(("rms_", "max_"))]
+    values = df[metrics].to_numpy(dtype=float)
+    bad = ~np.isfinite(values).all(axis=1)
+    if not bad.any():
+        return
+    i = int(np.flatnonzero(bad)[0])
+    row = df.iloc[i]
+    j = int(np.flatnonzero(~np.isfinite(values[i]))[0])
+    stopped = " (it stopped early: covariance lost)" if row.get("completed", 1.0) < 1 else ""
+    raise RunDivergedError(f"filter {row['filter']} diverged on scenario {row['scenario']} "
+                           f"seed {int(row['seed'])}{stopped}: {metrics[j]} = {values[i, j]}; "
+                           f"{int(bad.sum())} of {len(df)} run(s) have non-finite metrics, "
+                           "no table printed")
 
 
 def _json_summary(df, scn, filters, seeds) -> dict:
@@ -179,8 +214,9 @@ def _plot_first_seed(scn, filters, seed, args) -> None:
         outs[f] = run_on_log(log, name, {**filter_options(args), **own})
     errs = {f: errors_vs_trajectory(o.result, log.truth) for f, o in outs.items()}
     out_dir = Path(args.plot)
+    stem = safe_stem(scn.name)
     path = plots.save(plots.error_curves(errs, f"{scn.name}, seed {seed}"),
-                      out_dir / f"{scn.name}_errors.png")
+                      out_dir / f"{stem}_errors.png")
     print(f"wrote {path}")
     series = {}
     for f, o in outs.items():
@@ -189,5 +225,5 @@ def _plot_first_seed(scn, filters, seed, args) -> None:
                 series[f"{f} {sensor} {name}"] = (ev.time_s, ev.diagnostic(name))
     if series:
         path = plots.save(plots.adaptation_curves(series, "adaptation"),
-                          out_dir / f"{scn.name}_adaptation.png")
+                          out_dir / f"{stem}_adaptation.png")
         print(f"wrote {path}")

@@ -1,9 +1,14 @@
 """``fuzzynav study run | export | report``: learn rules with Optuna (or PSO), export, inspect."""
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
+from fuzzynav.cli.values import check_count
 from fuzzynav.errors import FuzzynavError
+
+#: more worker processes than this only queue on the machine's cores (and its memory)
+MAX_WORKERS = 4 * (os.cpu_count() or 1)
 
 
 def register(sub) -> None:
@@ -54,6 +59,8 @@ def _open(cfg, args):
 def _cmd_run(args) -> int:
     from fuzzynav.tuning.run import run_study
 
+    check_count("--trials", args.trials)
+    check_count("--workers", args.workers, hi=MAX_WORKERS)
     cfg = _load(args)
     study = run_study(cfg, args.trials, args.workers, args.storage, args.cache)
     print(f"study {cfg.name}: {len(study.trials)} trials in {args.storage or cfg.storage_url}")

@@ -203,6 +203,16 @@ _FIELDS = {
 }
 
 
+#: largest magnitude of each datasheet figure: far beyond any real IMU (a 1-g accelerometer
+#: bias, a 100 000 deg/h gyro bias, a 10 % scale error), below anything that overflows
+_LIMITS = {"dph": 1e5, "dpsh": 1e3, "ug": 1e6, "ppm": 1e5, "misalign_deg": 10.0,
+           "tau_s": 1e7}
+
+
+def _limit(name: str) -> float:
+    return next(v for k, v in _LIMITS.items() if k in name.split("_", 1)[1])
+
+
 @dataclass(frozen=True)
 class ImuSpec:
     """IMU specification in datasheet units (the ``[imu]`` table of a scenario).
@@ -328,13 +338,13 @@ class ImuSpec:
         for f in fields(cls):
             if f.name == "rate_hz":
                 continue
-            kind = _FIELDS[f.name][3]
+            kind, hi = _FIELDS[f.name][3], _limit(f.name)
             if kind == "vec":
-                kw[f.name] = t.vector(f.name, 3, f.default)
+                kw[f.name] = t.vector(f.name, 3, f.default, lo=-hi, hi=hi)
             elif kind == "mat":
-                kw[f.name] = t.matrix(f.name, 3, f.default)
+                kw[f.name] = t.matrix(f.name, 3, f.default, lo=-hi, hi=hi)
             else:
-                kw[f.name] = t.number(f.name, f.default, lo=0.0, lo_open=kind == "pos")
+                kw[f.name] = t.number(f.name, f.default, lo=0.0, hi=hi, lo_open=kind == "pos")
         t.finish()
         try:
             return cls(**kw)

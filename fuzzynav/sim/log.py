@@ -5,8 +5,10 @@ component's name (``SeedSequence(seed, spawn_key=(crc32(name),))``), so adding, 
 or reordering a sensor leaves the IMU noise and the other sensors' noise unchanged.
 
 Cache: one ``.npz`` per (scenario, seed), named ``<scenario>-<seed>-<key>.npz`` with
-``key`` the SHA-256 of the scenario's canonical form, the seed and :data:`DATA_VERSION`.
-Files are written atomically (temporary file + ``os.replace``) and read with
+``key`` the SHA-256 of the scenario's canonical form, the seed and :data:`DATA_VERSION`
+(the scenario part cut to 64 characters).  Files are written atomically (temporary file +
+``os.replace``; a full disk or a read-only directory is one
+:class:`fuzzynav.errors.OutputError`, with the old file intact) and read with
 ``allow_pickle=False``; a file that is unreadable, incomplete or made for another key is
 regenerated, never trusted.
 """
@@ -21,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fuzzynav.fileio import publish
+from fuzzynav.fileio import output_errors, publish, safe_stem
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.sim.scenario import Scenario
 from fuzzynav.sim.sensors import SensorData
@@ -134,22 +136,24 @@ def _read_cache(path: Path, key: str, scenario: Scenario, seed: int):
 
 
 def _write_cache(path: Path, arrays: dict):
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, **arrays)
-        publish(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    """Write atomically; a full disk or a read-only place is one :class:`OutputError`."""
+    with output_errors(path, "simulation cache file (see --cache / $FUZZYNAV_CACHE)"):
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
+        try:
+            with os.fdopen(fd, "wb") as f:
+                np.savez(f, **arrays)
+            publish(tmp, path)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
 
 
 def cache_path(cache_dir, scenario: Scenario, seed: int) -> Path:
     """Where the cache file of ``(scenario, seed)`` lives in ``cache_dir``."""
     key = cache_key(scenario, seed)
-    safe = "".join(c if c.isalnum() or c in "-_" else "_" for c in scenario.name)
-    return Path(cache_dir) / f"{safe}-{int(seed)}-{key[:16]}.npz"
+    # the name only helps a human find the file (the key identifies it): cut long names
+    return Path(cache_dir) / f"{safe_stem(scenario.name)}-{int(seed)}-{key[:16]}.npz"
 
 
 def simulate(scenario: Scenario, seed: int, cache_dir=None) -> SensorLog:

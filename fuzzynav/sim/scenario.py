@@ -17,7 +17,6 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import re
-import tomllib
 import types
 from dataclasses import asdict, dataclass
 from importlib import resources
@@ -27,11 +26,17 @@ import numpy as np
 
 from fuzzynav.errors import DataMissingError, InputFileError, UnknownNameError
 from fuzzynav.sim.imu import ImuSpec
+from fuzzynav.sim.scenario_checks import check_scenario
 from fuzzynav.sim.segments import SEGMENT_KINDS, Profile, Segment
 from fuzzynav.sim.sensors import spec_class
-from fuzzynav.sim.tomltable import Table, with_path
+from fuzzynav.sim.tomltable import Table, parse_toml, read_toml, with_path
 
 _SENSOR_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]{0,39}$")
+#: a scenario name is printed in one-line messages and tables and becomes part of file
+#: names: printable, without path separators, and short
+_SCENARIO_NAME = re.compile(r"^[^\x00-\x1f\x7f/\\]{1,100}$")
+#: bounds of a turn: a hundred full circles per segment, a gyro's usual 1000 deg/s range
+_MAX_TURN_DEG, _MAX_RATE_DPS = 36000.0, 1000.0
 #: default start time: the 2024 March equinox, 04:00 UTC (about noon in China)
 DEFAULT_UTC = _dt.datetime(2024, 3, 20, 4, 0, tzinfo=_dt.timezone.utc)
 
@@ -120,8 +125,9 @@ def _segment(t: Table) -> Segment:
     kw = dict(kind=kind,
               duration_s=t.number("duration_s", lo=0.0, lo_open=True),
               speed_change_mps=t.number("speed_change_mps", 0.0),
-              turn_deg=t.number("turn_deg", 0.0),
-              turn_rate_dps=t.number("turn_rate_dps", None),
+              turn_deg=t.number("turn_deg", 0.0, lo=-_MAX_TURN_DEG, hi=_MAX_TURN_DEG),
+              turn_rate_dps=t.number("turn_rate_dps", None, lo=-_MAX_RATE_DPS,
+                                     hi=_MAX_RATE_DPS),
               radius_m=t.number("radius_m", None, lo=0.0, lo_open=True),
               pitch_deg=t.number("pitch_deg", 0.0, lo=-80.0, hi=80.0, lo_open=True,
                                  hi_open=True),
@@ -150,6 +156,10 @@ def scenario_from_dict(d: dict, default_name: str = "scenario") -> Scenario:
     """Build a :class:`Scenario` from a parsed TOML document (errors carry no file)."""
     top = Table(d)
     name = top.string("name", default_name)
+    if top.has("name") and not _SCENARIO_NAME.match(name):
+        raise top.error("name", "must be 1 to 100 printable characters without '/' or '\\' "
+                                f"(it names cache and figure files), got {name[:40]!r}"
+                                + ("..." if len(name) > 40 else ""))
     description = top.string("description", "")
     st = top.table("start")
     start = dict(start_lat_deg=st.number("lat_deg", lo=-90.0, hi=90.0),
@@ -170,6 +180,8 @@ def scenario_from_dict(d: dict, default_name: str = "scenario") -> Scenario:
         for key in list(sens.data):
             sensors[key] = _sensor(sens.table(key), key)
     top.finish()
+    # sizes and cross-field meaning before anything is allocated (Profile builds the pieces)
+    check_scenario(segments, imu, sensors, start)
     # the motion is checked now (a static segment while moving, a turn at rest, ...), so
     # that a bad file fails at load time and not in the middle of a study
     Profile(segments, start["initial_speed_mps"], np.deg2rad(start["initial_heading_deg"]))
@@ -201,35 +213,49 @@ def _merge(base: dict, over: dict) -> dict:
     return out
 
 
-def _load(name_or_path, depth=0) -> Scenario:
+def _base_path(base: str, here: Path) -> Path:
+    """A ``base =`` file: inside the scenario's own directory (or below), never elsewhere."""
+    path = (here / base).resolve()
+    if not path.is_relative_to(here.resolve()):
+        raise InputFileError(None, "base", f"{base!r} points outside the scenario's own "
+                                           "directory; use a built-in name or a file next "
+                                           "to this one")
+    return path
+
+
+def _read(name_or_path):
+    """Parsed document, stem, label and directory of a scenario file or built-in name."""
     if _looks_like_path(name_or_path):
         path = Path(name_or_path)
-        if not path.is_file():
-            raise DataMissingError(f"{path}: scenario file not found")
-        text, stem, label, here = path.read_bytes(), path.stem, str(path), path.parent
-    else:
-        name = str(name_or_path)
-        if name not in list_scenarios():
-            raise UnknownNameError("scenario", name, list_scenarios())
-        res = _builtin_dir() / f"{name}.toml"
-        text, stem, label, here = res.read_bytes(), name, f"<built-in {name}.toml>", None
+        return read_toml(path, "scenario file"), path.stem, str(path), path.parent
+    name = str(name_or_path)
+    if name not in list_scenarios():
+        raise UnknownNameError("scenario", name[:100], list_scenarios())
+    label = f"<built-in {name}.toml>"
     with with_path(label):
-        try:
-            doc = tomllib.loads(text.decode("utf-8"))
-        except UnicodeDecodeError as exc:
-            raise InputFileError(None, "", f"not UTF-8 text ({exc.reason})") from None
-        except tomllib.TOMLDecodeError as exc:
-            raise InputFileError(None, "", f"invalid TOML: {exc}") from None
+        doc = parse_toml((_builtin_dir() / f"{name}.toml").read_bytes())
+    return doc, name, label, None
+
+
+def _load(name_or_path, depth=0) -> Scenario:
+    doc, stem, label, here = _read(name_or_path)
+    with with_path(label):
         if "base" in doc:
             base = doc.pop("base")
             if not isinstance(base, str):
                 raise InputFileError(None, "base", "must be a scenario name or a file path")
             if depth >= 8:
                 raise InputFileError(None, "base", "scenarios derive from each other in a loop")
-            if here is not None and _looks_like_path(base):
-                base = here / base
+            if _looks_like_path(base):
+                if here is None:
+                    raise InputFileError(None, "base", "a built-in derives from built-ins only")
+                base = _base_path(base, here)
             doc.setdefault("name", stem)
-            doc = _merge(_load(base, depth + 1).to_dict(), doc)
+            try:
+                parent = _load(base, depth + 1)
+            except (UnknownNameError, DataMissingError) as exc:  # name this file and key
+                raise InputFileError(None, "base", str(exc)) from None
+            doc = _merge(parent.to_dict(), doc)
         return scenario_from_dict(doc, default_name=stem)
 
 
@@ -247,6 +273,9 @@ def load_scenario(name_or_path) -> Scenario:
     DataMissingError
         The file does not exist.
     InputFileError
-        The file is not valid TOML or not a valid scenario (file, key path, problem).
+        The file is not valid TOML or not a valid scenario (file, key path, problem): a
+        directory, over 1 MiB, nested too deep, a ``base`` outside the file's directory,
+        a run too large for memory (:mod:`fuzzynav.sim.budget`) or values that would mean
+        nothing (:mod:`fuzzynav.sim.scenario_checks`).
     """
     return _load(name_or_path)

@@ -10,12 +10,21 @@ whose ``where`` is the dotted TOML key path (``sensors.gps.rate_hz``,
 from __future__ import annotations
 
 import datetime as _dt
+import difflib
 import math
+import os
+import stat
+import tomllib
 from contextlib import contextmanager
+from pathlib import Path
 
-from fuzzynav.errors import InputFileError
+from fuzzynav.errors import DataMissingError, InputFileError
 
 _REQUIRED = object()
+#: scenario and study files are hand-written: a few kB; anything far larger is a mistake
+MAX_TOML_BYTES = 1024 * 1024
+#: deepest nesting of tables and arrays a scenario or study file needs is about 4
+MAX_TOML_DEPTH = 16
 
 
 def _type_name(value) -> str:
@@ -165,7 +174,7 @@ class Table:
             out.append(float(v))
         return tuple(out)
 
-    def matrix(self, key, n, default=_REQUIRED):
+    def matrix(self, key, n, default=_REQUIRED, *, lo=None, hi=None):
         """An ``n`` x ``n`` matrix given as an array of ``n`` rows."""
         value, given = self._get(key, default)
         if not given:
@@ -173,7 +182,8 @@ class Table:
         if not isinstance(value, list) or len(value) != n:
             raise self.error(key, f"must be an array of {n} rows of {n} numbers")
         rows = Table({f"{key}[{i}]": r for i, r in enumerate(value)}, self.where)
-        return tuple(rows.vector(f"{key}[{i}]", n, broadcast=False) for i in range(n))
+        return tuple(rows.vector(f"{key}[{i}]", n, broadcast=False, lo=lo, hi=hi)
+                     for i in range(n))
 
     def windows(self, key, width, default=()):
         """An array of ``[start_s, end_s, ...]`` rows of ``width`` numbers, start < end."""
@@ -214,7 +224,9 @@ class Table:
         unknown = [k for k in self.data if k not in self._used]
         if unknown:
             known = ", ".join(sorted(self._used)) or "none"
-            raise self.error(unknown[0], f"unknown key; known keys here: {known}")
+            close = difflib.get_close_matches(str(unknown[0]), sorted(self._used), n=1)
+            hint = f"did you mean {close[0]!r}? " if close else ""
+            raise self.error(unknown[0], f"unknown key; {hint}known keys here: {known}")
 
 
 @contextmanager
@@ -226,3 +238,85 @@ def with_path(path):
         if exc.path is None and path is not None:
             raise InputFileError(path, exc.where, exc.what) from None
         raise
+
+
+def _depth_check(doc) -> None:
+    """Refuse nesting deeper than :data:`MAX_TOML_DEPTH` (walked without recursion)."""
+    stack = [(doc, "", 0)]
+    while stack:
+        node, where, depth = stack.pop()
+        if depth > MAX_TOML_DEPTH:
+            raise InputFileError(None, where, f"nesting deeper than {MAX_TOML_DEPTH} levels")
+        items = node.items() if isinstance(node, dict) else \
+            enumerate(node) if isinstance(node, list) else ()
+        for k, v in items:
+            if isinstance(v, (dict, list)):
+                key = f"{where}[{k}]" if isinstance(node, list) else \
+                    (f"{where}.{k}" if where else str(k))
+                stack.append((v, key, depth + 1))
+
+
+def _read_bytes(path: Path, what: str) -> bytes:
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        raise DataMissingError(f"{path}: {what} not found") from None
+    except OSError as exc:  # ENAMETOOLONG, ENOTDIR, ELOOP, EACCES ...
+        raise InputFileError(path, "", f"cannot read the {what}: {exc.strerror}") from None
+    if stat.S_ISDIR(st.st_mode):
+        raise InputFileError(path, "", f"is a directory, not a {what}")
+    if not stat.S_ISREG(st.st_mode):  # a FIFO or a device would block or never end
+        raise InputFileError(path, "", f"is not a regular file (a {what} is a TOML file)")
+    if st.st_size > MAX_TOML_BYTES:
+        raise InputFileError(path, "", f"file is {st.st_size} bytes; a {what} may be at "
+                                       f"most {MAX_TOML_BYTES} bytes")
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read(MAX_TOML_BYTES + 1)
+    except OSError as exc:
+        raise InputFileError(path, "", f"cannot read the {what}: {exc.strerror}") from None
+    if len(data) > MAX_TOML_BYTES:  # /proc files report size 0
+        raise InputFileError(path, "", f"a {what} may be at most {MAX_TOML_BYTES} bytes")
+    return data
+
+
+def parse_toml(data: bytes) -> dict:
+    """Parse TOML bytes; every problem is an :class:`InputFileError` without a file."""
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise InputFileError(None, "", f"not UTF-8 text ({exc.reason} at byte {exc.start})") \
+            from None
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputFileError(None, "", f"invalid TOML: {exc}") from None
+    except RecursionError:
+        raise InputFileError(None, "", f"invalid TOML: nesting deeper than {MAX_TOML_DEPTH} "
+                                       f"levels") from None
+    _depth_check(doc)
+    if not doc:
+        raise InputFileError(None, "", "the file is empty (no keys)")
+    return doc
+
+
+def read_toml(path, what: str) -> dict:
+    """Read and parse a TOML file of at most :data:`MAX_TOML_BYTES` bytes.
+
+    Parameters
+    ----------
+    path : path-like
+    what : str
+        What the file is, for messages ("scenario file", "study file").
+
+    Raises
+    ------
+    DataMissingError
+        The file does not exist.
+    InputFileError
+        A directory or a special file, too large, not UTF-8, not TOML, nested deeper
+        than :data:`MAX_TOML_DEPTH`, or empty (naming the file).
+    """
+    path = Path(path)
+    with with_path(str(path)):
+        return parse_toml(_read_bytes(path, what))

@@ -21,17 +21,11 @@ from __future__ import annotations
 
 import importlib.util
 import re
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from fuzzynav.errors import DataMissingError, FuzzynavError, InputFileError
-from fuzzynav.sim.tomltable import Table, with_path
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
+from fuzzynav.errors import FuzzynavError, InputFileError
+from fuzzynav.sim.tomltable import Table, read_toml, with_path
 
 SAMPLERS = ("tpe", "random", "qmc", "cmaes", "nsga2", "pso")
 PRUNERS = ("none", "median", "wilcoxon")
@@ -42,6 +36,10 @@ GROUP_METRICS = {"pos": "rms_pos_m", "vel": "rms_vel_mps", "att": "rms_att_deg"}
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,99}$")
 #: the DoM/ROR window of an adapter binding, in epochs (fuzzy_common.check_binding)
 _WINDOW = (1, 10000)
+#: a tuned output scales a covariance or R: a positive factor, at most this
+MAX_OUTPUT_FACTOR = 1e3
+#: files a study may name are the user's own: never system places
+_SYSTEM_DIRS = (Path("/etc"), Path("/proc"), Path("/sys"), Path("/dev"), Path("/boot"))
 
 
 @dataclass(frozen=True)
@@ -110,17 +108,30 @@ def _looks_like_path(name: str) -> bool:
     return name.endswith(".toml") or "/" in name or "\\" in name
 
 
-def _scenario(t: Table, i: int, name: str, here: Path) -> str:
-    """A scenario name, or a file path resolved against the config's directory; checked."""
+def _user_file(t: Table, key: str, path: Path, suffixes: tuple, what: str) -> Path:
+    """Refuse a path that is not a ``suffixes`` file or that lies in a system directory."""
+    real = path.resolve()
+    if path.suffix.lower() not in suffixes:
+        raise t.error(key, f"must be a {what} ({' or '.join(suffixes)}), got {str(path)!r}")
+    if any(real.is_relative_to(d) for d in _SYSTEM_DIRS):
+        raise t.error(key, f"{str(path)!r} is a system file, not a {what}")
+    return path
+
+
+def _scenario(t: Table, i: int, name: str, here: Path) -> tuple:
+    """A scenario name, or a file path resolved against the config's directory; checked.
+
+    Returns the name (or path) and the run's duration [s].
+    """
     from fuzzynav.sim.scenario import load_scenario
 
-    if _looks_like_path(name) and not Path(name).is_absolute():
-        name = str(here / name)
+    if _looks_like_path(name):
+        path = Path(name) if Path(name).is_absolute() else here / name
+        name = str(_user_file(t, f"scenarios[{i}]", path, (".toml",), "scenario file"))
     try:
-        load_scenario(name)
+        return name, load_scenario(name).duration_s
     except FuzzynavError as exc:
         raise t.error(f"scenarios[{i}]", str(exc)) from None
-    return name
 
 
 def _runs(t: Table, here: Path) -> tuple:
@@ -133,8 +144,9 @@ def _runs(t: Table, here: Path) -> tuple:
     if not isinstance(seeds, list) or not seeds or \
             not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in seeds):
         raise t.error("seeds", "must be a non-empty array of non-negative integers")
-    scenarios = [_scenario(t, i, sc, here) for i, sc in enumerate(scenarios)]
-    return tuple((sc, int(sd)) for sc in scenarios for sd in seeds)
+    loaded = [_scenario(t, i, sc, here) for i, sc in enumerate(scenarios)]
+    return tuple((sc, int(sd)) for sc, _ in loaded for sd in seeds), \
+        min(d for _, d in loaded)
 
 
 def _filter_name(t: Table, key: str, name) -> str:
@@ -167,6 +179,15 @@ def _pair(t: Table, key):
     return (lo, hi)
 
 
+def _factor_pair(t: Table, key):
+    """Bounds of a tuned output end: positive factors up to :data:`MAX_OUTPUT_FACTOR`."""
+    pair = _pair(t, key)
+    if pair is not None and not (pair[0] > 0.0 and pair[1] <= MAX_OUTPUT_FACTOR):
+        raise t.error(key, f"must lie in (0, {MAX_OUTPUT_FACTOR:g}] (the output is a factor "
+                           f"on a covariance), got {list(pair)}")
+    return pair
+
+
 def _window(t: Table):
     pair = _pair(t, "window")
     if pair is None:
@@ -183,6 +204,9 @@ def _controller(t: Table, here: Path) -> ControllerConfig:
     tmpl = Path(t.string("template"))
     if not tmpl.is_absolute():
         tmpl = here / tmpl
+    _user_file(t, "template", tmpl, (".json", ".fis"), "rule file")
+    if tmpl.is_dir():
+        raise t.error("template", f"{tmpl} is a directory, not a rule file")
     if not tmpl.is_file():
         raise t.error("template", f"rule file not found: {tmpl}")
     parts = {}
@@ -202,8 +226,8 @@ def _controller(t: Table, here: Path) -> ControllerConfig:
                          free_triangles=t.boolean("free_triangles", False),
                          rule_weights=t.boolean("rule_weights", False),
                          window=_window(t),
-                         output_range=_pair(t, "output_range"),
-                         output_low=_pair(t, "output_low"))
+                         output_range=_factor_pair(t, "output_range"),
+                         output_low=_factor_pair(t, "output_low"))
     t.finish()
     if c.output_low and c.output_range and not c.output_low[1] < c.output_range[0]:
         raise t.error("output_low", "must lie below output_range (the output's low end "
@@ -219,18 +243,24 @@ def _controller(t: Table, here: Path) -> ControllerConfig:
     return c
 
 
+def _check_held_out(tt: Table, train: tuple, test: tuple) -> None:
+    """Refuse a test run that is also a training run (its score would not be held out)."""
+    def key(run):
+        name, seed = run
+        return (str(Path(name).resolve()) if _looks_like_path(name) else name, seed)
+
+    seen = {key(r) for r in train}
+    for run in test:
+        if key(run) in seen:
+            raise tt.error("seeds", f"run ({run[0]}, seed {run[1]}) is also a training run; "
+                                    "test runs must be held out (other seeds or scenarios)")
+
+
 def load_study_config(path) -> StudyConfig:
-    """Read and check a study file."""
+    """Read and check a study file (errors name the file and the key)."""
     path = Path(path)
-    if not path.is_file():
-        raise DataMissingError(f"{path}: study file not found")
+    doc = read_toml(path, "study file")
     with with_path(str(path)):
-        try:
-            doc = tomllib.loads(path.read_text(encoding="utf-8"))
-        except UnicodeDecodeError as exc:
-            raise InputFileError(None, "", f"not UTF-8 text ({exc.reason})") from None
-        except tomllib.TOMLDecodeError as exc:
-            raise InputFileError(None, "", f"invalid TOML: {exc}") from None
         return study_config_from_dict(doc, path)
 
 
@@ -247,8 +277,8 @@ def study_config_from_dict(doc: dict, path: Path | None = None) -> StudyConfig:
     pso_t = st.table("pso", required=False)
     pso = PsoConfig()
     if pso_t is not None:
-        pso = PsoConfig(particles=pso_t.integer("particles", 16, lo=2),
-                        iterations=pso_t.integer("iterations", 20, lo=1),
+        pso = PsoConfig(particles=pso_t.integer("particles", 16, lo=2, hi=1000),
+                        iterations=pso_t.integer("iterations", 20, lo=1, hi=100_000),
                         inertia=pso_t.vector("inertia", 2, (0.9, 0.4), lo=0.0, hi=1.0,
                                              broadcast=False),
                         c1=pso_t.number("c1", 1.5, lo=0.0), c2=pso_t.number("c2", 1.5, lo=0.0))
@@ -275,12 +305,17 @@ def study_config_from_dict(doc: dict, path: Path | None = None) -> StudyConfig:
     t_start = ob.number("t_start_s", 0.0, lo=0.0)
     ob.finish()
     tr = top.table("train")
-    train = _runs(tr, here)
+    train, shortest = _runs(tr, here)
     tr.finish()
     tt = top.table("test")
-    test = _runs(tt, here)
+    test, shortest_test = _runs(tt, here)
     compare = _compare(tt)
     tt.finish()
+    _check_held_out(tt, train, test)
+    if t_start >= min(shortest, shortest_test):
+        raise ob.error("t_start_s", f"{t_start:g} s is at or after the end of the shortest "
+                                    f"run ({min(shortest, shortest_test):g} s): nothing "
+                                    "would be scored")
     ctrls = tuple(_controller(c, here) for c in top.tables("controllers"))
     if not ctrls:
         raise top.error("controllers", "a study needs at least one [[controllers]] table")

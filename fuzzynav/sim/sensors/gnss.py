@@ -35,6 +35,11 @@ from fuzzynav.sim.sensors import SensorData, epoch_indices, register
 from fuzzynav.sim.tomltable import Table
 
 _ZERO3 = (0.0, 0.0, 0.0)
+#: largest sensible figures: anything beyond describes no receiver and overflows squares
+_MAX_POS_M = 1e5          # a 100-km error is no longer a fix
+_MAX_VEL_MPS = 1e3
+_MAX_SCALE = 1e4
+_MAX_LEVER_M = 1e3        # larger than any vehicle
 _VECTOR_FIELDS = ("pos_sigma_m", "vel_sigma_mps", "gm_pos_sigma_m", "gm_vel_sigma_mps",
                   "claimed_pos_sigma_m", "claimed_vel_sigma_mps", "lever_arm_b_m")
 
@@ -102,13 +107,13 @@ class NoiseWindow:
 
     @classmethod
     def from_table(cls, t: Table) -> "NoiseWindow":
-        start = t.number("start_s")
+        start = t.number("start_s", lo=0.0)
         end = t.number("end_s")
         if not start < end:
             raise t.error("end_s", f"must be after start_s ({start!r}), got {end!r}")
-        w = cls(start, end, t.number("scale", 1.0, lo=0.0),
-                t.number("coloured_pos_m", 0.0, lo=0.0),
-                t.number("coloured_vel_mps", 0.0, lo=0.0),
+        w = cls(start, end, t.number("scale", 1.0, lo=0.0, hi=_MAX_SCALE),
+                t.number("coloured_pos_m", 0.0, lo=0.0, hi=_MAX_POS_M),
+                t.number("coloured_vel_mps", 0.0, lo=0.0, hi=_MAX_VEL_MPS),
                 t.number("coloured_tau_s", 30.0, lo=0.0, lo_open=True))
         t.finish()
         return w
@@ -184,6 +189,17 @@ class Spec:
         object.__setattr__(self, "noise_windows", tuple(self.noise_windows))
         if not self.rate_hz > 0.0:
             raise InputFileError(None, "rate_hz", f"must be positive, got {self.rate_hz!r}")
+
+    def columns(self) -> int:
+        """Measurement columns per epoch (memory budget)."""
+        return 6
+
+    def spell_count(self, t_end_s: float) -> tuple:
+        """``(key, number of periodic outages)`` over a run of ``t_end_s`` (memory budget)."""
+        if self.outage_period_s <= 0.0:
+            return "outage_period_s", 0
+        first = self.outage_period_s if self.outage_first_s is None else self.outage_first_s
+        return "outage_period_s", max(0.0, (t_end_s - first) / self.outage_period_s)
 
     # -- claimed noise ------------------------------------------------------------------
     def claimed_sigma(self) -> np.ndarray:
@@ -307,14 +323,16 @@ class Spec:
               "outlier_rate": t.number("outlier_rate", 0.0, lo=0.0, hi=1.0),
               "outages": t.windows("outages", 2),
               "outage_first_s": t.number("outage_first_s", None, lo=0.0)}
-        for name in ("pos_sigma_m", "vel_sigma_mps", "gm_pos_sigma_m", "gm_vel_sigma_mps"):
-            kw[name] = t.vector(name, 3, f[name].default, lo=0.0)
-        for name in ("claimed_pos_sigma_m", "claimed_vel_sigma_mps"):
-            kw[name] = t.vector(name, 3, None, lo=0.0)
-        for name in ("outlier_pos_m", "outlier_vel_mps", "outage_period_s",
-                     "outage_duration_s"):
+        for name in ("pos_sigma_m", "vel_sigma_mps", "gm_pos_sigma_m", "gm_vel_sigma_mps",
+                     "claimed_pos_sigma_m", "claimed_vel_sigma_mps"):
+            kw[name] = t.vector(name, 3, f[name].default, lo=0.0,
+                                hi=_MAX_POS_M if "pos" in name else _MAX_VEL_MPS)
+        kw["outlier_pos_m"] = t.number("outlier_pos_m", 0.0, lo=0.0, hi=_MAX_POS_M)
+        kw["outlier_vel_mps"] = t.number("outlier_vel_mps", 0.0, lo=0.0, hi=_MAX_VEL_MPS)
+        for name in ("outage_period_s", "outage_duration_s"):
             kw[name] = t.number(name, 0.0, lo=0.0)
-        kw["lever_arm_b_m"] = t.vector("lever_arm_b_m", 3, _ZERO3)
+        kw["lever_arm_b_m"] = t.vector("lever_arm_b_m", 3, _ZERO3, lo=-_MAX_LEVER_M,
+                                       hi=_MAX_LEVER_M)
         kw["noise_windows"] = tuple(NoiseWindow.from_table(w)
                                     for w in t.tables("noise_windows", required=False))
         if (kw["outage_period_s"] > 0.0) != (kw["outage_duration_s"] > 0.0):
@@ -323,7 +341,15 @@ class Spec:
         if kw["outage_duration_s"] >= kw["outage_period_s"] > 0.0:
             raise t.error("outage_duration_s", "must be shorter than outage_period_s")
         t.finish()
-        return cls(**kw)
+        spec = cls(**kw)
+        claimed = spec.claimed_sigma()
+        for key, part in (("claimed_pos_sigma_m", claimed[:3]),
+                          ("claimed_vel_sigma_mps", claimed[3:] if spec.velocity else 1.0)):
+            # a zero claimed sigma tells the filter R = 0: every fix is taken as exact
+            if not np.all(part > 0.0):
+                raise t.error(key, f"the claimed 1-sigma is zero on some axis (give {key} "
+                                   "> 0, or a non-zero noise)")
+        return spec
 
     def to_dict(self) -> dict:
         """The sensor table (TOML-ready, ``None`` fields left out, ``kind`` included)."""

@@ -127,6 +127,17 @@ class Spec:
             raise InputFileError(None, "ring_views", "an imaging sensor needs at least two "
                                                      "views (ring_views + zenith_view)")
 
+    def columns(self) -> int:
+        """Measurement columns per epoch: one AoP per view and the sun vector (budget)."""
+        return self.views_c().shape[0] + 3
+
+    def spell_count(self, t_end_s: float) -> tuple:
+        """``(key, expected number of cloud spells)`` over ``t_end_s`` (memory budget)."""
+        mean_cycle = self.cloud_mean_clear_s + self.cloud_mean_cloudy_s
+        if self.cloud_mean_clear_s <= 0.0 or self.cloud_mean_cloudy_s <= 0.0:
+            return "cloud_mean_clear_s", 0
+        return "cloud_mean_clear_s", 2.0 * t_end_s / mean_cycle
+
     # -- geometry -----------------------------------------------------------------------
     def views_c(self) -> np.ndarray:
         """Unit view directions in the sensor frame (= nominal body frame), shape (k, 3)."""
@@ -251,7 +262,7 @@ class Spec:
                                             lo_open=True),
               "student_t_dof": t.number("student_t_dof", 0.0, lo=0.0),
               "outlier_rate": t.number("outlier_rate", 0.0, lo=0.0, hi=1.0),
-              "outlier_scale": t.number("outlier_scale", 10.0, lo=0.0),
+              "outlier_scale": t.number("outlier_scale", 10.0, lo=0.0, hi=1e3),
               "dop_max": t.number("dop_max", skylight.DOP_MAX_CLEAR, lo=0.0, hi=1.0,
                                   lo_open=True),
               "dop_min": t.number("dop_min", 0.1, lo=0.0, hi=1.0),

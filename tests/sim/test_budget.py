@@ -1,0 +1,115 @@
+"""Memory budget, ``base =`` confinement and file-reading limits of scenario files."""
+import os
+import tracemalloc
+
+import pytest
+
+from fuzzynav.errors import InputFileError
+from fuzzynav.fileio import safe_stem
+from fuzzynav.sim import budget
+from fuzzynav.sim.log import simulate
+from fuzzynav.sim.scenario import load_scenario
+from fuzzynav.sim.tomltable import MAX_TOML_BYTES
+
+RUN = """
+name = "r"
+[start]
+lat_deg = 30.0
+lon_deg = 110.0
+speed_mps = 10.0
+[imu]
+rate_hz = {rate}
+[[segments]]
+kind = "cruise"
+duration_s = {duration}
+[sensors.gps]
+kind = "gnss"
+"""
+
+
+def _write(path, text):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text)
+    return path
+
+
+def test_the_estimate_is_samples_times_bytes_and_names_the_limit(tmp_path, monkeypatch):
+    monkeypatch.setenv(budget.ENV_VAR, "0.5")
+    # 100 Hz x 20 000 s = 2e6 samples x 4096 B = 7.63 GiB, computed by hand
+    path = _write(tmp_path / "big.toml", RUN.format(rate=100, duration=20000))
+    with pytest.raises(InputFileError) as exc:
+        load_scenario(path)
+    assert exc.value.where == "imu.rate_hz"
+    assert "= 2e+06 samples needs ~7.63 GB" in exc.value.what
+    assert "the limit is 512 MB ($FUZZYNAV_MAX_MEMORY_GB)" in exc.value.what
+    monkeypatch.setenv(budget.ENV_VAR, "8")
+    assert load_scenario(path).duration_s == 20000.0
+
+
+@pytest.mark.parametrize("value", ["0", "-1", "lots", "inf"])
+def test_a_bad_memory_limit_variable_is_named(tmp_path, monkeypatch, value):
+    monkeypatch.setenv(budget.ENV_VAR, value)
+    with pytest.raises(InputFileError, match=budget.ENV_VAR):
+        load_scenario(_write(tmp_path / "s.toml", RUN.format(rate=50, duration=10)))
+
+
+def test_the_default_limit_is_half_the_physical_memory(monkeypatch):
+    monkeypatch.delenv(budget.ENV_VAR, raising=False)
+    limit, source = budget.memory_limit()
+    physical = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    assert limit == pytest.approx(0.5 * physical, rel=1e-12) and "half" in source
+
+
+def _traced_peak(path):
+    scn = load_scenario(path)
+    tracemalloc.start()
+    try:
+        simulate(scn, 0)
+        return tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+
+
+def test_the_per_sample_figure_bounds_a_real_simulation(tmp_path):
+    # the marginal memory of a simulated sample (peak growth between a 40-s and an 80-s
+    # run, after a warm-up that pays the one-off imports) stays under the budget's figure
+    paths = [_write(tmp_path / f"{d}.toml", RUN.format(rate=50, duration=d)) for d in (1, 40, 80)]
+    simulate(load_scenario(paths[0]), 0)
+    small, large = _traced_peak(paths[1]), _traced_peak(paths[2])
+    per_sample = (large - small) / (40 * 50)
+    assert 0 < per_sample < budget.BYTES_PER_IMU_SAMPLE
+
+
+def test_base_files_stay_inside_the_scenario_directory(tmp_path):
+    _write(tmp_path / "parts" / "parent.toml", RUN.format(rate=50, duration=10))
+    child = _write(tmp_path / "child.toml", 'base = "parts/parent.toml"\nname = "c"\n')
+    assert load_scenario(child).name == "c"
+    outside = _write(tmp_path / "outside.toml", RUN.format(rate=50, duration=10))
+    inner = _write(tmp_path / "inner" / "x.toml", 'base = "../outside.toml"\n')
+    with pytest.raises(InputFileError, match="outside the scenario's own directory") as exc:
+        load_scenario(inner)
+    assert exc.value.where == "base" and exc.value.path == str(inner)
+    # a link inside the directory that points out of it is followed, then refused
+    (tmp_path / "inner" / "link.toml").symlink_to(outside)
+    _write(tmp_path / "inner" / "y.toml", 'base = "link.toml"\n')
+    with pytest.raises(InputFileError, match="outside"):
+        load_scenario(tmp_path / "inner" / "y.toml")
+
+
+def test_special_and_huge_files_are_refused_unread(tmp_path):
+    fifo = tmp_path / "pipe.toml"
+    os.mkfifo(fifo)  # opening it would block forever
+    with pytest.raises(InputFileError, match="not a regular file"):
+        load_scenario(fifo)
+    huge = tmp_path / "huge.toml"
+    with open(huge, "wb") as fh:
+        fh.truncate(MAX_TOML_BYTES + 1)  # sparse
+    with pytest.raises(InputFileError, match=f"at most {MAX_TOML_BYTES} bytes"):
+        load_scenario(huge)
+
+
+def test_safe_stem():
+    assert safe_stem("paper000-alt") == "paper000-alt"
+    assert safe_stem("../a b/c") == "_a_b_c"
+    long_a, long_b = safe_stem("x" * 300), safe_stem("x" * 299 + "y")
+    assert len(long_a) == 64 and long_a != long_b
