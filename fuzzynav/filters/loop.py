@@ -18,10 +18,12 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.filters import kalman
-from fuzzynav.filters.error_model import discretize, fill_F
+from fuzzynav.filters.error_model import block_end, discretize, fill_F
+from fuzzynav.filters.layout import COUPLE_ACCEL, COUPLE_GYRO, N_CORE, X_ATT, X_POS, X_VEL
 from fuzzynav.nav.earth import radii_nb
-from fuzzynav.nav.strapdown import (NAV_SIZE, PREV_SIZE, init_prev, mech_step, quat_mul,
-                                    quat_to_dcm_into, rv2q)
+from fuzzynav.nav.layout import NAV_H, NAV_LAT, NAV_LON, NAV_Q, NAV_SIZE, NAV_VEL, PREV_LLA, \
+    PREV_SIZE, PREV_VEL
+from fuzzynav.nav.strapdown import init_prev, mech_step, quat_mul, quat_to_dcm_into, rv2q, set_quat
 
 # event flags
 EV_PENDING, EV_ACCEPTED, EV_GATED, EV_EMPTY, EV_BAD_S, EV_BEFORE_START = 0, 1, 2, 3, 4, 5
@@ -32,24 +34,26 @@ ST_OK, ST_COVARIANCE = 0, 1
 @nb.njit(cache=True)
 def _feedback(nav, prev, xs, x):
     """Apply the error-state estimate to the navigation and sensor estimates (then x = 0)."""
-    a0, a1, a2, a3 = rv2q(x[0], x[1], x[2])
-    q0, q1, q2, q3 = quat_mul(a0, a1, a2, a3, nav[0], nav[1], nav[2], nav[3])
+    a0, a1, a2, a3 = rv2q(x[X_ATT], x[X_ATT + 1], x[X_ATT + 2])
+    q0, q1, q2, q3 = quat_mul(a0, a1, a2, a3, nav[NAV_Q], nav[NAV_Q + 1], nav[NAV_Q + 2],
+                              nav[NAV_Q + 3])
     qn = 1.0 / math.sqrt(q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
-    nav[0], nav[1], nav[2], nav[3] = q0 * qn, q1 * qn, q2 * qn, q3 * qn
-    rm, rn = radii_nb(nav[7])
-    dlat = x[7] / (rm + nav[9])
-    dlon = x[6] / ((rn + nav[9]) * math.cos(nav[7]))
+    set_quat(nav, q0 * qn, q1 * qn, q2 * qn, q3 * qn)
+    rm, rn = radii_nb(nav[NAV_LAT])
+    de, dn, du = x[X_POS], x[X_POS + 1], x[X_POS + 2]  # ENU metres
+    dlat = dn / (rm + nav[NAV_H])
+    dlon = de / ((rn + nav[NAV_H]) * math.cos(nav[NAV_LAT]))
     for i in range(3):
-        nav[4 + i] -= x[3 + i]
-        prev[6 + i] -= x[3 + i]  # keep the midpoint extrapolation free of the jump
-    nav[7] -= dlat
-    nav[8] -= dlon
-    nav[9] -= x[8]
-    prev[9] -= dlat
-    prev[10] -= dlon
-    prev[11] -= x[8]
+        nav[NAV_VEL + i] -= x[X_VEL + i]
+        prev[PREV_VEL + i] -= x[X_VEL + i]  # keep the midpoint extrapolation free of the jump
+    nav[NAV_LAT] -= dlat
+    nav[NAV_LON] -= dlon
+    nav[NAV_H] -= du
+    prev[PREV_LLA] -= dlat
+    prev[PREV_LLA + 1] -= dlon
+    prev[PREV_LLA + 2] -= du
     for j in range(xs.size):
-        xs[j] += x[9 + j]
+        xs[j] += x[N_CORE + j]
 
 
 @nb.njit(cache=True)
@@ -59,11 +63,11 @@ def _bias_totals(xs, blk_start, blk_kind, bg, ba):
         bg[i] = 0.0
         ba[i] = 0.0
     for b in range(blk_start.size):
-        s0 = blk_start[b] - 9
+        s0 = blk_start[b] - N_CORE
         for i in range(3):
-            if blk_kind[b] == 0:
+            if blk_kind[b] == COUPLE_GYRO:
                 bg[i] += xs[s0 + i]
-            else:
+            elif blk_kind[b] == COUPLE_ACCEL:
                 ba[i] += xs[s0 + i]
 
 
@@ -255,5 +259,5 @@ def _propagate(P, Qacc, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd, work, qd,
     for b in range(blk_start.size):
         if blk_inv_tau[b] > 0.0:
             d = math.exp(-tau * blk_inv_tau[b])
-            for i in range(3):
-                xs[blk_start[b] - 9 + i] *= d
+            for i in range(blk_start[b], block_end(blk_start, b, n)):
+                xs[i - N_CORE] *= d
