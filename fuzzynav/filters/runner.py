@@ -11,7 +11,7 @@ from fuzzynav.filters import adaptation, measurements
 from fuzzynav.filters.adaptation import N_DIAG, NoAdaptation
 from fuzzynav.filters.config import FilterConfig
 from fuzzynav.filters.layout import N_CORE
-from fuzzynav.filters.loop import ST_OK, run_loop
+from fuzzynav.filters import loop
 from fuzzynav.filters.result import EventLog, FilterResult
 from fuzzynav.nav import strapdown
 from fuzzynav.nav.layout import LLA_SLICE, NAV_SIZE, Q_SLICE, VEL_SLICE
@@ -130,13 +130,14 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
               flag=np.zeros(E, np.int64), diag=np.full((E, N_DIAG), np.nan))
     nav0 = strapdown.make_nav(init.lla, init.vel_n, init.q_bn)
     adapt_fns, _ = adaptation.kernel_table()
-    status, done = run_loop(
-        dth, dv, time_s, nav0, np.zeros(n - N_CORE), config.P0(), config.q_diag(), blk_start,
-        blk_kind, blk_inv_tau, tb["ev_t"], tb["ev_s"], tb["ev_data"], tb["meas_fns"],
-        tb["s_meas"], tb["s_mpar"], adapt_fns, tb["s_adapt"], tb["afp"], tb["afp_off"],
-        tb["aip"], tb["aip_off"], tb["ast"], tb["ast_off"], tb["gate"],
-        float(config.max_prop_dt_s), stride, out["t"], out["nav"], out["xs"], out["sig"],
-        ev["r"], ev["S"], ev["nis"], ev["flag"], ev["diag"])
+    status, done = loop.run_loop(
+        loop.Imu(dth, dv, time_s), loop.Start(nav0, np.zeros(n - N_CORE), config.P0()),
+        loop.Model(config.q_diag(), blk_start, blk_kind, blk_inv_tau),
+        loop.Events(tb["ev_t"], tb["ev_s"], tb["ev_data"]),
+        loop.Sensors(tb["s_meas"], tb["s_mpar"], tb["s_adapt"], tb["afp"], tb["afp_off"],
+                     tb["aip"], tb["aip_off"], tb["ast"], tb["ast_off"], tb["gate"]),
+        tb["meas_fns"], adapt_fns, loop.Settings(float(config.max_prop_dt_s), int(stride)),
+        loop.Outputs(**out), loop.EventOutputs(**ev))
     return _bundle(out, ev, tb, config, status, done, time_s)
 
 
@@ -150,7 +151,7 @@ def _bundle(out, ev, tb, config, status, done, time_s) -> FilterResult:
                               diag=ev["diag"][sel][:, :len(bd.diag_names)],
                               diag_names=bd.diag_names, channels=mdl.channels)
     nav = out["nav"][keep]
-    msg = "ok" if status == ST_OK else (
+    msg = "ok" if status == loop.ST_OK else (
         f"stopped at t = {time_s[done]:.2f} s: covariance lost positive definiteness")
     layout = config.model.layout
     return FilterResult(time_s=out["t"][keep], lla=nav[:, LLA_SLICE], vel_n=nav[:, VEL_SLICE],
