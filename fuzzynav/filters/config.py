@@ -89,12 +89,19 @@ class FilterConfig:
                                                  ("accel_bias", as_, arw, units.UG, units.UG)):
             for nm, sig, rw in zip(lay.of_kind(kind), sigmas, rws):
                 out[nm] = ([sig * unit] * 3, [_block_q(sig * unit, rw * rw_unit, taus[nm])] * 3)
-        extra = _per_block(self.extra_noise_si, len(self.model.extra), "extra_noise_si") \
-            if self.model.extra else ()
-        for (nm, _), (sig, q) in zip(self.model.extra, extra):
+        for (nm, _), (sig, q) in zip(self.model.extra, self._extra_noise()):
             size = lay[nm].stop - lay[nm].start
             out[nm] = ([float(sig)] * size, [float(q)] * size)
         return out
+
+    def _extra_noise(self):
+        pairs = _per_block(self.extra_noise_si, len(self.model.extra), "extra_noise_si")
+        for i, pair in enumerate(pairs):
+            ok = np.shape(pair) == (2,) and np.all(np.isfinite(pair))
+            if not (ok and pair[0] > 0.0 and pair[1] >= 0.0):
+                raise InputFileError(None, f"extra_noise_si[{i}]",
+                                     f"needs (sigma > 0, noise density >= 0), got {pair!r}")
+        return pairs
 
     def P0(self) -> np.ndarray:
         """Initial covariance (n x n, diagonal, SI), assembled from the blocks present."""

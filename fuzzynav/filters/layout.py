@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fuzzynav.errors import FuzzynavError
+from fuzzynav.errors import InputFileError, UnknownNameError
 from fuzzynav.registry import Registry
 
 #: couplings of a sensor-error block into the navigation core (codes seen by numba)
@@ -77,12 +77,12 @@ def register_block(name: str, size: int, coupling: int = COUPLE_NONE, label: str
     through ``C_bn``).
     """
     if coupling in (COUPLE_GYRO, COUPLE_ACCEL) and size != 3:
-        raise FuzzynavError(f"state block {name!r}: a bias-like coupling needs 3 states, "
-                            f"got {size}")
+        raise InputFileError(None, f"state block {name!r}",
+                             f"a bias-like coupling needs 3 states, got {size}")
     if axes is None:
         axes = "xyz" if size == 3 else ""
     if len(axes) not in (0, size) or (not axes and size != 1):
-        raise FuzzynavError(f"state block {name!r}: axes {axes!r} do not fit {size} states")
+        raise InputFileError(None, f"state block {name!r}", f"axes {axes!r} do not fit {size} states")
     return BLOCK_KINDS.add(name, BlockKind(name, size, coupling, label or name, axes))
 
 
@@ -121,14 +121,16 @@ class StateLayout:
         blocks = tuple((str(nm), int(sz)) for nm, sz in self.blocks)
         object.__setattr__(self, "blocks", blocks)
         if blocks[:len(CORE_BLOCKS)] != CORE_BLOCKS:
-            raise FuzzynavError(f"a state layout starts with {CORE_BLOCKS}, got {blocks[:3]}")
+            raise InputFileError(None, "state layout",
+                                 f"starts with {CORE_BLOCKS}, got {blocks[:len(CORE_BLOCKS)]}")
         names = [nm for nm, _ in blocks]
         if len(set(names)) != len(names):
-            raise FuzzynavError(f"state layout has a repeated block name: {names}")
+            raise InputFileError(None, "state layout", f"a block name is repeated: {names}")
         for nm, sz in blocks:
             kind = BLOCK_KINDS.lookup(kind_of(nm))
             if kind.size != sz:
-                raise FuzzynavError(f"state block {nm!r} has {kind.size} states, not {sz}")
+                raise InputFileError(None, f"state layout block {nm!r}",
+                                     f"has {kind.size} states, not {sz}")
         starts = np.cumsum([0] + [sz for _, sz in blocks])
         object.__setattr__(self, "_start", {nm: int(s) for (nm, _), s in zip(blocks, starts)})
 
@@ -155,7 +157,7 @@ class StateLayout:
         try:
             return self._start[name]
         except KeyError:
-            raise KeyError(f"no state block {name!r} in layout {self.names}") from None
+            raise UnknownNameError("state block of this layout", name, self.names) from None
 
     def __getitem__(self, name: str) -> slice:
         s = self.start(name)

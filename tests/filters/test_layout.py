@@ -96,3 +96,18 @@ def test_nav_layout_slices_partition_the_nav_vector():
 def test_measurement_only_kinds_do_not_couple():
     for name in ("mag_bias", "lever_arm", "dvl_scale", "dvl_misalignment", "log_scale"):
         assert BLOCK_KINDS.lookup(name).coupling == COUPLE_NONE
+
+
+@pytest.mark.parametrize("noise, match", [((), r"one value per block \(1\), got 0"),
+                                          (((0.0, 1.0),), r"extra_noise_si\[0\]"),
+                                          (((1.0, -1.0),), r"extra_noise_si\[0\]"),
+                                          (((1.0,),), r"extra_noise_si\[0\]")])
+def test_extra_block_noise_is_checked_per_block(noise, match):
+    cfg = FilterConfig(model=ErrorModel(extra=(("mag_bias", math.inf),)), extra_noise_si=noise)
+    with pytest.raises(FuzzynavError, match=match):
+        cfg.P0()
+
+
+def test_noise_for_blocks_that_do_not_exist_is_refused():
+    with pytest.raises(FuzzynavError, match="extra_noise_si"):
+        FilterConfig(extra_noise_si=((1.0, 0.0),)).q_diag()
