@@ -47,6 +47,8 @@ class FilterConfig:
         Longest covariance-propagation interval [s] (also propagated at every measurement).
     out_rate_hz : float
         Rate of the recorded solution [Hz] (rounded to a whole number of IMU samples).
+    extra_noise_si : tuple of (sigma, q) per ``model.extra`` block
+        Initial 1-sigma and driving-noise density (SI) of each extra block.
     """
 
     model: ErrorModel = MODEL_15
@@ -62,6 +64,7 @@ class FilterConfig:
     gate_probability: float | None = None
     max_prop_dt_s: float = 1.0
     out_rate_hz: float = 10.0
+    extra_noise_si: tuple = ()
 
     def with_(self, **changes) -> "FilterConfig":
         """A copy with some fields changed."""
@@ -74,27 +77,42 @@ class FilterConfig:
                 _per_block(self.gyro_rw_dph_psh, ng, "gyro_rw_dph_psh"),
                 _per_block(self.accel_rw_ug_psqrts, na, "accel_rw_ug_psqrts"))
 
+    def _block_noise(self) -> dict:
+        """Block name -> ``(initial sigmas, noise densities)`` per state (SI)."""
+        gs, as_, grw, arw = self._blocks()
+        lay, taus = self.model.layout, dict(self.model.block_taus())
+        out = {"att": (list(np.asarray(self.init_att_sigma_deg, float) * units.DEG),
+                       [(self.arw_dpsh * units.DPSH) ** 2] * 3),
+               "vel": ([self.init_vel_sigma_mps] * 3, [(self.vrw_ug_psqrthz * units.UG) ** 2] * 3),
+               "pos": ([self.init_pos_sigma_m] * 3, [0.0] * 3)}
+        for kind, sigmas, rws, unit, rw_unit in (("gyro_bias", gs, grw, units.DPH, units.DPH_PSH),
+                                                 ("accel_bias", as_, arw, units.UG, units.UG)):
+            for nm, sig, rw in zip(lay.of_kind(kind), sigmas, rws):
+                out[nm] = ([sig * unit] * 3, [_block_q(sig * unit, rw * rw_unit, taus[nm])] * 3)
+        for (nm, _), (sig, q) in zip(self.model.extra, self._extra_noise()):
+            size = lay[nm].stop - lay[nm].start
+            out[nm] = ([float(sig)] * size, [float(q)] * size)
+        return out
+
+    def _extra_noise(self):
+        pairs = _per_block(self.extra_noise_si, len(self.model.extra), "extra_noise_si")
+        for i, pair in enumerate(pairs):
+            ok = np.shape(pair) == (2,) and np.all(np.isfinite(pair))
+            if not (ok and pair[0] > 0.0 and pair[1] >= 0.0):
+                raise InputFileError(None, f"extra_noise_si[{i}]",
+                                     f"needs (sigma > 0, noise density >= 0), got {pair!r}")
+        return pairs
+
     def P0(self) -> np.ndarray:
-        """Initial covariance (n x n, diagonal, SI)."""
-        gs, as_, _, _ = self._blocks()
-        d = [*(np.asarray(self.init_att_sigma_deg, float) * units.DEG),
-             *[self.init_vel_sigma_mps] * 3, *[self.init_pos_sigma_m] * 3]
-        for s in gs:
-            d += [s * units.DPH] * 3
-        for s in as_:
-            d += [s * units.UG] * 3
+        """Initial covariance (n x n, diagonal, SI), assembled from the blocks present."""
+        noise = self._block_noise()
+        d = [s for nm in self.model.layout.names for s in noise[nm][0]]
         return np.diag(np.square(d))
 
     def q_diag(self) -> np.ndarray:
-        """Continuous process-noise spectral densities per state (SI)."""
-        gs, as_, grw, arw = self._blocks()
-        q = [(self.arw_dpsh * units.DPSH) ** 2] * 3 + [(self.vrw_ug_psqrthz * units.UG) ** 2] * 3
-        q += [0.0] * 3
-        for sig, rw, tau in zip(gs, grw, self.model.gyro_tau_s):
-            q += [_block_q(sig * units.DPH, rw * units.DPH_PSH, tau)] * 3
-        for sig, rw, tau in zip(as_, arw, self.model.accel_tau_s):
-            q += [_block_q(sig * units.UG, rw * units.UG, tau)] * 3
-        return np.array(q)
+        """Continuous process-noise spectral densities per state (SI), block by block."""
+        noise = self._block_noise()
+        return np.array([q for nm in self.model.layout.names for q in noise[nm][1]])
 
 
 def _block_q(sigma, rw, tau):

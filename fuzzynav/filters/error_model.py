@@ -1,14 +1,11 @@
 """Error-state model of the ENU strapdown INS (numba kernels).
 
-State layout (``n = 15`` or ``18``)::
-
-    0:3   phi_n      attitude error [rad], C_bn_calc = (I - [phi x]) C_bn_true
-    3:6   dvel_n     velocity error calc - true [m/s]
-    6:9   dpos_n     position error calc - true, ENU metres
-    then the sensor-error blocks of :class:`ErrorModel` (3 states each): every gyro block
-    adds to the residual gyro bias [rad/s], every accelerometer block to the residual
-    accelerometer bias [m/s^2]; a block is a random constant (tau = inf) or a first-order
-    Gauss-Markov process with correlation time tau [s].
+The state vector is a :class:`~fuzzynav.filters.layout.StateLayout`: the core ``att`` (phi_n,
+``C_bn_calc = (I - [phi x]) C_bn_true``), ``vel`` and ``pos`` (calc - true, ENU metres),
+then the sensor-error blocks of :class:`ErrorModel`: every gyro block adds to the residual
+gyro bias [rad/s], every accelerometer block to the residual accelerometer bias [m/s^2],
+other registered blocks (e.g. ``mag_bias``) only enter measurement models; a block is a
+random constant (tau = inf) or a first-order Gauss-Markov process with correlation time tau.
 
 The dynamics are the classical phi-angle model (Savage; Yan Gongmin's PSINS ``etm``) written
 with the position error in metres: with ``D = diag((R_N+h) cos L, R_M+h, 1)`` the metric
@@ -24,15 +21,26 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
+from fuzzynav.filters.layout import (BLOCK_KINDS, CORE, COUPLE_ACCEL, COUPLE_GYRO, X_ATT,
+                                     X_POS, X_VEL, StateLayout, kind_of)
 from fuzzynav.nav.earth import E2, OMEGA_IE, gravity_nb, radii_nb
+from fuzzynav.nav.layout import NAV_H, NAV_LAT, NAV_VEL
 
-PHI, DVEL, DPOS = 0, 3, 6
-NAV_STATES = 9
+# velocity error components, and the position error's rows/columns: in radians
+# (dlat, dlon, dh) while F is formed, then ENU metres (dE, dN, dU) after _to_metric
+_VE, _VN, _VU = X_VEL, X_VEL + 1, X_VEL + 2
+_LAT, _LON, _HGT = X_POS, X_POS + 1, X_POS + 2
+_E, _N = X_POS, X_POS + 1
+
+
+def _numbered(kind, count):
+    """Block names of ``count`` blocks of ``kind``: ``kind``, ``kind:1``, ``kind:2`` ..."""
+    return [kind if i == 0 else f"{kind}:{i}" for i in range(count)]
 
 
 @dataclass(frozen=True)
 class ErrorModel:
-    """Layout of the sensor-error states.
+    """The sensor-error blocks of the state and their dynamics.
 
     Parameters
     ----------
@@ -41,33 +49,40 @@ class ErrorModel:
         correlation time [s].
     accel_tau_s : tuple of float
         Same for the accelerometer blocks.
+    extra : tuple of (name, tau_s)
+        Further registered blocks (e.g. ``("mag_bias", inf)``), after the bias blocks.
     """
 
     gyro_tau_s: tuple = (math.inf,)
     accel_tau_s: tuple = (math.inf,)
+    extra: tuple = ()
+
+    def block_taus(self) -> dict:
+        """Sensor block name -> tau [s], in state order."""
+        out = dict(zip(_numbered("gyro_bias", len(self.gyro_tau_s)), self.gyro_tau_s))
+        out.update(zip(_numbered("accel_bias", len(self.accel_tau_s)), self.accel_tau_s))
+        out.update((str(nm), float(tau)) for nm, tau in self.extra)
+        return out
+
+    @property
+    def layout(self) -> StateLayout:
+        """The state layout: the core, the gyro blocks, the accelerometer blocks, the extras."""
+        return CORE.extended(*[(nm, BLOCK_KINDS.lookup(kind_of(nm)).size)
+                               for nm in self.block_taus()])
 
     @property
     def n_states(self) -> int:
         """Total number of error states."""
-        return NAV_STATES + 3 * (len(self.gyro_tau_s) + len(self.accel_tau_s))
+        return self.layout.n
 
     def block_arrays(self):
-        """``(start, kind, inv_tau)`` arrays per block: kind 0 gyro, 1 accelerometer."""
-        taus = list(self.gyro_tau_s) + list(self.accel_tau_s)
-        kinds = [0] * len(self.gyro_tau_s) + [1] * len(self.accel_tau_s)
-        start = NAV_STATES + 3 * np.arange(len(taus))
-        inv_tau = np.array([0.0 if math.isinf(t) else 1.0 / t for t in taus])
-        return start.astype(np.int64), np.array(kinds, dtype=np.int64), inv_tau
+        """``(start, coupling, inv_tau)`` arrays of the sensor blocks (for the loop)."""
+        inv = {nm: 0.0 if math.isinf(t) else 1.0 / t for nm, t in self.block_taus().items()}
+        return self.layout.block_arrays(inv)
 
     def labels(self):
         """State names for tables and plots."""
-        names = [f"phi_{a}" for a in "enu"] + [f"dvel_{a}" for a in "enu"] + \
-            [f"dpos_{a}" for a in "enu"]
-        for i, _ in enumerate(self.gyro_tau_s):
-            names += [f"gyro{i}_{a}" for a in "xyz"]
-        for i, _ in enumerate(self.accel_tau_s):
-            names += [f"accel{i}_{a}" for a in "xyz"]
-        return names
+        return list(self.layout.labels())
 
 
 #: the 15-state model (random-constant biases)
@@ -93,8 +108,8 @@ def fill_F(F, nav, C_bn, f_n, blk_start, blk_kind, blk_inv_tau):
     ``f_n`` the mean specific force in the navigation frame.
     """
     F[:, :] = 0.0
-    ve, vn, vu = nav[4], nav[5], nav[6]
-    lat, h = nav[7], nav[9]
+    ve, vn, vu = nav[NAV_VEL], nav[NAV_VEL + 1], nav[NAV_VEL + 2]
+    lat, h = nav[NAV_LAT], nav[NAV_H]
     rm, rn = radii_nb(lat)
     rmh, rnh = rm + h, rn + h
     sl, cl = math.sin(lat), math.cos(lat)
@@ -104,7 +119,7 @@ def fill_F(F, nav, C_bn, f_n, blk_start, blk_kind, blk_inv_tau):
     wie = (0.0, wie_n, wie_u)
     wen = (-vn / rmh, ve / rnh, ve * tl / rnh)
     win = (wen[0], wie_n + wen[1], wie_u + wen[2])
-    # --- in radian position units (dlat, dlon, dh) first: columns 6, 7, 8 ---
+    # --- in radian position units (dlat, dlon, dh) first ---
     # d(omega_ie)/dp and d(omega_en)/dp
     Mp1 = np.zeros((3, 3))
     Mp1[1, 0] = -wie_u
@@ -119,65 +134,74 @@ def fill_F(F, nav, C_bn, f_n, blk_start, blk_kind, blk_inv_tau):
     Mav[1, 0] = 1.0 / rnh
     Mav[2, 0] = tl / rnh
     # attitude rows: phi' = -win x phi + Mav dv + (Mp1 + Mp2) dp - C_bn eps
-    _skew_into(F, 0, 0, -win[0], -win[1], -win[2])
+    _skew_into(F, X_ATT, X_ATT, -win[0], -win[1], -win[2])
     for i in range(3):
         for j in range(3):
-            F[i, 3 + j] = Mav[i, j]
-            F[i, 6 + j] = Mp1[i, j] + Mp2[i, j]
+            F[X_ATT + i, X_VEL + j] = Mav[i, j]
+            F[X_ATT + i, X_POS + j] = Mp1[i, j] + Mp2[i, j]
     # velocity rows: dv' = f x phi + ([v x] Mav - [(2wie + wen) x]) dv + [v x](2Mp1 + Mp2) dp
-    _skew_into(F, 3, 0, f_n[0], f_n[1], f_n[2])
+    _skew_into(F, X_VEL, X_ATT, f_n[0], f_n[1], f_n[2])
     ax, ay, az = 2.0 * wie[0] + wen[0], 2.0 * wie[1] + wen[1], 2.0 * wie[2] + wen[2]
     for i in range(3):
         for j in range(3):
             vm = _skew_elem(ve, vn, vu, i, 0) * Mav[0, j] + \
                 _skew_elem(ve, vn, vu, i, 1) * Mav[1, j] + \
                 _skew_elem(ve, vn, vu, i, 2) * Mav[2, j]
-            F[3 + i, 3 + j] = vm - _skew_elem(ax, ay, az, i, j)
+            F[X_VEL + i, X_VEL + j] = vm - _skew_elem(ax, ay, az, i, j)
             vp = 0.0
             for k in range(3):
                 vp += _skew_elem(ve, vn, vu, i, k) * (2.0 * Mp1[k, j] + Mp2[k, j])
-            F[3 + i, 6 + j] = vp
+            F[X_VEL + i, X_POS + j] = vp
     # gravity: up component of dg with latitude and height
-    F[5, 6] += -_dgravity_dlat(lat, h)
-    F[5, 8] += -(gravity_nb(lat, h + 0.5) - gravity_nb(lat, h - 0.5))
+    F[_VU, _LAT] += -_dgravity_dlat(lat, h)
+    F[_VU, _HGT] += -(gravity_nb(lat, h + 0.5) - gravity_nb(lat, h - 0.5))
     # position rows (dlat, dlon, dh)
-    F[6, 4] = 1.0 / rmh
-    F[6, 8] = -vn / rmh**2
-    F[7, 3] = 1.0 / (rnh * cl)
-    F[7, 6] = ve * tl / (rnh * cl)
-    F[7, 8] = -ve / (rnh**2 * cl)
-    F[8, 5] = 1.0
+    F[_LAT, _VN] = 1.0 / rmh
+    F[_LAT, _HGT] = -vn / rmh**2
+    F[_LON, _VE] = 1.0 / (rnh * cl)
+    F[_LON, _LAT] = ve * tl / (rnh * cl)
+    F[_LON, _HGT] = -ve / (rnh**2 * cl)
+    F[_HGT, _VU] = 1.0
     # --- metric position error: D F D^-1 + dD/dt D^-1, D = diag of the dpos_n order ---
     _to_metric(F, lat, rmh, rnh, vn, vu, tl, cl)
-    # --- sensor-error blocks ---
+    # --- sensor-error blocks, each as its registered coupling says ---
+    n = F.shape[0]
     for b in range(blk_start.size):
         s0 = blk_start[b]
-        row = 0 if blk_kind[b] == 0 else 3
-        sign = -1.0 if blk_kind[b] == 0 else 1.0
-        for i in range(3):
-            for j in range(3):
-                F[row + i, s0 + j] = sign * C_bn[i, j]
-            F[s0 + i, s0 + i] = -blk_inv_tau[b]
+        if blk_kind[b] == COUPLE_GYRO or blk_kind[b] == COUPLE_ACCEL:
+            row = X_ATT if blk_kind[b] == COUPLE_GYRO else X_VEL
+            sign = -1.0 if blk_kind[b] == COUPLE_GYRO else 1.0
+            for i in range(3):
+                for j in range(3):
+                    F[row + i, s0 + j] = sign * C_bn[i, j]
+        for i in range(s0, block_end(blk_start, b, n)):
+            F[i, i] = -blk_inv_tau[b]
+
+
+@nb.njit(cache=True)
+def block_end(blk_start, b, n):
+    """One past the last state of sensor block ``b`` (blocks are contiguous up to ``n``)."""
+    return blk_start[b + 1] if b + 1 < blk_start.size else n
 
 
 @nb.njit(cache=True)
 def _to_metric(F, lat, rmh, rnh, vn, vu, tl, cl):
-    """Convert columns/rows 6:9 from (dlat, dlon, dh) to ENU metres in place."""
+    """Convert the position columns/rows from (dlat, dlon, dh) to ENU metres in place."""
     n = F.shape[0]
     # radian state r = (dlat, dlon, dh) -> metres m = (dE, dN, dU) = (D1 dlon, D0 dlat, dh)
     d_lat, d_lon = rmh, rnh * cl
     # new columns: F[:, m] = F[:, r] / D  (permuting lat/lon into N/E order)
     for i in range(n):
-        c_lat, c_lon = F[i, 6], F[i, 7]
-        F[i, 6] = c_lon / d_lon   # dE column
-        F[i, 7] = c_lat / d_lat   # dN column
+        c_lat, c_lon = F[i, _LAT], F[i, _LON]
+        F[i, _E] = c_lon / d_lon
+        F[i, _N] = c_lat / d_lat
     for j in range(n):
-        r_lat, r_lon = F[6, j], F[7, j]
-        F[6, j] = r_lon * d_lon   # dE row
-        F[7, j] = r_lat * d_lat   # dN row
+        r_lat, r_lon = F[_LAT, j], F[_LON, j]
+        F[_E, j] = r_lon * d_lon
+        F[_N, j] = r_lat * d_lat
     # dD/dt D^-1 terms (heights change the radii of the metric map)
-    F[6, 6] += vu / rnh - tl * vn / rmh
-    F[7, 7] += vu / rmh
+    F[_E, _E] += vu / rnh - tl * vn / rmh
+    F[_N, _N] += vu / rmh
 
 
 @nb.njit(cache=True)

@@ -13,15 +13,95 @@ Memory is independent of the run length apart from the requested outputs (every
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
 
 from fuzzynav.filters import kalman
-from fuzzynav.filters.error_model import discretize, fill_F
+from fuzzynav.filters.error_model import block_end, discretize, fill_F
+from fuzzynav.filters.layout import COUPLE_ACCEL, COUPLE_GYRO, N_CORE, X_ATT, X_POS, X_VEL
 from fuzzynav.nav.earth import radii_nb
-from fuzzynav.nav.strapdown import (NAV_SIZE, PREV_SIZE, init_prev, mech_step, quat_mul,
-                                    quat_to_dcm_into, rv2q)
+from fuzzynav.nav.layout import NAV_H, NAV_LAT, NAV_LON, NAV_Q, NAV_SIZE, NAV_VEL, PREV_LLA, \
+    PREV_SIZE, PREV_VEL
+from fuzzynav.nav.strapdown import init_prev, mech_step, quat_mul, quat_to_dcm_into, rv2q, set_quat
+
+
+
+class Imu(NamedTuple):
+    """IMU increments: ``dth``, ``dv`` (N, 3) [rad, m/s] and ``time_s`` (N+1,)."""
+
+    dth: np.ndarray
+    dv: np.ndarray
+    time_s: np.ndarray
+
+
+class Start(NamedTuple):
+    """Initial state: ``nav0`` (nav layout), sensor states ``xs0``, covariance ``P0``."""
+
+    nav0: np.ndarray
+    xs0: np.ndarray
+    P0: np.ndarray
+
+
+class Model(NamedTuple):
+    """Error model: ``q_diag`` per state and the sensor blocks' start, coupling and 1/tau."""
+
+    q_diag: np.ndarray
+    blk_start: np.ndarray
+    blk_kind: np.ndarray
+    blk_inv_tau: np.ndarray
+
+
+class Events(NamedTuple):
+    """Measurement epochs in time order: time, sensor index, data row."""
+
+    t: np.ndarray
+    s: np.ndarray
+    data: np.ndarray
+
+
+class Sensors(NamedTuple):
+    """Per sensor: measurement-kernel id and constants, adapter id and its flat arrays
+    (``afp[afp_off[s]:afp_off[s + 1]]`` ...), chi-square gate per row count."""
+
+    meas: np.ndarray
+    mpar: np.ndarray
+    adapt: np.ndarray
+    afp: np.ndarray
+    afp_off: np.ndarray
+    aip: np.ndarray
+    aip_off: np.ndarray
+    ast: np.ndarray
+    ast_off: np.ndarray
+    gate: np.ndarray
+
+
+class Settings(NamedTuple):
+    """Longest propagation interval [s] and the output stride [samples]."""
+
+    max_prop_dt: float
+    out_stride: int
+
+
+class Outputs(NamedTuple):
+    """Recorded solution (every ``out_stride`` samples): time, nav, sensor states, sigma."""
+
+    t: np.ndarray
+    nav: np.ndarray
+    xs: np.ndarray
+    sig: np.ndarray
+
+
+class EventOutputs(NamedTuple):
+    """Per event: residual, S diagonal, NIS, flag, adaptation diagnostics."""
+
+    r: np.ndarray
+    S: np.ndarray
+    nis: np.ndarray
+    flag: np.ndarray
+    diag: np.ndarray
+
 
 # event flags
 EV_PENDING, EV_ACCEPTED, EV_GATED, EV_EMPTY, EV_BAD_S, EV_BEFORE_START = 0, 1, 2, 3, 4, 5
@@ -32,24 +112,26 @@ ST_OK, ST_COVARIANCE = 0, 1
 @nb.njit(cache=True)
 def _feedback(nav, prev, xs, x):
     """Apply the error-state estimate to the navigation and sensor estimates (then x = 0)."""
-    a0, a1, a2, a3 = rv2q(x[0], x[1], x[2])
-    q0, q1, q2, q3 = quat_mul(a0, a1, a2, a3, nav[0], nav[1], nav[2], nav[3])
+    a0, a1, a2, a3 = rv2q(x[X_ATT], x[X_ATT + 1], x[X_ATT + 2])
+    q0, q1, q2, q3 = quat_mul(a0, a1, a2, a3, nav[NAV_Q], nav[NAV_Q + 1], nav[NAV_Q + 2],
+                              nav[NAV_Q + 3])
     qn = 1.0 / math.sqrt(q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
-    nav[0], nav[1], nav[2], nav[3] = q0 * qn, q1 * qn, q2 * qn, q3 * qn
-    rm, rn = radii_nb(nav[7])
-    dlat = x[7] / (rm + nav[9])
-    dlon = x[6] / ((rn + nav[9]) * math.cos(nav[7]))
+    set_quat(nav, q0 * qn, q1 * qn, q2 * qn, q3 * qn)
+    rm, rn = radii_nb(nav[NAV_LAT])
+    de, dn, du = x[X_POS], x[X_POS + 1], x[X_POS + 2]  # ENU metres
+    dlat = dn / (rm + nav[NAV_H])
+    dlon = de / ((rn + nav[NAV_H]) * math.cos(nav[NAV_LAT]))
     for i in range(3):
-        nav[4 + i] -= x[3 + i]
-        prev[6 + i] -= x[3 + i]  # keep the midpoint extrapolation free of the jump
-    nav[7] -= dlat
-    nav[8] -= dlon
-    nav[9] -= x[8]
-    prev[9] -= dlat
-    prev[10] -= dlon
-    prev[11] -= x[8]
+        nav[NAV_VEL + i] -= x[X_VEL + i]
+        prev[PREV_VEL + i] -= x[X_VEL + i]  # keep the midpoint extrapolation free of the jump
+    nav[NAV_LAT] -= dlat
+    nav[NAV_LON] -= dlon
+    nav[NAV_H] -= du
+    prev[PREV_LLA] -= dlat
+    prev[PREV_LLA + 1] -= dlon
+    prev[PREV_LLA + 2] -= du
     for j in range(xs.size):
-        xs[j] += x[9 + j]
+        xs[j] += x[N_CORE + j]
 
 
 @nb.njit(cache=True)
@@ -59,11 +141,11 @@ def _bias_totals(xs, blk_start, blk_kind, bg, ba):
         bg[i] = 0.0
         ba[i] = 0.0
     for b in range(blk_start.size):
-        s0 = blk_start[b] - 9
+        s0 = blk_start[b] - N_CORE
         for i in range(3):
-            if blk_kind[b] == 0:
+            if blk_kind[b] == COUPLE_GYRO:
                 bg[i] += xs[s0 + i]
-            else:
+            elif blk_kind[b] == COUPLE_ACCEL:
                 ba[i] += xs[s0 + i]
 
 
@@ -79,17 +161,26 @@ def _record(j, t, nav, xs, P, out_t, out_nav, out_xs, out_sig):
 
 
 @nb.njit(cache=True)
-def run_loop(dth, dv, time_s, nav0, xs0, P0, q_diag, blk_start, blk_kind, blk_inv_tau,
-             ev_t, ev_s, ev_data, meas_fns, s_meas, s_mpar, adapt_fns, s_adapt,
-             afp, afp_off, aip, aip_off, ast, ast_off, s_gate, max_prop_dt, out_stride,
-             out_t, out_nav, out_xs, out_sig, ev_r, ev_S, ev_nis, ev_flag, ev_diag):
+def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, out, evout):
     """Run the filter over all IMU samples; returns ``(status, samples_done)``.
 
-    ``time_s`` has N+1 entries (increment k spans ``time_s[k]..time_s[k+1]``).  Outputs are
-    written into the preallocated ``out_*`` (every ``out_stride`` samples, starting with the
-    initial state) and ``ev_*`` (one row per event) arrays.  ``ast`` (adapter states) is
-    updated in place.
+    Arguments are the named tuples above (:class:`Imu`, :class:`Start`, :class:`Model`,
+    :class:`Events`, :class:`Sensors`, :class:`Settings`, :class:`Outputs`,
+    :class:`EventOutputs`) and the kernel tuples of the measurement models and adaptation
+    policies.  ``imu.time_s`` has N+1 entries (increment k spans ``time_s[k]..time_s[k+1]``).
+    Outputs are written into the preallocated ``out`` arrays (every ``out_stride`` samples,
+    starting with the initial state) and ``evout`` (one row per event); ``sensors.ast``
+    (adapter states) is updated in place.
     """
+    # plain local names: the loop body reads as the algorithm, and numba sees bare arrays
+    dth, dv, time_s = imu
+    nav0, xs0, P0 = start
+    q_diag, blk_start, blk_kind, blk_inv_tau = model
+    ev_t, ev_s, ev_data = events
+    s_meas, s_mpar, s_adapt, afp, afp_off, aip, aip_off, ast, ast_off, s_gate = sensors
+    max_prop_dt, out_stride = settings
+    out_t, out_nav, out_xs, out_sig = out
+    ev_r, ev_S, ev_nis, ev_flag, ev_diag = evout
     n = P0.shape[0]
     M = ev_r.shape[1]
     N = dth.shape[0]
@@ -255,5 +346,5 @@ def _propagate(P, Qacc, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd, work, qd,
     for b in range(blk_start.size):
         if blk_inv_tau[b] > 0.0:
             d = math.exp(-tau * blk_inv_tau[b])
-            for i in range(3):
-                xs[blk_start[b] - 9 + i] *= d
+            for i in range(blk_start[b], block_end(blk_start, b, n)):
+                xs[i - N_CORE] *= d

@@ -5,6 +5,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fuzzynav.filters.layout import LAYOUT_15, StateLayout
 from fuzzynav.nav import attitude
 
 
@@ -52,11 +53,13 @@ class FilterResult:
     lla : (K, 3) latitude [rad], longitude [rad], height [m].
     vel_n : (K, 3) ENU velocity [m/s].
     q_bn : (K, 4) attitude quaternion.
-    sensor_states : (K, n-9) estimated sensor errors per block (SI).
+    sensor_states : (K, n - N_CORE) estimated sensor errors, the blocks after the
+        navigation core in ``layout`` order (SI).
     sigma : (K, n) square roots of the covariance diagonal (SI; position in metres).
     state_labels : names of the n states.
     events : sensor name -> :class:`EventLog`.
     status : ``"ok"`` or a description of why the run stopped early.
+    layout : the :class:`~fuzzynav.filters.layout.StateLayout` of the error state.
     """
 
     time_s: np.ndarray
@@ -68,8 +71,7 @@ class FilterResult:
     state_labels: tuple
     events: dict = field(default_factory=dict)
     status: str = "ok"
-    gyro_blocks: tuple = (0,)
-    accel_blocks: tuple = (1,)
+    layout: StateLayout = LAYOUT_15
 
     @property
     def att(self) -> np.ndarray:
@@ -79,12 +81,20 @@ class FilterResult:
     @property
     def gyro_bias(self) -> np.ndarray:
         """Total estimated gyro bias [rad/s], shape (K, 3)."""
-        return sum(self.sensor_states[:, 3 * b:3 * b + 3] for b in self.gyro_blocks)
+        return self._block_sum("gyro_bias")
 
     @property
     def accel_bias(self) -> np.ndarray:
         """Total estimated accelerometer bias [m/s^2], shape (K, 3)."""
-        return sum(self.sensor_states[:, 3 * b:3 * b + 3] for b in self.accel_blocks)
+        return self._block_sum("accel_bias")
+
+    def _block_sum(self, kind):
+        return sum(self.sensor_states[:, self.layout.sensor_slice(nm)]
+                   for nm in self.layout.of_kind(kind))
+
+    def state_sigma(self, block: str) -> np.ndarray:
+        """1-sigma of the states of ``block`` (e.g. ``"pos"``), shape (K, block size)."""
+        return self.sigma[:, self.layout[block]]
 
     @property
     def ok(self) -> bool:

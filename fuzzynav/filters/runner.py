@@ -10,9 +10,11 @@ from fuzzynav.errors import FuzzynavError
 from fuzzynav.filters import adaptation, measurements
 from fuzzynav.filters.adaptation import N_DIAG, NoAdaptation
 from fuzzynav.filters.config import FilterConfig
-from fuzzynav.filters.loop import ST_OK, run_loop
+from fuzzynav.filters.layout import N_CORE
+from fuzzynav.filters import loop
 from fuzzynav.filters.result import EventLog, FilterResult
 from fuzzynav.nav import strapdown
+from fuzzynav.nav.layout import LLA_SLICE, NAV_SIZE, Q_SLICE, VEL_SLICE
 
 
 @dataclass(frozen=True)
@@ -122,19 +124,20 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
     stride = max(1, int(round(1.0 / (config.out_rate_hz * dt_nom))))
     K = dth.shape[0] // stride + 1
     E, M = tb["ev_t"].size, tb["M"]
-    out = dict(t=np.full(K, np.nan), nav=np.full((K, strapdown.NAV_SIZE), np.nan),
-               xs=np.full((K, n - 9), np.nan), sig=np.full((K, n), np.nan))
+    out = dict(t=np.full(K, np.nan), nav=np.full((K, NAV_SIZE), np.nan),
+               xs=np.full((K, n - N_CORE), np.nan), sig=np.full((K, n), np.nan))
     ev = dict(r=np.full((E, M), np.nan), S=np.full((E, M), np.nan), nis=np.full(E, np.nan),
               flag=np.zeros(E, np.int64), diag=np.full((E, N_DIAG), np.nan))
     nav0 = strapdown.make_nav(init.lla, init.vel_n, init.q_bn)
     adapt_fns, _ = adaptation.kernel_table()
-    status, done = run_loop(
-        dth, dv, time_s, nav0, np.zeros(n - 9), config.P0(), config.q_diag(), blk_start,
-        blk_kind, blk_inv_tau, tb["ev_t"], tb["ev_s"], tb["ev_data"], tb["meas_fns"],
-        tb["s_meas"], tb["s_mpar"], adapt_fns, tb["s_adapt"], tb["afp"], tb["afp_off"],
-        tb["aip"], tb["aip_off"], tb["ast"], tb["ast_off"], tb["gate"],
-        float(config.max_prop_dt_s), stride, out["t"], out["nav"], out["xs"], out["sig"],
-        ev["r"], ev["S"], ev["nis"], ev["flag"], ev["diag"])
+    status, done = loop.run_loop(
+        loop.Imu(dth, dv, time_s), loop.Start(nav0, np.zeros(n - N_CORE), config.P0()),
+        loop.Model(config.q_diag(), blk_start, blk_kind, blk_inv_tau),
+        loop.Events(tb["ev_t"], tb["ev_s"], tb["ev_data"]),
+        loop.Sensors(tb["s_meas"], tb["s_mpar"], tb["s_adapt"], tb["afp"], tb["afp_off"],
+                     tb["aip"], tb["aip_off"], tb["ast"], tb["ast_off"], tb["gate"]),
+        tb["meas_fns"], adapt_fns, loop.Settings(float(config.max_prop_dt_s), int(stride)),
+        loop.Outputs(**out), loop.EventOutputs(**ev))
     return _bundle(out, ev, tb, config, status, done, time_s)
 
 
@@ -147,12 +150,11 @@ def _bundle(out, ev, tb, config, status, done, time_s) -> FilterResult:
                               nis=ev["nis"][sel], flag=ev["flag"][sel],
                               diag=ev["diag"][sel][:, :len(bd.diag_names)],
                               diag_names=bd.diag_names, channels=mdl.channels)
-    ng = len(config.model.gyro_tau_s)
     nav = out["nav"][keep]
-    msg = "ok" if status == ST_OK else (
+    msg = "ok" if status == loop.ST_OK else (
         f"stopped at t = {time_s[done]:.2f} s: covariance lost positive definiteness")
-    return FilterResult(time_s=out["t"][keep], lla=nav[:, 7:10], vel_n=nav[:, 4:7],
-                        q_bn=nav[:, 0:4], sensor_states=out["xs"][keep], sigma=out["sig"][keep],
-                        state_labels=tuple(config.model.labels()), events=events, status=msg,
-                        gyro_blocks=tuple(range(ng)),
-                        accel_blocks=tuple(range(ng, ng + len(config.model.accel_tau_s))))
+    layout = config.model.layout
+    return FilterResult(time_s=out["t"][keep], lla=nav[:, LLA_SLICE], vel_n=nav[:, VEL_SLICE],
+                        q_bn=nav[:, Q_SLICE], sensor_states=out["xs"][keep],
+                        sigma=out["sig"][keep], state_labels=layout.labels(), events=events,
+                        status=msg, layout=layout)

@@ -15,10 +15,10 @@ One step integrates the increments ``dtheta_b`` [rad] and ``dv_b`` [m/s] of one 
 * trapezoidal position update and the attitude update
   ``q <- q(-omega_in_n dt) * q * q(phi)``.
 
-The navigation state is a float64 array ``nav`` of length :data:`NAV_SIZE`:
-``[q_w, q_x, q_y, q_z, vel_e, vel_n, vel_u, lat_rad, lon_rad, h_m]`` (quaternion of
-``C_bn``).  The step keeps the previous increments and state in a work array ``prev`` of
-length :data:`PREV_SIZE` (initialise it with :func:`init_prev`).
+The navigation state is a float64 array ``nav`` laid out as :mod:`fuzzynav.nav.layout` says
+(quaternion of ``C_bn``, ENU velocity, latitude, longitude, height).  The step keeps the
+previous increments and state in a work array ``prev`` (same module; initialise it with
+:func:`init_prev`).
 """
 from __future__ import annotations
 
@@ -28,10 +28,9 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.nav.earth import OMEGA_IE, gravity_nb, radii_nb
-
-NAV_SIZE = 10
-PREV_SIZE = 13  # dtheta(3) dv(3) vel(3) lat lon h, flag
-Q, VEL, LAT, LON, H = 0, 4, 7, 8, 9
+from fuzzynav.nav.layout import (LLA_SLICE, NAV_H, NAV_LAT, NAV_LON, NAV_Q, NAV_SIZE, NAV_VEL,
+                                 PREV_DTH, PREV_DV, PREV_FLAG, PREV_LLA, PREV_SIZE, PREV_VEL,
+                                 Q_SLICE, VEL_SLICE)
 
 
 @nb.njit(cache=True)
@@ -59,8 +58,8 @@ def rv2q(x, y, z):
 
 @nb.njit(cache=True)
 def quat_to_dcm_into(nav, C):
-    """Write ``C_bn`` of the quaternion in ``nav[0:4]`` into the 3x3 array ``C``."""
-    w, x, y, z = nav[0], nav[1], nav[2], nav[3]
+    """Write ``C_bn`` of the quaternion of ``nav`` into the 3x3 array ``C``."""
+    w, x, y, z = nav[NAV_Q], nav[NAV_Q + 1], nav[NAV_Q + 2], nav[NAV_Q + 3]
     C[0, 0] = w * w + x * x - y * y - z * z
     C[0, 1] = 2.0 * (x * y - w * z)
     C[0, 2] = 2.0 * (x * z + w * y)
@@ -75,10 +74,10 @@ def quat_to_dcm_into(nav, C):
 @nb.njit(cache=True)
 def init_prev(nav, prev):
     """Prepare the work array for the first step (no previous increments)."""
-    prev[12] = 0.0
+    prev[PREV_FLAG] = 0.0
     for i in range(3):
-        prev[6 + i] = nav[VEL + i]
-        prev[9 + i] = nav[LAT + i]
+        prev[PREV_VEL + i] = nav[NAV_VEL + i]
+        prev[PREV_LLA + i] = nav[NAV_LAT + i]
 
 
 @nb.njit(cache=True)
@@ -99,13 +98,13 @@ def mech_step(nav, prev, dth, dv, dt, f_n):
         Output: mean specific force of the interval in the navigation frame [m/s^2]
         (for the error model).
     """
-    if prev[12] == 0.0:  # first step: no previous increments, so no coning/sculling term
+    if prev[PREV_FLAG] == 0.0:  # first step: no previous increments, so no coning/sculling
         for i in range(3):
-            prev[i] = dth[i]
-            prev[3 + i] = dv[i]
-        prev[12] = 1.0
-    px, py, pz = prev[0], prev[1], prev[2]
-    ux, uy, uz = prev[3], prev[4], prev[5]
+            prev[PREV_DTH + i] = dth[i]
+            prev[PREV_DV + i] = dv[i]
+        prev[PREV_FLAG] = 1.0
+    px, py, pz = prev[PREV_DTH], prev[PREV_DTH + 1], prev[PREV_DTH + 2]
+    ux, uy, uz = prev[PREV_DV], prev[PREV_DV + 1], prev[PREV_DV + 2]
     tx, ty, tz = dth[0], dth[1], dth[2]
     vx, vy, vz = dv[0], dv[1], dv[2]
     # coning: phi = dth + dth_prev x dth / 12
@@ -127,13 +126,13 @@ def mech_step(nav, prev, dth, dv, dt, f_n):
     sz = vz + 0.5 * rz + (tx * ry - ty * rx) / 6.0 \
         + ((px * vy - py * vx) + (ux * ty - uy * tx)) / 12.0
     # midpoint quantities, extrapolated from the previous step
-    ve, vn, vu = nav[4], nav[5], nav[6]
-    lat, lon, h = nav[7], nav[8], nav[9]
-    vme = 1.5 * ve - 0.5 * prev[6]
-    vmn = 1.5 * vn - 0.5 * prev[7]
-    vmu = 1.5 * vu - 0.5 * prev[8]
-    latm = 1.5 * lat - 0.5 * prev[9]
-    hm = 1.5 * h - 0.5 * prev[11]
+    ve, vn, vu = nav[NAV_VEL], nav[NAV_VEL + 1], nav[NAV_VEL + 2]
+    lat, lon, h = nav[NAV_LAT], nav[NAV_LON], nav[NAV_H]
+    vme = 1.5 * ve - 0.5 * prev[PREV_VEL]
+    vmn = 1.5 * vn - 0.5 * prev[PREV_VEL + 1]
+    vmu = 1.5 * vu - 0.5 * prev[PREV_VEL + 2]
+    latm = 1.5 * lat - 0.5 * prev[PREV_LLA]
+    hm = 1.5 * h - 0.5 * prev[PREV_LLA + 2]
     rm, rn = radii_nb(latm)
     sl, cl = math.sin(latm), math.cos(latm)
     wie_n, wie_u = OMEGA_IE * cl, OMEGA_IE * sl
@@ -143,7 +142,7 @@ def mech_step(nav, prev, dth, dv, dt, f_n):
     wine, winn, winu = wen_e, wie_n + wen_n, wie_u + wen_u
     g = gravity_nb(latm, hm)
     # body -> navigation with the attitude at the start of the interval
-    q0, q1, q2, q3 = nav[0], nav[1], nav[2], nav[3]
+    q0, q1, q2, q3 = nav[NAV_Q], nav[NAV_Q + 1], nav[NAV_Q + 2], nav[NAV_Q + 3]
     c00 = q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3
     c01 = 2.0 * (q1 * q2 - q0 * q3)
     c02 = 2.0 * (q1 * q3 + q0 * q2)
@@ -183,13 +182,19 @@ def mech_step(nav, prev, dth, dv, dt, f_n):
     qn = 1.0 / math.sqrt(q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
     # keep the previous values for the next step's extrapolation and corrections
     for i in range(3):
-        prev[i] = dth[i]
-        prev[3 + i] = dv[i]
-    prev[6], prev[7], prev[8] = ve, vn, vu
-    prev[9], prev[10], prev[11] = lat, lon, h
-    nav[0], nav[1], nav[2], nav[3] = q0 * qn, q1 * qn, q2 * qn, q3 * qn
-    nav[4], nav[5], nav[6] = ve1, vn1, vu1
-    nav[7], nav[8], nav[9] = lat1, lon1, h1
+        prev[PREV_DTH + i] = dth[i]
+        prev[PREV_DV + i] = dv[i]
+    prev[PREV_VEL], prev[PREV_VEL + 1], prev[PREV_VEL + 2] = ve, vn, vu
+    prev[PREV_LLA], prev[PREV_LLA + 1], prev[PREV_LLA + 2] = lat, lon, h
+    set_quat(nav, q0 * qn, q1 * qn, q2 * qn, q3 * qn)
+    nav[NAV_VEL], nav[NAV_VEL + 1], nav[NAV_VEL + 2] = ve1, vn1, vu1
+    nav[NAV_LAT], nav[NAV_LON], nav[NAV_H] = lat1, lon1, h1
+
+
+@nb.njit(cache=True)
+def set_quat(nav, q0, q1, q2, q3):
+    """Store the attitude quaternion ``(q0, q1, q2, q3)`` in ``nav``."""
+    nav[NAV_Q], nav[NAV_Q + 1], nav[NAV_Q + 2], nav[NAV_Q + 3] = q0, q1, q2, q3
 
 
 @nb.njit(cache=True)
@@ -211,9 +216,9 @@ def _integrate(nav0, dtheta_b, dv_b, dt, stride):
 def make_nav(lla, vel_n, q_bn) -> np.ndarray:
     """Pack position ``(lat_rad, lon_rad, h_m)``, ENU velocity and quaternion into ``nav``."""
     nav = np.empty(NAV_SIZE)
-    nav[Q:Q + 4] = q_bn
-    nav[VEL:VEL + 3] = vel_n
-    nav[LAT:LAT + 3] = lla
+    nav[Q_SLICE] = q_bn
+    nav[VEL_SLICE] = vel_n
+    nav[LLA_SLICE] = lla
     return nav
 
 
@@ -239,4 +244,4 @@ def integrate(lla0, vel_n0, q_bn0, dtheta_b, dv_b, dt, stride=1):
     nav0 = make_nav(lla0, vel_n0, q_bn0)
     out = _integrate(nav0, np.ascontiguousarray(dtheta_b, dtype=float),
                      np.ascontiguousarray(dv_b, dtype=float), float(dt), int(stride))
-    return {"lla": out[:, LAT:LAT + 3], "vel_n": out[:, VEL:VEL + 3], "q_bn": out[:, Q:Q + 4]}
+    return {"lla": out[:, LLA_SLICE], "vel_n": out[:, VEL_SLICE], "q_bn": out[:, Q_SLICE]}

@@ -18,8 +18,10 @@ import math
 import numba as nb
 import numpy as np
 
+from fuzzynav.filters.layout import X_ATT, X_POS, X_VEL
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.nav.earth import radii_nb
+from fuzzynav.nav.layout import NAV_H, NAV_LAT, NAV_LON, NAV_VEL
 
 
 @nb.njit(MEAS_SIG, cache=True)
@@ -31,35 +33,35 @@ def gnss_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
     lu = C_bn[2, 0] * lx + C_bn[2, 1] * ly + C_bn[2, 2] * lz
     wx, wy, wz = aux[0], aux[1], aux[2]
     cx, cy, cz = wy * lz - wz * ly, wz * lx - wx * lz, wx * ly - wy * lx
-    lat, h = nav[7], nav[9]
+    lat, h = nav[NAV_LAT], nav[NAV_H]
     rm, rn = radii_nb(lat)
     m = 0
     if par[3] != 0.0:
-        de = (nav[8] - row[1]) * (rn + h) * math.cos(lat) + le - nav[4] * dt_back
-        dn = (nav[7] - row[0]) * (rm + h) + ln - nav[5] * dt_back
-        du = (nav[9] - row[2]) + lu - nav[6] * dt_back
+        de = (nav[NAV_LON] - row[1]) * (rn + h) * math.cos(lat) + le - nav[NAV_VEL] * dt_back
+        dn = (lat - row[0]) * (rm + h) + ln - nav[NAV_VEL + 1] * dt_back
+        du = (h - row[2]) + lu - nav[NAV_VEL + 2] * dt_back
         res = (de, dn, du)
         for i in range(3):
             if math.isfinite(res[i]) and row[6 + i] > 0.0:
                 z[m] = res[i]
                 # d(C l) = (C l) x phi  ->  [C l x]
                 if i == 0:
-                    H[m, 1], H[m, 2] = -lu, ln
+                    H[m, X_ATT + 1], H[m, X_ATT + 2] = -lu, ln
                 elif i == 1:
-                    H[m, 0], H[m, 2] = lu, -le
+                    H[m, X_ATT], H[m, X_ATT + 2] = lu, -le
                 else:
-                    H[m, 0], H[m, 1] = -ln, le
-                H[m, 6 + i] = 1.0
+                    H[m, X_ATT], H[m, X_ATT + 1] = -ln, le
+                H[m, X_POS + i] = 1.0
                 R[m] = row[6 + i] * row[6 + i]
                 chan[m] = 0
                 m += 1
     if par[4] != 0.0:
         for i in range(3):
             lever_v = C_bn[i, 0] * cx + C_bn[i, 1] * cy + C_bn[i, 2] * cz
-            res = nav[4 + i] + lever_v - row[3 + i]
+            res = nav[NAV_VEL + i] + lever_v - row[3 + i]
             if math.isfinite(res) and row[9 + i] > 0.0:
                 z[m] = res
-                H[m, 3 + i] = 1.0
+                H[m, X_VEL + i] = 1.0
                 R[m] = row[9 + i] * row[9 + i]
                 chan[m] = 1
                 m += 1

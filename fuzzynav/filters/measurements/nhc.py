@@ -16,12 +16,14 @@ import math
 import numba as nb
 import numpy as np
 
+from fuzzynav.filters.layout import X_ATT, X_VEL
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
+from fuzzynav.nav.layout import NAV_VEL
 
 
 @nb.njit(MEAS_SIG, cache=True)
 def nhc_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
-    ve, vn, vu = nav[4], nav[5], nav[6]
+    ve, vn, vu = nav[NAV_VEL], nav[NAV_VEL + 1], nav[NAV_VEL + 2]
     m = 0
     for k, axis in ((0, 0), (1, 2)):
         sig = row[2 + k]
@@ -30,10 +32,10 @@ def nhc_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
         cx, cy, cz = C_bn[0, axis], C_bn[1, axis], C_bn[2, axis]  # row of C_nb
         z[m] = cx * ve + cy * vn + cz * vu - row[k]
         # c . (phi x v) = phi . (v x c)
-        H[m, 0] = vn * cz - vu * cy
-        H[m, 1] = vu * cx - ve * cz
-        H[m, 2] = ve * cy - vn * cx
-        H[m, 3], H[m, 4], H[m, 5] = cx, cy, cz
+        H[m, X_ATT] = vn * cz - vu * cy
+        H[m, X_ATT + 1] = vu * cx - ve * cz
+        H[m, X_ATT + 2] = ve * cy - vn * cx
+        H[m, X_VEL], H[m, X_VEL + 1], H[m, X_VEL + 2] = cx, cy, cz
         R[m] = sig * sig
         chan[m] = 0
         m += 1

@@ -32,6 +32,7 @@ import math
 import numba as nb
 import numpy as np
 
+from fuzzynav.filters.layout import X_ATT
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.nav import polarization as ps
 
@@ -84,7 +85,7 @@ def _point(C, aop, sun, sigma, J, z, H, R, chan):
     euler_jacobian(C, J)
     z[0] = _wrap(heading - h)
     for j in range(3):
-        H[0, j] = J[2, j] - dp * J[0, j] - dr * J[1, j]
+        H[0, X_ATT + j] = J[2, j] - dp * J[0, j] - dr * J[1, j]
     R[0] = (dh_da * sigma) ** 2
     chan[0] = CH_HEADING
     return 1
@@ -135,7 +136,7 @@ def _imaging(C, aops, views, sun, sigma, prior_std, J, z, H, R, chan):
             return 0
         z[0] = dh
         for j in range(3):
-            H[0, j] = J[2, j]
+            H[0, X_ATT + j] = J[2, j]
         R[0] = cov[1, 1]
         chan[0] = CH_HEADING
         return 1
@@ -146,8 +147,8 @@ def _imaging(C, aops, views, sun, sigma, prior_std, J, z, H, R, chan):
     z[0] = pitch - p
     z[1] = dh - g * z[0]
     for j in range(3):
-        H[0, j] = J[0, j]
-        H[1, j] = J[2, j] - g * J[0, j]
+        H[0, X_ATT + j] = J[0, j]
+        H[1, X_ATT + j] = J[2, j] - g * J[0, j]
     R[0] = cov[0, 0]
     R[1] = r1
     chan[0], chan[1] = CH_PITCH, CH_HEADING
@@ -165,7 +166,7 @@ def _raw(C, aops, views, sun, sigmas, z, H, R, chan):
             continue
         z[m] = _fold(pred - aops[i])
         for j in range(3):
-            H[m, j] = jac[j]
+            H[m, X_ATT + j] = jac[j]
         R[m] = sigmas[i] ** 2
         chan[m] = CH_AOP
         m += 1
