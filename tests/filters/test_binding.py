@@ -152,3 +152,18 @@ def test_fuzzy_is_the_filter_and_fakf_its_listed_alias():
     fuzzy, fakf = get_filter("fuzzy"), get_filter("fakf")
     assert fakf.make is fuzzy.make
     assert fakf.description == "alias of 'fuzzy'"
+
+
+def test_fis_check_refuses_a_bad_binding_in_one_line(tmp_path, capsys):
+    from fuzzynav.cli import main
+
+    doc = _doc()
+    doc["binding"]["inputs"]["dom_pos"] = {"statistic": "dom", "chanel": "pos"}
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    code = main(["fis", "check", str(path)])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    assert err.strip().splitlines() == [f"fuzzynav: error: {path}: $.binding.inputs.dom_pos."
+                                        f"chanel: unknown key 'chanel'; known: statistic, "
+                                        f"channel"]
