@@ -195,11 +195,21 @@ def _rules_summary(fis) -> str:
     return f"rules ({len(fis.rules)}): {w}; connective {'/'.join(conn)}"
 
 
+def _binding(fis, path):
+    """The rule file's parsed binding (None without one): a bad one fails the check."""
+    if fis.binding is None:
+        return None
+    from fuzzynav.filters.adaptation.binding import Binding
+
+    return Binding.of(fis, path)
+
+
 def cmd_check(args) -> int:
     """Validate a rule file and print a one-screen summary."""
     from fuzzynav.fuzzy.lint import advisories
 
     fis = _load(args.file)
+    binding = _binding(fis, args.file)
     print(f"{args.file}: OK ({_FORMATS[_kind(args.file)]}), {fis.type} system {fis.name!r}")
     print("operators: " + ", ".join(f"{k} {v}" for k, v in fis.operators.as_dict().items()))
     for title, variables in (("inputs", fis.inputs), ("outputs", fis.outputs)):
@@ -212,9 +222,10 @@ def cmd_check(args) -> int:
     table = rule_grid(fis)
     if table:
         _table(*table)
-    if fis.binding:
-        print(f"binding: adapter {fis.binding.get('adapter')!r}, keys "
-              f"{', '.join(sorted(fis.binding))}")
+    if binding is not None:
+        feeds = ", ".join(f"{b.name} <- {b.statistic}({b.channel})" for b in binding.inputs)
+        print(f"binding: adapter {binding.adapter!r}, {feeds}, window {binding.window}"
+              + (f", sensor {binding.sensor!r}" if binding.sensor else ""))
     if fis.provenance:
         src = fis.provenance.get("source") or fis.provenance.get("study") or "-"
         print(f"provenance: {src if len(src) <= 88 else src[:85] + '...'}")

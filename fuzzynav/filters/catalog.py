@@ -16,10 +16,11 @@ from fuzzynav.errors import DataMissingError, FuzzynavError
 from fuzzynav.filters import adaptation, measurements
 from fuzzynav.filters.adaptation.classical import (ConstantScale, FadingMemory, Huber, SageHusa,
                                                    VariationalBayes)
-from fuzzynav.filters.named import FilterContext, FilterSetup, _config_overrides, \
-    config_from_imu, register_filter
+from fuzzynav.filters.adaptation.binding import Binding
+from fuzzynav.filters.named import FilterContext, FilterSetup, config_from_imu, \
+    config_overrides, register_alias, register_filter
 
-#: the paper's two controllers, used by ``fakf`` when no ``--rules`` are given
+#: the paper's two controllers, used by ``fuzzy`` (alias ``fakf``) without ``--rules``
 PAPER000_RULES = ("paper000_gps_sins.json", "paper000_attitude.json")
 
 
@@ -62,11 +63,14 @@ def bind_systems(items, sensors: dict, required: bool = True) -> dict:
     """
     out = {}
     for fis, source in items:
-        policy = adaptation.get((fis.binding or {}).get("adapter", ""))(fis, source)
-        target = (fis.binding or {}).get("sensor")
-        chans = set(policy.channels)
+        binding = Binding.of(fis, source)
+        policy = adaptation.get(binding.adapter)(fis, source, binding)
+        target = binding.sensor
+        chans = set(binding.channels)
         if target:
             matched = [nm for nm, d in sensors.items() if target in (nm, d.kind)]
+            for nm in matched:  # the named sensor must have the channels read
+                binding.check_channels(measurements.get(sensors[nm].kind), source)
         else:
             matched = [nm for nm, d in sensors.items()
                        if chans and chans <= set(measurements.get(d.kind).channels)]
@@ -86,12 +90,12 @@ def bind_systems(items, sensors: dict, required: bool = True) -> dict:
 
 
 def _base(ctx: FilterContext):
-    return config_from_imu(ctx.imu_noise, **_config_overrides(ctx.options))
+    return config_from_imu(ctx.imu_noise, **config_overrides(ctx.options))
 
 
-@register_filter("fakf", "fuzzy adaptive KF (exponential weighting, paper 000); "
-                         "--rules FILE to use other rule files")
-def _fakf(ctx: FilterContext) -> FilterSetup:
+@register_filter("fuzzy", "fuzzy adaptive KF: each rule file (--rules FILE, repeatable) "
+                          "binds the adapter it names; default: paper 000's two controllers")
+def _fuzzy(ctx: FilterContext) -> FilterSetup:
     given = ctx.options.get("rules")
     if given:
         adapters = bind_rule_files([given] if isinstance(given, (str, Path)) else given,
@@ -99,8 +103,13 @@ def _fakf(ctx: FilterContext) -> FilterSetup:
     else:
         adapters = bind_rule_files(PAPER000_RULES, ctx.sensors, required=False)
         if not adapters:
-            raise FuzzynavError("fakf: none of the paper-000 rule files fits this run's sensors")
+            raise FuzzynavError("fuzzy: none of the paper-000 rule files fits this run's "
+                                "sensors")
     return FilterSetup(_base(ctx), adapters)
+
+
+# paper 000's name for it (FAKF: fuzzy adaptive Kalman filter), kept for scripts and studies
+register_alias("fakf", "fuzzy")
 
 
 def _every_sensor(ctx, make):

@@ -77,6 +77,12 @@ def register_filter(name: str, description: str):
     return deco
 
 
+def register_alias(alias: str, name: str) -> None:
+    """Register ``alias`` as another name of the filter ``name`` (listed as an alias)."""
+    target = FILTERS[name]
+    FILTERS.add(alias, NamedFilter(alias, f"alias of {name!r}", target.make))
+
+
 def parse_filter_spec(spec: str):
     """``NAME`` or ``NAME@RULES[+RULES...]`` -> ``(name, options)``.
 
@@ -125,7 +131,8 @@ def config_from_imu(noise, **overrides) -> FilterConfig:
     return FilterConfig(**cfg)
 
 
-def _config_overrides(options) -> dict:
+def config_overrides(options) -> dict:
+    """The filter-configuration keys among a named filter's user ``options``."""
     keys = ("init_att_sigma_deg", "init_vel_sigma_mps", "init_pos_sigma_m", "gate_probability",
             "max_prop_dt_s", "out_rate_hz")
     return {k: options[k] for k in keys if k in options}
@@ -133,4 +140,4 @@ def _config_overrides(options) -> dict:
 
 @register_filter("ekf", "EKF with the nominal noise the sensors and the IMU datasheet claim")
 def _ekf(ctx: FilterContext) -> FilterSetup:
-    return FilterSetup(config_from_imu(ctx.imu_noise, **_config_overrides(ctx.options)))
+    return FilterSetup(config_from_imu(ctx.imu_noise, **config_overrides(ctx.options)))

@@ -56,3 +56,12 @@ def located(prefix: str, path=None):
     except FisError as exc:
         file = exc.path if exc.path is not None else path
         raise FisError(file, join(prefix, exc.where), exc.what) from None
+
+
+def unique(names, where: str, what: str):
+    """Fail on the first repeated name (``where[i].name``)."""
+    seen = set()
+    for i, n in enumerate(names):
+        if n in seen:
+            fail(f"{where}[{i}].name", f"duplicate {what} name {n!r}")
+        seen.add(n)

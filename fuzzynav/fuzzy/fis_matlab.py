@@ -12,9 +12,9 @@ from __future__ import annotations
 import re
 
 from fuzzynav.fuzzy._where import FisError, located
-from fuzzynav.fuzzy.io import read_text, write_text_atomic
 from fuzzynav.fuzzy.membership import SHAPES
 from fuzzynav.fuzzy.system import Antecedent, FuzzySystem, Operators, Rule, Term, Variable
+from fuzzynav.fuzzy.textio import read_text, write_text_atomic
 
 _FROM_MATLAB = {s.matlab: s.name for s in SHAPES.values() if s.matlab}
 _KNOWN_SYSTEM_KEYS = {"Name", "Type", "Version", "NumInputs", "NumOutputs", "NumRules",

@@ -11,19 +11,14 @@ Behaviour shared by every mode and engine (users rely on it):
 """
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
-from fuzzynav.fuzzy._where import FisEvaluationError
 from fuzzynav.fuzzy.defuzz import Implied, pwl_defuzz, singleton_defuzz
 from fuzzynav.fuzzy.layout import CLAMPED, NAN_INPUT, NO_RULE
 from fuzzynav.fuzzy.membership import evaluate_mf
 from fuzzynav.fuzzy.quadrature import curved_defuzz
-
-_PARALLEL_MIN = 20000
-
 
 @dataclass(frozen=True)
 class EvalInfo:
@@ -47,31 +42,6 @@ class EvalInfo:
     n_no_rule: int
     n_nan: int
     status: np.ndarray
-
-
-def _prepare(fis, inputs):
-    if not isinstance(inputs, Mapping):
-        raise FisEvaluationError(f"inputs must be a mapping name -> value, got "
-                                 f"{type(inputs).__name__}")
-    names = fis.input_names
-    missing = [n for n in names if n not in inputs]
-    unknown = [n for n in inputs if n not in names]
-    if missing or unknown:
-        raise FisEvaluationError(f"system {fis.name!r} takes inputs {', '.join(names)}; "
-                                 f"missing: {missing}, unknown: {unknown}")
-    try:
-        arrays = [np.asarray(inputs[n], dtype=float) for n in names]
-    except (TypeError, ValueError) as exc:
-        raise FisEvaluationError(f"inputs must be numbers or arrays of numbers: {exc}") \
-            from None
-    try:
-        arrays = np.broadcast_arrays(*arrays)
-    except ValueError as exc:
-        raise FisEvaluationError(f"inputs do not broadcast together: {exc}") from None
-    shape = arrays[0].shape
-    X = np.stack([a.ravel() for a in arrays], axis=1) if arrays[0].size else \
-        np.empty((0, len(names)))
-    return np.ascontiguousarray(X), shape
 
 
 def clamp(fis, X: np.ndarray):
@@ -175,7 +145,8 @@ def output_values(fis, W, Xc, per_output):
     return Y
 
 
-def _finish(fis, Y, status):
+def finish_outputs(fis, Y, status):
+    """Empty output sets take their defaults, NaN inputs give NaN outputs: (Y, status)."""
     empty = np.isnan(Y) & ~(status[:, None] & NAN_INPUT).astype(bool)
     defaults = np.array([v.default_value for v in fis.outputs])
     Y = np.where(empty, defaults, Y)
@@ -188,37 +159,4 @@ def python_exact(fis, X: np.ndarray):
     """Exact evaluation through the pure-Python reference path: (Y, status)."""
     Xc, status = clamp(fis, X)
     W = firing_strengths(fis, Xc)
-    return _finish(fis, output_values(fis, W, Xc, _exact_mamdani_output), status)
-
-
-def evaluate(fis, inputs, *, mode="exact", n_points=101, return_info=False, engine="auto"):
-    """Implementation of :meth:`FuzzySystem.evaluate` (see there)."""
-    X, shape = _prepare(fis, inputs)
-    if mode == "exact":
-        if engine not in ("auto", "compiled", "python"):
-            raise FisEvaluationError(f"engine must be 'auto', 'compiled' or 'python', got "
-                                     f"{engine!r}")
-        compiled = engine == "compiled" or (engine == "auto" and fis.is_compilable)
-        if compiled:
-            Y, status = fis.compile().evaluate(X, parallel=len(X) >= _PARALLEL_MIN)
-        else:
-            Y, status = python_exact(fis, X)
-    elif mode == "sampled":
-        from fuzzynav.fuzzy.sampled import sampled_evaluate
-
-        if isinstance(n_points, bool) or not isinstance(n_points, int) or n_points < 2:
-            raise FisEvaluationError(f"n_points must be an integer >= 2, got {n_points!r}")
-        Y, status = sampled_evaluate(fis, X, n_points)
-    else:
-        raise FisEvaluationError(f"mode must be 'exact' or 'sampled', got {mode!r}")
-    out = {}
-    for o, name in enumerate(fis.output_names):
-        col = Y[:, o].reshape(shape)
-        out[name] = float(col) if shape == () else col
-    if not return_info:
-        return out
-    info = EvalInfo(n_samples=len(X), n_clamped=int(np.count_nonzero(status & CLAMPED)),
-                    n_no_rule=int(np.count_nonzero(status & NO_RULE)),
-                    n_nan=int(np.count_nonzero(status & NAN_INPUT)),
-                    status=status.reshape(shape))
-    return out, info
+    return finish_outputs(fis, output_values(fis, W, Xc, _exact_mamdani_output), status)

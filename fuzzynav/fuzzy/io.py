@@ -11,21 +11,16 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 from collections.abc import Mapping
 from functools import lru_cache
 from importlib import resources
-from pathlib import Path
 
-from fuzzynav.errors import DataMissingError
 from fuzzynav.fuzzy._where import FisError, located
-from fuzzynav.fuzzy.system import Antecedent, FuzzySystem, Operators, Rule, Term, Variable
-
-FORMAT = "fuzzynav-fis"
-VERSION = 1
-#: larger files are refused before parsing
-MAX_FILE_BYTES = 8 * 1024 * 1024
-_OPTIONAL_OBJECTS = ("binding", "provenance", "expected")
+from fuzzynav.fuzzy.document import FORMAT, OPTIONAL_OBJECTS, VERSION, to_dict
+from fuzzynav.fuzzy.fis_matlab import read_matlab_fis, write_matlab_fis
+from fuzzynav.fuzzy.system import (NAME_RE, Antecedent, FuzzySystem, Operators, Rule, Term,
+                                   Variable)
+from fuzzynav.fuzzy.textio import MAX_FILE_BYTES, read_text, write_text_atomic
 
 
 # ------------------------------------------------------------------------ parsing
@@ -50,8 +45,6 @@ def _pairs(pairs):
 
 
 def _key_path(where: str, key) -> str:
-    from fuzzynav.fuzzy.system import NAME_RE
-
     if isinstance(key, str) and NAME_RE.match(key):
         return f"{where}.{key}"
     return f"{where}[{json.dumps(key)}]"
@@ -86,30 +79,6 @@ def parse_json_text(text: str, path=None):
     except RecursionError:
         raise FisError(path, "", "invalid JSON: nesting too deep") from None
     return doc
-
-
-def read_text(path, what: str = "rule file") -> str:
-    """Read a UTF-8 text file of at most :data:`MAX_FILE_BYTES` bytes."""
-    p = Path(path)
-    try:
-        with open(p, "rb") as fh:
-            size = os.fstat(fh.fileno()).st_size
-            if size > MAX_FILE_BYTES:
-                raise FisError(p, "", f"file is {size} bytes; a {what} may be at most "
-                                      f"{MAX_FILE_BYTES} bytes")
-            data = fh.read(MAX_FILE_BYTES + 1)
-    except FileNotFoundError:
-        raise DataMissingError(f"{p}: no such {what}") from None
-    except IsADirectoryError:
-        raise FisError(p, "", f"is a directory, not a {what}") from None
-    except PermissionError:
-        raise FisError(p, "", "permission denied") from None
-    if len(data) > MAX_FILE_BYTES:
-        raise FisError(p, "", f"a {what} may be at most {MAX_FILE_BYTES} bytes")
-    try:
-        return data.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise FisError(p, "", f"not UTF-8 text (byte {exc.start})") from None
 
 
 # ---------------------------------------------------------------------- validation
@@ -213,37 +182,7 @@ def from_dict(doc, path=None) -> FuzzySystem:
         rules = [_canonical_order(io_vars["inputs"], r) for r in rules]
         return FuzzySystem(doc["name"], doc["type"], operators, tuple(io_vars["inputs"]),
                            tuple(io_vars["outputs"]), tuple(rules),
-                           *(doc.get(k) for k in _OPTIONAL_OBJECTS))
-
-
-def _var_dict(v: Variable, output: bool) -> dict:
-    d = {"name": v.name, "range": list(v.range)}
-    if output and v.default is not None:
-        d["default"] = v.default
-    d["terms"] = [{"name": t.name, "mf": t.mf, "params": list(t.params)} for t in v.terms]
-    return d
-
-
-def _rule_dict(r: Rule) -> dict:
-    cond = {a.variable: ({"not": a.term} if a.negated else a.term) for a in r.antecedents}
-    d = {"if": cond, "then": dict(r.consequents), "weight": r.weight}
-    if r.connective != "and":
-        d["connective"] = r.connective
-    return d
-
-
-def to_dict(fis: FuzzySystem) -> dict:
-    """The canonical ``fuzzynav-fis`` version-1 document of ``fis``."""
-    d = {"format": FORMAT, "version": VERSION, "name": fis.name, "type": fis.type,
-         "operators": fis.operators.as_dict(),
-         "inputs": [_var_dict(v, False) for v in fis.inputs],
-         "outputs": [_var_dict(v, True) for v in fis.outputs],
-         "rules": [_rule_dict(r) for r in fis.rules]}
-    for key in _OPTIONAL_OBJECTS:
-        value = getattr(fis, key)
-        if value is not None:
-            d[key] = json.loads(json.dumps(value))
-    return d
+                           *(doc.get(k) for k in OPTIONAL_OBJECTS))
 
 
 # ---------------------------------------------------------------------- load / save
@@ -283,8 +222,6 @@ def load_fis(source) -> FuzzySystem:
     if not isinstance(source, (str, os.PathLike)):
         raise TypeError(f"load_fis takes a path or a dict, got {type(source).__name__}")
     if str(source).lower().endswith(".fis"):
-        from fuzzynav.fuzzy.fis_matlab import read_matlab_fis
-
         return read_matlab_fis(source)
     return from_dict(parse_json_text(read_text(source), source), source)
 
@@ -307,27 +244,6 @@ def dumps(doc, width: int = 96) -> str:
     return emit(doc, 0) + "\n"
 
 
-def write_text_atomic(path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file and ``os.replace``."""
-    p = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent or ".")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        mask = os.umask(0)
-        os.umask(mask)
-        os.chmod(tmp, 0o666 & ~mask)  # mkstemp makes 0600: give the file the usual mode
-        os.replace(tmp, p)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
-
-
 def save_fis(fis: FuzzySystem, path) -> None:
     """Write ``fis`` as a ``fuzzynav-fis`` JSON file, atomically (``.fis``: MATLAB).
 
@@ -338,8 +254,6 @@ def save_fis(fis: FuzzySystem, path) -> None:
         Destination; the extension ``.fis`` writes MATLAB format instead.
     """
     if str(path).lower().endswith(".fis"):
-        from fuzzynav.fuzzy.fis_matlab import write_matlab_fis
-
         write_matlab_fis(fis, path)
         return
     write_text_atomic(path, dumps(to_dict(fis)))

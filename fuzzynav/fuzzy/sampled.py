@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from fuzzynav.fuzzy.inference import (_finish, clamp, consequents, firing_strengths,
-                                      output_values)
+from fuzzynav.fuzzy.inference import (clamp, consequents, finish_outputs,
+                                      firing_strengths, output_values)
 from fuzzynav.fuzzy.membership import evaluate_mf
 
 _CHUNK = 8192
@@ -79,4 +79,4 @@ def sampled_evaluate(fis, X: np.ndarray, n_points: int = 101):
     """Sampled-mode evaluation of rows of X: (Y, status)."""
     Xc, status = clamp(fis, X)
     W = firing_strengths(fis, Xc)
-    return _finish(fis, output_values(fis, W, Xc, _per_output(n_points)), status)
+    return finish_outputs(fis, output_values(fis, W, Xc, _per_output(n_points)), status)

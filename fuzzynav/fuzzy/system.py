@@ -13,8 +13,10 @@ import re
 from dataclasses import dataclass, field
 from functools import cached_property
 
-from fuzzynav.fuzzy._where import fail
+from fuzzynav.fuzzy._where import fail, unique
+from fuzzynav.fuzzy.document import to_dict
 from fuzzynav.fuzzy.membership import SHAPES, check_params
+from fuzzynav.fuzzy.validation import check_system
 
 NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,63}$")
 
@@ -37,15 +39,6 @@ def _check_name(name, where: str, what: str = "name"):
     if not isinstance(name, str) or not NAME_RE.match(name):
         fail(where, f"{what} must be an identifier (letter or _, then letters, digits, _; "
                     f"at most 64 characters), got {name!r}")
-
-
-def unique(names, where: str, what: str):
-    """Fail on the first repeated name (``where[i].name``)."""
-    seen = set()
-    for i, n in enumerate(names):
-        if n in seen:
-            fail(f"{where}[{i}].name", f"duplicate {what} name {n!r}")
-        seen.add(n)
 
 
 @dataclass(frozen=True)
@@ -278,8 +271,6 @@ class FuzzySystem:
 
     def to_dict(self) -> dict:
         """The system as a ``fuzzynav-fis`` version-1 document (lossless)."""
-        from fuzzynav.fuzzy.io import to_dict
-
         return to_dict(self)
 
     def compile(self):
@@ -316,10 +307,8 @@ class FuzzySystem:
         dict or (dict, EvalInfo)
             Output name -> float (all inputs scalar) or ndarray of the broadcast shape.
         """
-        from fuzzynav.fuzzy.inference import evaluate
+        from fuzzynav.fuzzy.batch import evaluate  # lazy: keeps ``import fuzzynav.fuzzy`` light
 
         return evaluate(self, inputs, mode=mode, n_points=n_points,
                         return_info=return_info, engine=engine)
 
-
-from fuzzynav.fuzzy.validation import check_system  # noqa: E402  (uses the classes above)

@@ -5,9 +5,8 @@ loader prefixes them with ``$`` and the file name.
 """
 from __future__ import annotations
 
-from fuzzynav.fuzzy._where import fail, located
+from fuzzynav.fuzzy._where import fail, located, unique
 from fuzzynav.fuzzy.membership import FUZZY_SHAPES, SUGENO_SHAPES, check_params
-from fuzzynav.fuzzy.system import unique
 
 
 def check_system(fis) -> None:

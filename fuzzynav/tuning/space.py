@@ -28,6 +28,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from fuzzynav.errors import InputFileError
+from fuzzynav.filters.adaptation.binding import Binding
 from fuzzynav.fuzzy import (Antecedent, FuzzySystem, Rule, Variable, load_fis,
                             standard_labels, triangular_partition)
 
@@ -74,11 +75,13 @@ class ControllerSpace:
 
     config: object          # ControllerConfig
     template: FuzzySystem
+    binding: Binding        # the template's, parsed once; tuned systems keep it
 
     @classmethod
     def from_config(cls, cc) -> "ControllerSpace":
-        """Load the template and check the configuration against it."""
-        return cls(cc, check_against_template(cc))
+        """Load the template and check the configuration (and its binding) against it."""
+        tmpl = check_against_template(cc)
+        return cls(cc, tmpl, Binding.of(tmpl, cc.template))
 
     # -- building ---------------------------------------------------------------------------
     def _p(self, key):
@@ -162,12 +165,14 @@ class ControllerSpace:
         t = self.template
         inputs = tuple(self._variable(trial, v, False) for v in t.inputs)
         output = self._variable(trial, t.outputs[0], True)
-        binding = dict(t.binding or {})
+        binding = self.binding
         if self.config.window is not None:
-            binding["window"] = trial.suggest_int(self._p("window"), *self.config.window)
+            binding = replace(binding, window=trial.suggest_int(self._p("window"),
+                                                                *self.config.window))
         return FuzzySystem(name=f"{t.name}-tuned", type=t.type, operators=t.operators,
                            inputs=inputs, outputs=(output,),
-                           rules=self._rules(trial, inputs, output), binding=binding)
+                           rules=self._rules(trial, inputs, output),
+                           binding=binding.to_dict())
 
 
 def build_all(spaces, trial) -> dict:

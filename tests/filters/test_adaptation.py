@@ -5,8 +5,8 @@ import pytest
 from fuzzynav.errors import FuzzynavError, InputFileError
 from fuzzynav.filters import adaptation, measurements
 from fuzzynav.filters.adaptation import classical, window
-from fuzzynav.filters.adaptation.fuzzy_alpha import FuzzyExponentialWeighting
-from fuzzynav.filters.adaptation.fuzzy_rscale import FuzzyRScaling
+from fuzzynav.filters.adaptation.exponential_weighting import FuzzyExponentialWeighting
+from fuzzynav.filters.adaptation.r_scaling import FuzzyRScaling
 from fuzzynav.filters.catalog import bind_rule_files, bind_systems
 from fuzzynav.fuzzy import load_fis
 

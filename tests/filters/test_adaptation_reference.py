@@ -17,8 +17,8 @@ import pytest
 
 from fuzzynav.filters import adaptation, measurements
 from fuzzynav.filters.adaptation import classical
-from fuzzynav.filters.adaptation.fuzzy_alpha import FuzzyExponentialWeighting
-from fuzzynav.filters.adaptation.fuzzy_rscale import FuzzyRScaling
+from fuzzynav.filters.adaptation.exponential_weighting import FuzzyExponentialWeighting
+from fuzzynav.filters.adaptation.r_scaling import FuzzyRScaling
 from fuzzynav.fuzzy import load_fis
 from tests.floats import ULP_RTOL
 

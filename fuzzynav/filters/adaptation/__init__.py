@@ -86,7 +86,7 @@ class NoAdaptation(Adapter):
 
 
 ADAPTERS = Registry("adaptation policy", __name__,
-                    ("fuzzy_alpha", "fuzzy_rscale", "classical"))
+                    ("exponential_weighting", "r_scaling", "classical"))
 
 
 def register(cls):

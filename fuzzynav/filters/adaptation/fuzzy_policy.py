@@ -2,7 +2,8 @@
 from __future__ import annotations
 
 from fuzzynav.filters.adaptation import Adapter
-from fuzzynav.filters.adaptation.fuzzy_common import channels_of, check_binding, pack
+from fuzzynav.filters.adaptation.binding import Binding
+from fuzzynav.filters.adaptation.fuzzy_common import pack
 
 
 class FuzzyPolicy(Adapter):
@@ -14,16 +15,20 @@ class FuzzyPolicy(Adapter):
         The rule set; its ``binding.adapter`` must equal the policy's ``name``.
     source : str, optional
         Where it came from (named in error messages).
+    binding : Binding, optional
+        ``fis.binding`` already parsed (by whoever chose this policy from it).
     """
 
     role = ""
     diag_prefix: tuple = ()
     floats: tuple = ()
 
-    def __init__(self, fis, source=None):
+    def __init__(self, fis, source=None, binding: Binding | None = None):
         self.fis = fis
         self.source = source
-        self.binding = check_binding(fis, source, self.name)
+        if binding is None or binding.adapter != self.name:
+            binding = Binding.of(fis, source, self.name)
+        self.binding = binding
         self.diag_names = tuple(self.diag_prefix) + tuple(fis.input_names)
 
     @classmethod
@@ -36,7 +41,7 @@ class FuzzyPolicy(Adapter):
     @property
     def channels(self) -> tuple:
         """Measurement channels the rule file reads."""
-        return channels_of(self.fis)
+        return self.binding.channels
 
     def arrays(self, model):
         return pack(self.fis, self.source, self.binding, model, self.role, self.policy_floats())

@@ -79,5 +79,8 @@ def statistic(kind, st, off, n, n_channels, HPH, R, chan, m, c):
     return act / th
 
 
-#: statistic names as written in rule-file bindings
+#: statistic names as written in rule-file bindings -> kernel code of :func:`statistic`
 STATISTICS = {"dom": 0, "ror": 1}
+#: how ``dom`` is normalised (``binding.normalisation``) -> kernel code: only the relative
+#: trace per channel, ``(tr P_z - tr C_r) / tr P_z``, is implemented
+DOM_NORMALISATIONS = {"relative-trace": 0}

@@ -51,7 +51,5 @@ class FuzzyExponentialWeighting(FuzzyPolicy):
     diag_prefix = ("alpha",)
 
     def policy_floats(self):
-        from fuzzynav.filters.adaptation.fuzzy_common import output_index
-
-        out = self.fis.outputs[output_index(self.fis, self.source, self.binding, self.role)]
+        out = self.fis.outputs[self.binding.output_index(self.fis, self.role)]
         return (min(1.0, max(out.range[0], 0.1)),)

@@ -1,0 +1,231 @@
+"""A rule file's ``binding``: how a filter feeds a fuzzy system, parsed once and checked.
+
+The fuzzy engine carries ``binding`` as an opaque JSON object; the filters give it its
+meaning here.  :meth:`Binding.of` turns it into a frozen :class:`Binding` and refuses
+anything it would not use, with an :class:`~fuzzynav.errors.InputFileError` naming the
+rule file and the JSON path (``$.binding.inputs.dom_pos.chanel: unknown key 'chanel';
+known: statistic, channel``).  Everything downstream (packing the policy arrays, binding
+to sensors, tuning) reads the dataclass, never the dict; :meth:`Binding.to_dict` writes
+the same JSON back.
+
+Keys (``docs/fuzzy.md``): ``adapter`` (a fuzzy adaptation policy), ``inputs`` (fuzzy input
+-> ``statistic`` and ``channel``), ``outputs`` (fuzzy output -> the policy quantity it
+drives), ``window`` (epochs, default 10), ``sensor`` (a sensor name or kind, optional),
+``normalisation`` (how ``dom`` is reduced: ``relative-trace``, the only one and default).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from fuzzynav.errors import InputFileError
+from fuzzynav.filters import adaptation, measurements
+from fuzzynav.filters.adaptation import window
+
+#: the DoM/ROR window in epochs, inclusive bounds
+WINDOW_RANGE = (1, 10000)
+DEFAULT_WINDOW = 10
+_KEYS = ("adapter", "inputs", "outputs", "window", "sensor", "normalisation")
+_INPUT_KEYS = ("statistic", "channel")
+
+
+class _Where:
+    """Raises errors located in one rule file's binding."""
+
+    def __init__(self, source):
+        self.source = source
+
+    def error(self, where: str, what: str) -> InputFileError:
+        return InputFileError(self.source, "$.binding" + (f".{where}" if where else ""), what)
+
+    def mapping(self, value, where: str, known=None) -> dict:
+        """``value`` as a JSON object, with only ``known`` keys when given."""
+        if not isinstance(value, dict):
+            raise self.error(where, f"must be a JSON object, got {type(value).__name__}")
+        for key in value:
+            if known is not None and key not in known:
+                at = f"{where}.{key}" if where else str(key)
+                raise self.error(at, f"unknown key {key!r}; known: {', '.join(known)}")
+        return value
+
+    def name(self, value, where: str, what: str) -> str:
+        if not isinstance(value, str) or not value:
+            raise self.error(where, f"must name {what} (a non-empty string), got {value!r}")
+        return value
+
+
+@dataclass(frozen=True)
+class InputBinding:
+    """What feeds one fuzzy input: a windowed ``statistic`` of a measurement ``channel``."""
+
+    name: str
+    statistic: str
+    channel: str = "all"
+
+
+@dataclass(frozen=True)
+class OutputBinding:
+    """Which policy quantity (``target``, e.g. ``alpha``) a fuzzy output drives."""
+
+    name: str
+    target: str
+
+
+@dataclass(frozen=True)
+class Binding:
+    """A parsed, checked rule-file binding (see the module docstring).
+
+    Attributes
+    ----------
+    adapter : str
+        Registered name of the fuzzy adaptation policy.
+    inputs : tuple of InputBinding
+        One per fuzzy input, in the system's input order.
+    outputs : tuple of OutputBinding
+    window : int
+        Epochs of the innovation window.
+    sensor : str or None
+        Sensor name or kind to bind to (None: every sensor with the channels read).
+    normalisation : str
+        How ``dom`` is reduced (``relative-trace``: per channel, see
+        :mod:`fuzzynav.filters.adaptation.window`).
+    """
+
+    adapter: str
+    inputs: tuple
+    outputs: tuple
+    window: int = DEFAULT_WINDOW
+    sensor: str | None = None
+    normalisation: str = "relative-trace"
+
+    @classmethod
+    def of(cls, fis, source=None, adapter: str | None = None) -> "Binding":
+        """Parse and check the ``binding`` of fuzzy system ``fis`` (from file ``source``).
+
+        With ``adapter``, the binding must name that adapter (checked first).
+        """
+        w = _Where(source)
+        if fis.binding is None:
+            raise w.error("", "missing: a rule file run by a filter needs a binding "
+                              "(adapter, inputs, outputs, window)")
+        doc = w.mapping(fis.binding, "", _KEYS)
+        if adapter is not None and doc.get("adapter") != adapter:
+            raise w.error("adapter", f"this policy needs adapter {adapter!r}; the rule file "
+                                     f"is bound to {doc.get('adapter')!r}")
+        adapter = _adapter(w, doc.get("adapter"))
+        return cls(adapter=adapter.name, inputs=_inputs(w, doc.get("inputs"), fis),
+                   outputs=_outputs(w, doc.get("outputs"), fis, adapter.role),
+                   window=_window(w, doc.get("window", DEFAULT_WINDOW)),
+                   sensor=None if doc.get("sensor") is None else
+                   w.name(doc["sensor"], "sensor", "a sensor or sensor kind"),
+                   normalisation=_normalisation(w, doc.get("normalisation", "relative-trace")))
+
+    def to_dict(self) -> dict:
+        """The JSON object of this binding, as rule files write it."""
+        d = {"adapter": self.adapter,
+             "inputs": {b.name: {"statistic": b.statistic, "channel": b.channel}
+                        for b in self.inputs},
+             "outputs": {b.name: b.target for b in self.outputs},
+             "window": self.window}
+        if self.sensor is not None:
+            d["sensor"] = self.sensor
+        if any(b.statistic == "dom" for b in self.inputs):
+            d["normalisation"] = self.normalisation  # says how the dom inputs are reduced
+        return d
+
+    @property
+    def channels(self) -> tuple:
+        """The measurement channels read, sorted (``all`` excluded)."""
+        return tuple(sorted({b.channel for b in self.inputs} - {"all"}))
+
+    def output_index(self, fis, target: str) -> int:
+        """Index in ``fis.outputs`` of the output driving ``target``."""
+        name = next(b.name for b in self.outputs if b.target == target)
+        return fis.output_names.index(name)
+
+    def statistic_codes(self) -> list:
+        """Kernel code of each input's statistic (:func:`window.statistic`)."""
+        return [window.DOM_NORMALISATIONS[self.normalisation] if b.statistic == "dom"
+                else window.STATISTICS[b.statistic] for b in self.inputs]
+
+    def check_channels(self, model, source=None) -> None:
+        """Refuse channels that measurement ``model`` does not have."""
+        for b in self.inputs:
+            if b.channel != "all" and b.channel not in model.channels:
+                raise _Where(source).error(
+                    f"inputs.{b.name}.channel", f"the {model.kind} model has no channel "
+                    f"{b.channel!r} (channels: {', '.join(model.channels + ('all',))})")
+
+
+def _adapter(w: _Where, name):
+    name = w.name(name, "adapter", "a fuzzy adaptation policy")
+    fuzzy = {k: cls for k, cls in adaptation.ADAPTERS.load().items()
+             if getattr(cls, "role", "")}
+    if name not in fuzzy:
+        raise w.error("adapter", f"unknown fuzzy adapter {name!r}; known: "
+                                 f"{', '.join(sorted(fuzzy))}")
+    return fuzzy[name]
+
+
+def known_channels() -> tuple:
+    """Every channel of the registered measurement models, and ``all``."""
+    names = {c for m in measurements.MODELS.load().values() for c in m.channels}
+    return tuple(sorted(names)) + ("all",)
+
+
+def _input(w: _Where, name: str, spec) -> InputBinding:
+    where = f"inputs.{name}"
+    spec = w.mapping(spec, where, _INPUT_KEYS)
+    stat = spec.get("statistic")
+    if stat not in window.STATISTICS:
+        raise w.error(f"{where}.statistic", f"unknown statistic {stat!r}; "
+                                            f"known: {', '.join(window.STATISTICS)}")
+    chan = spec.get("channel", "all")
+    if chan not in known_channels():
+        raise w.error(f"{where}.channel", f"unknown channel {chan!r}; "
+                                          f"known: {', '.join(known_channels())}")
+    return InputBinding(name, stat, chan)
+
+
+def _inputs(w: _Where, doc, fis) -> tuple:
+    if doc is None:
+        raise w.error("inputs", "missing: map every fuzzy input to a statistic and a channel")
+    doc = w.mapping(doc, "inputs")
+    for name in doc:
+        if name not in fis.input_names:
+            raise w.error(f"inputs.{name}", f"names no input of the fuzzy system "
+                                            f"(inputs: {', '.join(fis.input_names)})")
+    for name in fis.input_names:
+        if name not in doc:
+            raise w.error(f"inputs.{name}", "missing: say which statistic feeds this input")
+    return tuple(_input(w, name, doc[name]) for name in fis.input_names)
+
+
+def _outputs(w: _Where, doc, fis, role: str) -> tuple:
+    doc = w.mapping(doc if doc is not None else {}, "outputs")
+    out = []
+    for name, target in doc.items():
+        if name not in fis.output_names:
+            raise w.error(f"outputs.{name}", f"names no output of the fuzzy system "
+                                             f"(outputs: {', '.join(fis.output_names)})")
+        if target != role:
+            raise w.error(f"outputs.{name}", f"unknown target {target!r}; this adapter's "
+                                             f"output drives {role!r}")
+        out.append(OutputBinding(name, target))
+    if len(out) != 1:
+        raise w.error("outputs", f"bind exactly one output to {role!r} (bound: {len(out)})")
+    return tuple(out)
+
+
+def _window(w: _Where, n) -> int:
+    lo, hi = WINDOW_RANGE
+    if not isinstance(n, int) or isinstance(n, bool) or not lo <= n <= hi:
+        raise w.error("window", f"must be an integer number of epochs in {lo}..{hi}, "
+                                f"got {n!r}")
+    return n
+
+
+def _normalisation(w: _Where, value) -> str:
+    if value not in window.DOM_NORMALISATIONS:
+        raise w.error("normalisation", f"unknown normalisation {value!r}; known: "
+                                       f"{', '.join(window.DOM_NORMALISATIONS)}")
+    return value
