@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from fuzzynav.errors import FuzzynavError, InputFileError
+from fuzzynav.filters.adaptation.binding import WINDOW_RANGE
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
 
 SAMPLERS = ("tpe", "random", "qmc", "cmaes", "nsga2", "pso")
@@ -34,8 +35,6 @@ TUNE_MODES = ("both", "rules", "breakpoints")
 GROUP_METRICS = {"pos": "rms_pos_m", "vel": "rms_vel_mps", "att": "rms_att_deg"}
 #: a study name becomes a file name (the journal) and an Optuna study name
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,99}$")
-#: the DoM/ROR window of an adapter binding, in epochs (fuzzy_common.check_binding)
-_WINDOW = (1, 10000)
 #: a tuned output scales a covariance or R: a positive factor, at most this
 MAX_OUTPUT_FACTOR = 1e3
 #: files a study may name are the user's own: never system places
@@ -192,7 +191,7 @@ def _window(t: Table):
     pair = _pair(t, "window")
     if pair is None:
         return None
-    lo, hi = _WINDOW
+    lo, hi = WINDOW_RANGE
     if not all(float(v).is_integer() and lo <= v <= hi for v in pair):
         raise t.error("window", f"must be two integer epoch counts in {lo}..{hi}, "
                                 f"got {list(pair)}")
