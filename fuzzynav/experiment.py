@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from fuzzynav.errors import UnknownNameError
 from fuzzynav.filters.named import FilterContext, FilterSetup, get_filter, parse_filter_spec
 from fuzzynav.filters.runner import InitialState, run_filter
 from fuzzynav.metrics import errors_vs_trajectory, improvement_ci, mean_ci, rms_metrics
@@ -108,9 +109,22 @@ def summary_table(df: pd.DataFrame, metrics, baseline: str | None = None) -> pd.
 
     Returns a table indexed by metric with, per filter, ``mean``, ``ci`` (half width) and,
     for non-baseline filters, ``improvement_pct`` with ``improvement_lo`` / ``_hi``.
+
+    Raises
+    ------
+    UnknownNameError
+        (a ``KeyError``) for a ``baseline`` not among the filters of ``df`` or a metric
+        that is not one of its columns.
     """
     out = {}
     filters = list(dict.fromkeys(df["filter"]))
+    # names the caller typed: one clear error instead of pandas' bare KeyError
+    if baseline is not None and baseline not in filters:
+        raise UnknownNameError("baseline filter", baseline, filters)
+    for m in metrics:
+        if m not in df.columns or m in ("scenario", "filter", "seed"):
+            raise UnknownNameError("metric", m, [c for c in df.columns
+                                                 if c.startswith(("rms_", "max_"))])
     for m in metrics:
         row = {}
         piv = df.pivot_table(index="seed", columns="filter", values=m)

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
+from fuzzynav.errors import RunDivergedError
 from fuzzynav.nav import attitude, earth
 
 AXES = ("e", "n", "u")
@@ -146,3 +147,35 @@ def improvement_ci(baseline, candidate, level: float = 0.95, n_boot: int = 2000,
     boot = 100.0 * (1.0 - c[idx].mean(1) / b[idx].mean(1))
     lo, hi = np.percentile(boot, [50 * (1 - level), 50 * (1 + level)])
     return Estimate(point, float(lo), float(hi), int(b.size))
+
+
+def check_finite_metrics(df) -> None:
+    """Refuse a table of runs with a non-finite metric (a diverged filter run).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        One row per run with columns ``filter``, ``scenario``, ``seed``, the metrics
+        (``rms_*``, ``max_*``) and optionally ``completed`` and ``error``; a row with an
+        ``error`` (a filter that could not run, recorded as such) is not a diverged run.
+
+    Raises
+    ------
+    RunDivergedError
+        Naming the first such run's filter, scenario and seed and how many there are.
+    """
+    metrics = [c for c in df.columns if c.startswith(("rms_", "max_"))]
+    values = df[metrics].to_numpy(dtype=float)
+    bad = ~np.isfinite(values).all(axis=1)
+    if "error" in df.columns:
+        bad &= df["error"].isna().to_numpy()
+    if not bad.any():
+        return
+    i = int(np.flatnonzero(bad)[0])
+    row = df.iloc[i]
+    j = int(np.flatnonzero(~np.isfinite(values[i]))[0])
+    stopped = " (it stopped early: covariance lost)" if row.get("completed", 1.0) < 1 else ""
+    raise RunDivergedError(f"filter {row['filter']} diverged on scenario {row['scenario']} "
+                           f"seed {int(row['seed'])}{stopped}: {metrics[j]} = {values[i, j]}; "
+                           f"{int(bad.sum())} of {len(df)} run(s) have non-finite metrics, "
+                           "no table printed")

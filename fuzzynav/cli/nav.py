@@ -5,11 +5,10 @@ import json
 import os
 from pathlib import Path
 
-import numpy as np
-
 from fuzzynav.cli.values import check_count, check_t_start, write_stdout
-from fuzzynav.errors import FuzzynavError, RunDivergedError
+from fuzzynav.errors import FuzzynavError
 from fuzzynav.fileio import safe_stem
+from fuzzynav.metrics import check_finite_metrics
 
 
 def default_cache_dir() -> Path:
@@ -38,8 +37,10 @@ def register(sub) -> None:
 
 def add_source_arguments(p) -> None:
     p.add_argument("scenario", nargs="?", help="built-in scenario name or scenario TOML file")
-    p.add_argument("--data", metavar="KIND:DIR",
-                   help="a recording instead of a scenario, e.g. rtklib:../shared/datasets/rtklib-drive")
+    p.add_argument("--data", metavar="KIND:DIR[:SESSION]",
+                   help="a recording instead of a scenario, e.g. rtklib:../shared/datasets/"
+                        "rtklib-drive; SESSION picks one of several recordings in DIR (the "
+                        "<id> of imu_<id>.csv)")
 
 
 def add_recording_arguments(p) -> None:
@@ -72,7 +73,7 @@ def _cmd_scenarios(args) -> int:
     for name in list_scenarios():
         scn = load_scenario(name)
         print(f"  {name:<24} {scn.duration_s:7.0f} s  {scn.description}")
-    print("\ndata sources (--data KIND:DIR):")
+    print("\ndata sources (--data KIND:DIR[:SESSION]):")
     for kind, desc in data_sources().items():
         print(f"  {kind:<24} {desc}")
     print("\nfilters (--filter NAME):")
@@ -162,29 +163,6 @@ def run_scenario_filters(args, filters, baseline=None, claims=None, claim_labels
     if args.plot:
         _plot_first_seed(scn, filters, seeds[0], args)
     return 0
-
-
-def check_finite_metrics(df) -> None:
-    """Refuse a Monte-Carlo table with a non-finite metric (a diverged filter run).
-
-    Raises
-    ------
-    RunDivergedError
-        Naming the first such run's filter, scenario and seed and how many there are.
-    """
-    metrics = [c for c in df.columns if c.startswith(("rms_", "max_"))]
-    values = df[metrics].to_numpy(dtype=float)
-    bad = ~np.isfinite(values).all(axis=1)
-    if not bad.any():
-        return
-    i = int(np.flatnonzero(bad)[0])
-    row = df.iloc[i]
-    j = int(np.flatnonzero(~np.isfinite(values[i]))[0])
-    stopped = " (it stopped early: covariance lost)" if row.get("completed", 1.0) < 1 else ""
-    raise RunDivergedError(f"filter {row['filter']} diverged on scenario {row['scenario']} "
-                           f"seed {int(row['seed'])}{stopped}: {metrics[j]} = {values[i, j]}; "
-                           f"{int(bad.sum())} of {len(df)} run(s) have non-finite metrics, "
-                           "no table printed")
 
 
 def _json_summary(df, scn, filters, seeds) -> dict:

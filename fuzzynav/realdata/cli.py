@@ -1,4 +1,4 @@
-"""``fuzzynav run --data KIND:DIR``: the validation protocol from the command line.
+"""``fuzzynav run --data KIND:DIR[:SESSION]``: the validation protocol from the command line.
 
 Prints the table of the simulated ``run`` (one column per fed stream: GNSS throughout, with
 outages), or JSON with ``--json``; ``--plot DIR`` writes the horizontal error against time
@@ -90,11 +90,11 @@ def load_recording(spec, args):
     """Parse ``--data`` and load the recording with the loader options of ``args``."""
     from fuzzynav.realdata.sources import parse_data_spec, resolve_mounting
 
-    source, directory = parse_data_spec(spec)
+    source, directory, session = parse_data_spec(spec)
     mounting = resolve_mounting(getattr(args, "mounting", "auto"))
     return source.load(directory, mounting=mounting,
                        imu_delay_s=getattr(args, "imu_delay", None),
-                       span_s=_span(getattr(args, "span", None)))
+                       span_s=_span(getattr(args, "span", None)), session=session)
 
 
 def run_recording(spec, filter_name, options, args) -> int:

@@ -1,4 +1,4 @@
-"""Recording kinds usable with ``--data KIND:DIR`` and the parsing of that argument.
+"""Recording kinds usable with ``--data KIND:DIR[:SESSION]`` and the parsing of that argument.
 
 A kind is one :class:`DataSource` in :data:`SOURCES`: a description and a loader taking the
 recording directory (any copy of a recording of that kind) and returning an object with
@@ -27,8 +27,9 @@ class DataSource:
     description : str
         One line for ``fuzzynav scenarios``.
     load : callable
-        ``load(directory, mounting="auto", imu_delay_s=None, span_s=None) -> Recording``;
-        ``None`` leaves a loader's own default.
+        ``load(directory, mounting="auto", imu_delay_s=None, span_s=None, session=None)
+        -> Recording``; ``None`` leaves a loader's own default (``session``: which
+        recording of a directory that holds several).
     """
 
     kind: str
@@ -51,12 +52,12 @@ def register_source(kind: str, description: str):
 
 @register_source("rtklib", "RTKLIB car recording: imu_<id>.csv + .tag + gnss_<id>*.pos "
                            "(e.g. ../shared/datasets/rtklib-drive)")
-def _load_rtklib(directory, mounting="auto", imu_delay_s=None, span_s=None):
+def _load_rtklib(directory, mounting="auto", imu_delay_s=None, span_s=None, session=None):
     from fuzzynav.sim.loaders.rtklib import load_rtklib
 
     kw = {} if imu_delay_s is None else {"imu_delay_s": float(imu_delay_s)}
     # velocities are loaded as recorded; the protocol decides what to do with their lag
-    return load_rtklib(directory, mounting=mounting, span_s=span_s, **kw)
+    return load_rtklib(directory, mounting=mounting, span_s=span_s, session=session, **kw)
 
 
 #: mounting files shipped with the package (``--mounting NAME``)
@@ -87,8 +88,18 @@ def resolve_mounting(text):
                            f"{', '.join(builtin_mountings())}; or auto, none)")
 
 
-def parse_data_spec(spec: str) -> tuple[DataSource, Path]:
-    """Split ``KIND:DIR`` and check both parts.
+def parse_data_spec(spec: str) -> tuple[DataSource, Path, str | None]:
+    """Split ``KIND:DIR[:SESSION]`` and check the parts.
+
+    ``SESSION`` chooses one recording of a directory that holds several (for ``rtklib``
+    the ``<id>`` of ``imu_<id>.csv``).  A directory whose own name has a colon is taken
+    whole when it exists.
+
+    Returns
+    -------
+    source : DataSource
+    directory : Path
+    session : str or None
 
     Raises
     ------
@@ -99,13 +110,17 @@ def parse_data_spec(spec: str) -> tuple[DataSource, Path]:
     DataMissingError
         When the directory does not exist.
     """
-    kind, sep, directory = str(spec).partition(":")
-    if not sep or not kind or not directory:
-        raise FuzzynavError(f"--data: expected KIND:DIR (e.g. rtklib:../shared/datasets/"
-                            f"rtklib-drive), got {spec!r}")
+    kind, sep, rest = str(spec).partition(":")
+    directory, session = rest, None
+    head, colon, tail = rest.rpartition(":")
+    if colon and not Path(rest).expanduser().is_dir():
+        directory, session = head, tail
+    if not sep or not kind or not directory or session == "":
+        raise FuzzynavError(f"--data: expected KIND:DIR or KIND:DIR:SESSION (e.g. rtklib:"
+                            f"../shared/datasets/rtklib-drive), got {spec!r}")
     if kind not in SOURCES:
         raise UnknownNameError("data source kind", kind, SOURCES)
     path = Path(directory).expanduser()
     if not path.is_dir():
         raise DataMissingError(f"{path}: recording directory not found (--data {spec})")
-    return SOURCES[kind], path
+    return SOURCES[kind], path, session

@@ -16,6 +16,7 @@ from fuzzynav.realdata.mems import CONSUMER_MEMS, MemsModel
 from fuzzynav.realdata.protocol import ProtocolSettings
 from fuzzynav.realdata.score import errors_against, outage_drifts, score
 from fuzzynav.realdata.session import Start, constraints_for, run_named, start_from
+from fuzzynav.sim.log import check_seed
 
 #: feed name -> label in tables and figures
 FEEDS = {"gnss": "GNSS throughout", "outages": "with outages"}
@@ -94,6 +95,7 @@ def validate(rec, filter_name: str, settings: ProtocolSettings = ProtocolSetting
         Filter options (e.g. ``rules``).
     mems : MemsModel
     """
+    seed = check_seed(seed)  # numpy would refuse a negative one with a bare ValueError
     lever = np.asarray(rec.gnss.meta.get("lever_arm_b", np.zeros(3)), float)
     noisy = protocol.degraded_fixes(rec.gnss, settings, np.random.default_rng(seed))
     known = rec.mounting is not None

@@ -15,6 +15,7 @@ regenerated, never trusted.
 from __future__ import annotations
 
 import hashlib
+import operator
 import os
 import tempfile
 import zlib
@@ -23,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fuzzynav.errors import InputFileError
 from fuzzynav.fileio import output_errors, publish, safe_stem
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.sim.scenario import Scenario
@@ -56,6 +58,26 @@ class SensorLog:
     truth: Trajectory
     imu: ImuData
     sensors: dict
+
+
+def check_seed(seed, where: str = "seed") -> int:
+    """``seed`` as an ``int`` if it is a non-negative integer.
+
+    Raises
+    ------
+    InputFileError
+        (also a ``ValueError``) naming ``where``, for a negative, fractional or
+        non-numeric seed; numpy would take a float's integer part or refuse with a bare
+        ``ValueError`` deep inside.
+    """
+    try:
+        value = operator.index(seed)  # ints and numpy integers, not 1.5 or "3"
+    except TypeError:
+        raise InputFileError(None, where, f"must be a non-negative integer, got {seed!r}") \
+            from None
+    if value < 0:
+        raise InputFileError(None, where, f"must be a non-negative integer, got {value}")
+    return value
 
 
 def component_rng(seed: int, name: str) -> np.random.Generator:
@@ -171,8 +193,7 @@ def simulate(scenario: Scenario, seed: int, cache_dir=None) -> SensorLog:
     -------
     SensorLog
     """
-    if int(seed) < 0:
-        raise ValueError(f"seed must be non-negative, got {seed}")
+    seed = check_seed(seed)
     if cache_dir is None:
         return _generate(scenario, seed)
     key = cache_key(scenario, seed)

@@ -79,6 +79,16 @@ class Scenario:
     def __post_init__(self):
         object.__setattr__(self, "segments", tuple(self.segments))
         object.__setattr__(self, "sensors", types.MappingProxyType(dict(self.sensors)))
+        # a Scenario built in Python gets the checks of a scenario file (errors name the key
+        # of the file format: start.lat_deg, sensors.gps.rate_hz, ...)
+        start = {"start_lat_deg": self.start_lat_deg, "start_lon_deg": self.start_lon_deg,
+                 "start_h_m": self.start_h_m, "initial_speed_mps": self.initial_speed_mps,
+                 "initial_heading_deg": self.initial_heading_deg}
+        # sizes and cross-field meaning before anything is allocated (Profile builds pieces)
+        check_scenario(self.segments, self.imu, self.sensors, start)
+        # the motion too (a static segment while moving, a turn at rest, ...), so that a bad
+        # scenario fails when it is made and not in the middle of a study
+        Profile(self.segments, self.initial_speed_mps, np.deg2rad(self.initial_heading_deg))
 
     @property
     def start_lla_rad(self) -> np.ndarray:
@@ -180,11 +190,7 @@ def scenario_from_dict(d: dict, default_name: str = "scenario") -> Scenario:
         for key in list(sens.data):
             sensors[key] = _sensor(sens.table(key), key)
     top.finish()
-    # sizes and cross-field meaning before anything is allocated (Profile builds the pieces)
-    check_scenario(segments, imu, sensors, start)
-    # the motion is checked now (a static segment while moving, a turn at rest, ...), so
-    # that a bad file fails at load time and not in the middle of a study
-    Profile(segments, start["initial_speed_mps"], np.deg2rad(start["initial_heading_deg"]))
+    # Scenario() runs the cross-field checks (scenario_checks) and the motion check
     return Scenario(name=name, description=description, segments=segments, imu=imu,
                     sensors=sensors, **start)
 

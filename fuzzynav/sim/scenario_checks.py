@@ -8,6 +8,8 @@ file whose ``where`` is the key to change.
 """
 from __future__ import annotations
 
+import math
+
 from fuzzynav.errors import InputFileError
 from fuzzynav.sim.budget import check_run_size
 
@@ -31,14 +33,37 @@ def check_scenario(segments, imu, sensors, start: dict) -> None:
     imu : ImuSpec
     sensors : Mapping[str, Spec]
     start : dict
-        ``start_lat_deg``, ``initial_speed_mps`` (the parsed ``[start]`` table).
+        ``start_lat_deg``, ``initial_speed_mps`` (the parsed ``[start]`` table) and
+        optionally the other start values of :class:`~fuzzynav.sim.scenario.Scenario`.
     """
+    _check_start(start)
     duration = float(sum(s.duration_s for s in segments))
     check_run_size(duration, imu.rate_hz, sensors)
     _check_segments(segments, imu.rate_hz)
     _check_speed_and_pole(segments, start)
     for name, spec in sensors.items():
         _check_sensor(f"sensors.{name}", spec, imu.rate_hz, duration)
+
+
+#: Scenario attribute -> key of the [start] table
+_START_KEYS = {"start_lat_deg": "lat_deg", "start_lon_deg": "lon_deg", "start_h_m": "h_m",
+               "initial_speed_mps": "speed_mps", "initial_heading_deg": "heading_deg"}
+
+
+def _check_start(start: dict) -> None:
+    """Finite start values and a latitude on the globe (a file's ranges are checked as it
+    is read; a Scenario built in Python comes here unchecked)."""
+    for attr, key in _START_KEYS.items():
+        value = start.get(attr, 0.0)
+        try:
+            ok = math.isfinite(value)
+        except TypeError:
+            ok = False
+        if not ok:
+            raise InputFileError(None, f"start.{key}", f"must be a finite number, got {value!r}")
+    if not -90.0 <= start["start_lat_deg"] <= 90.0:
+        raise InputFileError(None, "start.lat_deg", f"{start['start_lat_deg']:g} deg is not a "
+                                                    "latitude (-90 to 90)")
 
 
 def _check_segments(segments, rate_hz: float) -> None:

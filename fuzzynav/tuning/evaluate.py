@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 
 from fuzzynav.experiment import run_on_log
-from fuzzynav.metrics import mean_ci
+from fuzzynav.metrics import check_finite_metrics, mean_ci
 from fuzzynav.tuning.config import GROUP_METRICS
 
 TUNED = "tuned"
@@ -20,12 +20,21 @@ def run_table(evaluator, systems: dict, runs, compare=()) -> pd.DataFrame:
     """One row per (run, filter): metrics and ratios to the baseline.
 
     ``systems`` (controller -> FuzzySystem) is run as filter ``"tuned"``; ``compare`` are named
-    filters run beside it (their failures are recorded, not raised).
+    filters run beside it (a filter that cannot run is recorded with an ``error``).
+
+    Raises
+    ------
+    RunDivergedError
+        When the baseline, the tuned rules or a compared filter gives non-finite metrics on
+        a run: the ratios would turn it into a plain number (``FAILED_RATIO``) and the table
+        would read as a result.
     """
-    rows = []
+    rows, baselines = [], []
     for scenario, seed in runs:
         log = evaluator.log(scenario, seed)
         base = evaluator.baseline(scenario, seed)
+        baselines.append({"scenario": scenario, "seed": seed,
+                          "filter": evaluator.config.baseline, **base})
         outcomes = {}
         if systems:
             _, m = evaluator.run_systems(systems, scenario, seed)
@@ -45,6 +54,7 @@ def run_table(evaluator, systems: dict, runs, compare=()) -> pd.DataFrame:
                 row.update({f"{g}_ratio": r[g] for g in GROUP_METRICS})
                 row["score"] = evaluator.score(r)
             rows.append(row)
+    check_finite_metrics(pd.DataFrame(baselines + rows))  # names filter, scenario and seed
     return pd.DataFrame(rows)
 
 

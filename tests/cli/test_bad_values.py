@@ -19,7 +19,7 @@ import pytest
 import fuzzynav.experiment
 import fuzzynav.sim.log
 from fuzzynav.cli import main
-from fuzzynav.cli.nav import check_finite_metrics
+from fuzzynav.metrics import check_finite_metrics
 from fuzzynav.errors import RunDivergedError
 
 ROOT = Path(__file__).resolve().parents[2]

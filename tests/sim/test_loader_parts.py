@@ -116,6 +116,27 @@ def test_mounting_toml(tmp_path):
         assert exc.value.where == where and exc.value.path == str(p)
 
 
+
+def test_mounting_toml_has_the_scenario_files_limits(tmp_path):
+    """Deep nesting, a huge file and a directory: one InputFileError naming the file each
+    (tomllib alone would raise RecursionError, read it all, or IsADirectoryError)."""
+    from fuzzynav.sim.tomltable import MAX_TOML_BYTES, MAX_TOML_DEPTH
+
+    p = tmp_path / "mounting.toml"
+    for text, what in [("x = " + "[" * 5000 + "]" * 5000, "nest"),
+                       (f"a = [{'[' * (MAX_TOML_DEPTH + 2)}1{']' * (MAX_TOML_DEPTH + 2)}]",
+                        "deeper than"),
+                       ("# pad\n" * (MAX_TOML_BYTES // 6 + 1), "bytes")]:
+        p.write_text(text)
+        with pytest.raises(InputFileError, match=what) as exc:
+            Mounting.from_toml(p)
+        assert exc.value.path == str(p)
+    d = tmp_path / "dir.toml"
+    d.mkdir()
+    with pytest.raises(InputFileError, match="is a directory") as exc:
+        Mounting.from_toml(d)
+    assert exc.value.path == str(d)
+
 # -- coarse alignment and lag on simulated data -------------------------------------------------------
 CAR = {"start": {"lat_deg": 40.0, "lon_deg": -105.0, "h_m": 1600.0},
        "imu": {"rate_hz": 100.0, "gyro_arw_dpsh": 0.3, "accel_vrw_ug_psqrthz": 80.0,

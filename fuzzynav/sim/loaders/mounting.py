@@ -18,14 +18,13 @@ Without a mounting the IMU frame is used as the body frame and the lever arm is 
 """
 from __future__ import annotations
 
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from fuzzynav.errors import InputFileError
-from fuzzynav.sim.tomltable import Table, with_path
+from fuzzynav.sim.tomltable import Table, read_toml, with_path
 
 #: forward-right-down body axes to right-forward-up: (x, y, z)_rfu = (y, x, -z)_frd
 C_RFU_FRD = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
@@ -101,9 +100,6 @@ class Mounting:
     def from_toml(cls, path) -> "Mounting":
         """Read a ``mounting.toml`` file."""
         path = Path(path)
+        doc = read_toml(path, "mounting file")  # bounded size and nesting, like scenarios
         with with_path(path):
-            try:
-                doc = tomllib.loads(path.read_text(encoding="utf-8"))
-            except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-                raise InputFileError(None, "", f"invalid TOML: {exc}") from None
             return cls.from_dict(doc)

@@ -31,6 +31,7 @@ second just before the first IMU sample, counted from 1970 in the GPS time scale
 """
 from __future__ import annotations
 
+import glob
 import io
 from dataclasses import dataclass
 from pathlib import Path
@@ -127,14 +128,38 @@ class Recording:
 
 
 # -- files --------------------------------------------------------------------------------
-def _one(directory: Path, pattern: str, what: str) -> Path:
+def _one(directory: Path, pattern: str, what: str, several: str) -> Path:
     found = sorted(directory.glob(pattern))
     if not found:
         raise DataMissingError(f"{directory}: no {what} ({pattern}) in the recording directory")
     if len(found) > 1:
         raise InputFileError(directory, pattern, "several files match ("
-                             + ", ".join(p.name for p in found) + "); pass session=")
+                             + ", ".join(p.name for p in found) + f"); {several}")
     return found[0]
+
+
+def sessions(directory) -> list[str]:
+    """The ``<id>`` of every ``imu_<id>.csv`` in ``directory``, sorted."""
+    return sorted(p.stem[len("imu_"):] for p in Path(directory).glob("imu_*.csv"))
+
+
+def _imu_file(directory: Path, session) -> Path:
+    """``imu_<session>.csv``, or the only IMU file; errors list the sessions there are."""
+    ids = ", ".join(sessions(directory)) or "none"
+    if session is None:
+        return _one(directory, "imu_*.csv", "IMU file",
+                    f"choose a session ({ids}) with session=\"<id>\" (command line: "
+                    "--data KIND:DIR:SESSION)")
+    sid = str(session)
+    # the id becomes part of a file name and a glob pattern: a plain name only
+    if not sid or sid != Path(sid).name or glob.escape(sid) != sid:
+        raise InputFileError(directory, "session", f"{sid!r} is not a session id (a plain "
+                                                   f"name; sessions here: {ids})")
+    imu = directory / f"imu_{sid}.csv"
+    if not imu.exists():
+        raise DataMissingError(f"{directory}: no session {sid!r} (no {imu.name}); sessions "
+                               f"here: {ids}")
+    return imu
 
 
 def find_files(directory, session=None) -> dict:
@@ -142,13 +167,13 @@ def find_files(directory, session=None) -> dict:
     directory = Path(directory)
     if not directory.is_dir():
         raise DataMissingError(f"{directory}: recording directory not found")
-    sid = "*" if session is None else str(session)
-    imu = _one(directory, f"imu_{sid}.csv", "IMU file")
+    imu = _imu_file(directory, session)
     tag = imu.with_name(imu.name + ".tag")
     if not tag.is_file():
         raise DataMissingError(f"{tag}: time-tag file of {imu.name} not found")
     session_id = imu.stem[len("imu_"):]
-    pos = _one(directory, f"gnss_{session_id}*.pos", "GNSS solution")
+    pos = _one(directory, f"{glob.escape('gnss_' + session_id)}*.pos", "GNSS solution",
+               "keep one solution per session in the directory")
     for what, path in (("IMU file", imu), ("time-tag file", tag), ("GNSS solution", pos)):
         if not path.is_file():
             raise InputFileError(path, "", f"not a regular file (a directory?); the {what} "
@@ -363,7 +388,7 @@ def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
     except InputFileError as exc:  # a span outside the data
         raise InputFileError(directory, exc.where, exc.what) from None
     imu.meta.update(n_missing_samples=clock.n_missing, max_gap_s=clock.max_gap_ms / 1000.0,
-                    tick_jitter_ms=clock.jitter_ms)
+                    tick_jitter_ms=clock.jitter_ms, source=str(files["imu"]))
     pos = read_pos(files["pos"])
     checks.gnss_overlap(files["pos"], pos.time_int_s + pos.time_frac_s, pos.columns["q"],
                         (epoch + imu.time_s[0], epoch + imu.time_s[-1]), limits)

@@ -75,7 +75,7 @@ def gyro_course_gain(imu, gnss, min_speed_mps=3.0, min_turn_rad=np.pi / 2):
 
 
 def course_rate_lag(imu, gnss, up_b=None, t_range=None, min_speed_mps=3.0, max_lag_s=0.5,
-                    step_s=0.0025):
+                    step_s=0.0025, source=None):
     """The shift [s] to add to IMU times for the gyro heading to follow the GNSS course.
 
     Parameters
@@ -91,14 +91,23 @@ def course_rate_lag(imu, gnss, up_b=None, t_range=None, min_speed_mps=3.0, max_l
         Both chords of a pair must be at least this fast (a course is defined).
     max_lag_s, step_s : float
         Search range and grid [s].
+    source : path-like, optional
+        The recording the data came from, named in errors; default ``imu.meta["source"]``
+        (set by the RTKLIB loader to the IMU file).
 
     Returns
     -------
     float
+
+    Raises
+    ------
+    InputFileError
+        Too few moving GNSS intervals in ``t_range`` to measure a lag (naming ``source``).
     """
     mid, ok, d_course, psi = _course_changes(imu, gnss, up_b, min_speed_mps, max_lag_s, t_range)
     if ok.sum() < 20:
-        raise InputFileError(None, "time alignment", "too few moving GNSS intervals to "
+        source = imu.meta.get("source") if source is None else source
+        raise InputFileError(source, "time alignment", "too few moving GNSS intervals to "
                                                      "measure the IMU lag")
 
     def cost(lag):
