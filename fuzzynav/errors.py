@@ -47,3 +47,28 @@ class UnknownNameError(FuzzynavError, KeyError):
 
 class DataMissingError(FuzzynavError, FileNotFoundError):
     """A recording or data file the user named is not there."""
+
+
+class OutputError(FuzzynavError):
+    """A file could not be written (read-only directory, full disk, ...).
+
+    Raised after the temporary file is removed: the file at ``path``, if there was one, is
+    as it was.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file (or directory) that was to be written.
+    reason : OSError or str
+        What the system said.
+    """
+
+    def __init__(self, path, reason):
+        self.path = str(path)
+        if isinstance(reason, OSError) and reason.strerror:
+            reason = reason.strerror
+        self.reason = str(reason)
+        super().__init__(f"{self.path}: cannot write it: {self.reason} (nothing was changed)")
+
+    def __str__(self) -> str:
+        return self.args[0]

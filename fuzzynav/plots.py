@@ -6,14 +6,12 @@ notebooks), so nothing is forced here.
 """
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
 
-from fuzzynav.fileio import publish
+from fuzzynav.fileio import write_atomic
 
 _AXES = ("east", "north", "up")
 _STYLES = ("-", "--", "-.", ":")
@@ -94,14 +92,7 @@ def membership_functions(fis, title: str = "", n_points: int = 400) -> plt.Figur
 def save(fig: plt.Figure, path) -> Path:
     """Write a figure atomically (format from the suffix) and close it."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
-    os.close(fd)
     try:
-        fig.savefig(tmp, dpi=110)
-        publish(tmp, path)
+        return write_atomic(path, lambda tmp: fig.savefig(tmp, dpi=110), suffix=path.suffix)
     finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
         plt.close(fig)
-    return path
