@@ -18,6 +18,7 @@ from tqdm.auto import tqdm
 
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.tuning.study import n_finished, open_study, reap_stale, run_worker
+from fuzzynav.tuning.warmup import warm_up
 
 #: a worker is started with this program instead of ``python -m``, which would put the
 #: current directory first on its import path (a stray ``inspect.py`` there broke workers)
@@ -139,6 +140,7 @@ def run_study(cfg, trials=None, workers: int = 1, storage=None, cache_dir=None,
     if workers > 1 and cfg.path is None:
         raise FuzzynavError("several workers need the study config as a file")
     study = open_study(cfg, storage, create=True)
+    warm_up(cfg, cache_dir, progress)  # a cold cache compiles: say so, once, here
     if cfg.sampler == "pso":
         from fuzzynav.tuning.pso import run_pso
 
