@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import threading
+from contextlib import contextmanager
 from pathlib import Path
 
 from tqdm.auto import tqdm
@@ -38,9 +39,9 @@ def is_cold(cache=None) -> bool:
     return cache is not None and compiled_count(cache) == 0
 
 
-def _compile_by_running(cfg, cache_dir) -> None:
-    """One candidate (the templates' own rules) and the baseline on the first training run:
-    the code path of every trial."""
+def compile_by_running(cfg, cache_dir=None) -> None:
+    """Run one candidate (the templates' own rules) and the baseline on the first training
+    run: the code path of every trial, so every kernel a trial needs gets compiled."""
     from fuzzynav.fuzzy import load_fis
     from fuzzynav.tuning.objective import Evaluator
 
@@ -51,17 +52,18 @@ def _compile_by_running(cfg, cache_dir) -> None:
     ev.ratios(metrics, scenario, seed)
 
 
-def warm_up(cfg, cache_dir=None, progress: bool = True) -> bool:
-    """Compile the kernels of ``cfg``'s trials here when the cache is cold.
+@contextmanager
+def compiling(progress: bool = True):
+    """Say that kernels are being compiled, with a live count, while the body runs -- if the
+    kernel cache is cold when it starts; yields whether it is.
 
-    Returns
-    -------
-    bool
-        Whether anything had to be compiled.
+    Enter it before anything imports the filters: importing them (loading a study config
+    does) already compiles the kernels that have explicit signatures.
     """
     cache = kernel_cache()
     if not is_cold(cache):
-        return False
+        yield False
+        return
     bar = tqdm(desc=MESSAGE, total=None, unit=" kernels", disable=not progress,
                bar_format="{desc}: {n} kernels compiled, {elapsed}")
     done = threading.Event()
@@ -73,10 +75,18 @@ def warm_up(cfg, cache_dir=None, progress: bool = True) -> bool:
     watcher = threading.Thread(target=count, daemon=True)
     watcher.start()
     try:
-        _compile_by_running(cfg, cache_dir)
+        yield True
     finally:
         done.set()
         watcher.join()
         bar.update(compiled_count(cache) - bar.n)
         bar.close()
-    return True
+
+
+def warm_up(cfg, cache_dir=None, progress: bool = True) -> bool:
+    """Compile the kernels of ``cfg``'s trials here when the cache is cold (see
+    :func:`compiling`); returns whether it was."""
+    with compiling(progress) as cold:
+        if cold:
+            compile_by_running(cfg, cache_dir)
+    return cold

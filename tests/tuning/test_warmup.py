@@ -23,7 +23,7 @@ def fake_compile(tmp_path, monkeypatch):
         for name in ("loop.run_loop-10.py311.nbi", "kalman.gain-20.py311.nbi"):
             (sub / name).write_bytes(b"")
 
-    monkeypatch.setattr(warmup, "_compile_by_running", compile_)
+    monkeypatch.setattr(warmup, "compile_by_running", compile_)
     return cache, calls
 
 
