@@ -114,3 +114,29 @@ def test_workers_do_not_import_from_the_current_directory(tmp_path, sim_cache, m
     monkeypatch.chdir(cwd)
     study = run_study(cfg, workers=2, cache_dir=sim_cache, progress=False)
     assert len(study.get_trials(states=(TrialState.COMPLETE,))) == 2
+
+
+@pytest.mark.slow
+def test_a_killed_pso_worker_is_replaced_and_the_swarm_completes(tmp_path, long_cache, capfd):
+    cfg = load_study_config(write_study(
+        tmp_path, train={"scenarios": [str(LONG)], "seeds": SEEDS},
+        study={"sampler": "pso", "seed": 7, "trials": 100, "stale_after_s": 600.0,
+               "pso": {"particles": 3, "iterations": 2, "inertia": [0.9, 0.4],
+                       "c1": 1.5, "c2": 1.5}}))
+    open_study(cfg, create=True)
+    watcher = optuna.load_study(study_name=cfg.name, storage=JournalStorage(
+        JournalFileBackend(cfg.storage_url[len("journal:"):])))
+    result = {}
+    runner = threading.Thread(target=lambda: result.update(study=run_study(
+        cfg, workers=2, cache_dir=long_cache, progress=False)))
+    runner.start()
+    killed = _kill_mid_trial(watcher, 1)
+    runner.join(300)
+    assert "study" in result, "run_study raised (see the captured output)"
+    trials = watcher.get_trials(deepcopy=False)
+    done = sorted((t.user_attrs["pso_iteration"], t.user_attrs["particle"]) for t in trials
+                  if t.state == TrialState.COMPLETE)
+    assert done == [(k, i) for k in range(2) for i in range(3)]
+    assert trials[killed.number].state == TrialState.FAIL
+    assert zombie_children() == []
+    assert "worker 1 killed by SIGKILL" in capfd.readouterr().err
