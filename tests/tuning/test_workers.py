@@ -61,6 +61,23 @@ def _kill_mid_trial(watcher, worker, timeout_s=120.0):
     raise AssertionError(f"worker {worker} never ran a trial")
 
 
+def run_and_kill(cfg, cache, worker):
+    """Run ``cfg`` with two workers, kill worker ``worker`` mid-trial; ``(the killed trial,
+    every trial at the end)``.  The run must end without an error."""
+    open_study(cfg, create=True)
+    watcher = optuna.load_study(study_name=cfg.name, storage=JournalStorage(
+        JournalFileBackend(cfg.storage_url[len("journal:"):])))
+    result = {}
+    runner = threading.Thread(target=lambda: result.update(study=run_study(
+        cfg, workers=2, cache_dir=cache, progress=False)))
+    runner.start()
+    killed = _kill_mid_trial(watcher, worker)
+    runner.join(300)
+    assert not runner.is_alive()
+    assert "study" in result, "run_study raised (see the captured output)"
+    return killed, watcher.get_trials(deepcopy=False)
+
+
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc")
 @pytest.mark.parametrize("worker", [1, pytest.param(0, marks=pytest.mark.slow)],
                          ids=["second", "first"])
@@ -70,18 +87,7 @@ def test_a_killed_worker_is_reaped_and_its_trial_retried(tmp_path, long_cache, w
     cfg = load_study_config(write_study(
         tmp_path, train={"scenarios": [str(LONG)], "seeds": SEEDS},
         study={"trials": total, "stale_after_s": 600.0}))  # only a dead pid gets reaped
-    open_study(cfg, create=True)
-    watcher = optuna.load_study(study_name=cfg.name, storage=JournalStorage(
-        JournalFileBackend(cfg.storage_url[len("journal:"):])))
-    result = {}
-    runner = threading.Thread(target=lambda: result.update(study=run_study(
-        cfg, workers=2, cache_dir=long_cache, progress=False)))
-    runner.start()
-    killed = _kill_mid_trial(watcher, worker)
-    runner.join(300)
-    assert not runner.is_alive()
-    assert "study" in result, "run_study raised (see the captured output)"
-    trials = watcher.get_trials(deepcopy=False)
+    killed, trials = run_and_kill(cfg, long_cache, worker)
     assert len([t for t in trials if t.state == TrialState.COMPLETE]) == total
     assert not [t for t in trials if t.state in (TrialState.RUNNING, TrialState.WAITING)]
     assert trials[killed.number].state == TrialState.FAIL
@@ -123,17 +129,7 @@ def test_a_killed_pso_worker_is_replaced_and_the_swarm_completes(tmp_path, long_
         study={"sampler": "pso", "seed": 7, "trials": 100, "stale_after_s": 600.0,
                "pso": {"particles": 3, "iterations": 2, "inertia": [0.9, 0.4],
                        "c1": 1.5, "c2": 1.5}}))
-    open_study(cfg, create=True)
-    watcher = optuna.load_study(study_name=cfg.name, storage=JournalStorage(
-        JournalFileBackend(cfg.storage_url[len("journal:"):])))
-    result = {}
-    runner = threading.Thread(target=lambda: result.update(study=run_study(
-        cfg, workers=2, cache_dir=long_cache, progress=False)))
-    runner.start()
-    killed = _kill_mid_trial(watcher, 1)
-    runner.join(300)
-    assert "study" in result, "run_study raised (see the captured output)"
-    trials = watcher.get_trials(deepcopy=False)
+    killed, trials = run_and_kill(cfg, long_cache, 1)
     done = sorted((t.user_attrs["pso_iteration"], t.user_attrs["particle"]) for t in trials
                   if t.state == TrialState.COMPLETE)
     assert done == [(k, i) for k in range(2) for i in range(3)]
