@@ -50,8 +50,32 @@ class DataMissingError(FuzzynavError, FileNotFoundError):
 
 
 class OutputError(FuzzynavError):
-    """A result could not be written (read-only place, full disk, a file where a directory
-    should be); the old file, if any, is left as it was and no temporary file remains."""
+    """A file could not be written (read-only place, full disk, a file where a directory
+    should be, a name too long).
+
+    Raised after the temporary file is removed: the file at ``path``, if there was one, is
+    as it was.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file (or directory) that was to be written.
+    reason : OSError or str
+        What the system said.
+    what : str, optional
+        What the file is ("simulation cache", "figure"); named in the message.
+    """
+
+    def __init__(self, path, reason, what: str = ""):
+        self.path = str(path)
+        if isinstance(reason, OSError) and reason.strerror:
+            reason = reason.strerror
+        self.reason = str(reason)
+        thing = f"the {what}" if what else "it"
+        super().__init__(f"{self.path}: cannot write {thing}: {self.reason} (nothing was changed)")
+
+    def __str__(self) -> str:
+        return self.args[0]
 
 
 class RunDivergedError(FuzzynavError):

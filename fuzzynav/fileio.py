@@ -2,14 +2,18 @@
 
 ``tempfile.mkstemp`` creates files readable by their owner only (mode 0600); a rule file, a
 figure or a cache file should get the usual mode (0666 minus the umask) like any file the
-user writes.  :func:`publish` sets that mode and moves the temporary file into place.
+user writes.  :func:`publish` sets that mode and moves the temporary file into place;
+:func:`write_atomic` does the whole round and turns a failure (read-only directory, full
+disk) into one :class:`~fuzzynav.errors.OutputError` line, leaving no temporary file.
 """
 from __future__ import annotations
 
 import hashlib
 import os
 import re
+import tempfile
 from contextlib import contextmanager
+from pathlib import Path
 
 from fuzzynav.errors import OutputError
 
@@ -58,5 +62,51 @@ def output_errors(path, what: str):
     except OutputError:
         raise
     except OSError as exc:
-        reason = exc.strerror or str(exc)
-        raise OutputError(f"{path}: cannot write the {what}: {reason}") from None
+        raise OutputError(path, exc, what) from None
+
+
+def make_dir(path, what: str = "") -> Path:
+    """``mkdir -p path``; a failure is an :class:`OutputError` naming it (and ``what``)."""
+    path = Path(path)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(path, exc, what) from None
+    return path
+
+
+def write_atomic(path, write, suffix: str = ".tmp", what: str = "") -> Path:
+    """Write ``path`` by calling ``write(tmp)`` on a temporary file beside it, then publish.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    write : callable
+        Fills the temporary file given its path (e.g. ``df.to_csv``, ``fig.savefig``).
+    suffix : str
+        Suffix of the temporary file (writers that infer the format from it need the real one).
+    what : str, optional
+        What the file is, for the error message ("figure", "report").
+
+    Raises
+    ------
+    OutputError
+        The directory is read-only, the disk full, ...: ``path`` is unchanged and the
+        temporary file removed.
+    """
+    path = Path(path)
+    make_dir(path.parent, what)
+    tmp = None
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=suffix)
+        os.close(fd)
+        write(tmp)
+        with open(tmp, "rb+") as fh:  # on disk before it replaces the old file
+            os.fsync(fh.fileno())
+        publish(tmp, path)
+    except OSError as exc:
+        raise OutputError(path, exc, what) from None
+    finally:
+        if tmp is not None and os.path.exists(tmp):
+            os.unlink(tmp)
+    return path

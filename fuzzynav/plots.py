@@ -6,14 +6,12 @@ notebooks), so nothing is forced here.
 """
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
 
-from fuzzynav.fileio import output_errors, publish
+from fuzzynav.fileio import write_atomic
 
 _AXES = ("east", "north", "up")
 _STYLES = ("-", "--", "-.", ":")
@@ -99,17 +97,7 @@ def save(fig: plt.Figure, path) -> Path:
     """
     path = Path(path)
     try:
-        with output_errors(path, "figure"):
-            path.parent.mkdir(parents=True, exist_ok=True)
-            fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.",
-                                       suffix=path.suffix)
-            os.close(fd)
-            try:
-                fig.savefig(tmp, dpi=110)
-                publish(tmp, path)
-            finally:
-                if os.path.exists(tmp):
-                    os.unlink(tmp)
+        return write_atomic(path, lambda tmp: fig.savefig(tmp, dpi=110), suffix=path.suffix,
+                            what="figure")
     finally:
         plt.close(fig)
-    return path

@@ -57,11 +57,16 @@ def _open(cfg, args):
 
 
 def _cmd_run(args) -> int:
-    from fuzzynav.tuning.run import run_study
+    from fuzzynav.tuning.warmup import compile_by_running, compiling
 
     check_count("--trials", args.trials)
     check_count("--workers", args.workers, hi=MAX_WORKERS)
-    cfg = _load(args)
+    with compiling() as cold:  # a cold kernel cache: loading the config already compiles
+        cfg = _load(args)
+        if cold:
+            compile_by_running(cfg, args.cache)
+    from fuzzynav.tuning.run import run_study
+
     study = run_study(cfg, args.trials, args.workers, args.storage, args.cache)
     print(f"study {cfg.name}: {len(study.trials)} trials in {args.storage or cfg.storage_url}")
     if not args.no_summary:

@@ -25,9 +25,14 @@ PAPER000_RULES = ("paper000_gps_sins.json", "paper000_attitude.json")
 
 
 def rules_dirs() -> list[Path]:
-    """Where rule files named without a directory are looked up, in order."""
+    """Where rule files named without a directory are looked up, in order.
+
+    ``FUZZYNAV_RULES``, ``./rules``, the checkout's ``rules/`` (source or editable install),
+    then the copy a wheel ships in ``fuzzynav/rules`` (``setup.py`` puts it there).
+    """
     dirs = [Path(p) for p in os.environ.get("FUZZYNAV_RULES", "").split(os.pathsep) if p]
-    dirs += [Path.cwd() / "rules", Path(__file__).resolve().parents[2] / "rules"]
+    package = Path(__file__).resolve().parents[1]
+    dirs += [Path.cwd() / "rules", package.parent / "rules", package / "rules"]
     return dirs
 
 

@@ -109,17 +109,58 @@ def _check_header(doc, path):
                                           f"reads {FORMAT} version {VERSION}")
 
 
+#: longest quotation of the offending value in a schema error message (characters)
+MAX_QUOTE = 200
+
+
+def _brief(value) -> str:
+    """``repr(value)``, cut to :data:`MAX_QUOTE` characters and then saying what it was."""
+    text = repr(value)
+    if len(text) <= MAX_QUOTE:
+        return text
+    what = type(value).__name__
+    for kind, unit in ((list, "items"), (dict, "keys"), (str, "characters")):
+        if isinstance(value, kind):
+            what = f"{kind.__name__} of {len(value)} {unit}"
+    return f"{text[:MAX_QUOTE]}... ({what})"
+
+
+def schema_message(error) -> str:
+    """A jsonschema error's message with the offending value quoted briefly.
+
+    jsonschema quotes the whole value (``[...] is too long``): for a file of 140 000 rules
+    that is a message of megabytes.  The JSON path says where the value is.
+    """
+    msg = error.message
+    full = repr(error.instance)
+    if len(full) > MAX_QUOTE and full in msg:
+        msg = msg.replace(full, _brief(error.instance))
+    if len(msg) > 3 * MAX_QUOTE:  # a long value quoted some other way (a safety net)
+        msg = f"{msg[:3 * MAX_QUOTE]}... (message cut from {len(msg)} characters)"
+    return msg
+
+
+def _size_errors(doc, path):
+    """Top-level arrays longer than the schema allows, refused before anything walks them
+    (the schema would first check each of, say, 140 000 rules: a minute)."""
+    for key, spec in schema().get("properties", {}).items():
+        value, limit = doc.get(key), spec.get("maxItems")
+        if isinstance(value, list) and limit is not None and len(value) > limit:
+            raise FisError(path, f"$.{key}", f"{len(value)} items; at most {limit} allowed")
+
+
 def _schema_errors(doc, path):
     import jsonschema
 
     error = jsonschema.exceptions.best_match(_validator().iter_errors(doc))
     if error is not None:
-        raise FisError(path, error.json_path, error.message)
+        raise FisError(path, error.json_path, schema_message(error))
 
 
 def validate_document(doc, path=None) -> None:
     """Check the header and the JSON Schema of a parsed document (not the semantics)."""
     _check_header(doc, path)
+    _size_errors(doc, path)
     _walk(doc, "$", path)
     _schema_errors(doc, path)
 

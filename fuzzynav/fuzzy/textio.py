@@ -5,7 +5,7 @@ import os
 import tempfile
 from pathlib import Path
 
-from fuzzynav.errors import DataMissingError
+from fuzzynav.errors import DataMissingError, OutputError
 from fuzzynav.fuzzy._where import FisError
 
 #: larger files are refused before parsing
@@ -37,10 +37,16 @@ def read_text(path, what: str = "rule file") -> str:
 
 
 def write_text_atomic(path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file and ``os.replace``."""
+    """Write ``text`` to ``path`` through a temporary file and ``os.replace``.
+
+    A failure (read-only directory, full disk) raises :class:`~fuzzynav.errors.OutputError`
+    with ``path`` unchanged and no temporary file left.  (``fuzzynav.fileio`` does the same
+    for the rest of the package; the fuzzy engine imports nothing of it.)
+    """
     p = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent or ".")
+    tmp = None
     try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent or ".")
         with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as fh:
             fh.write(text)
             fh.flush()
@@ -49,9 +55,8 @@ def write_text_atomic(path, text: str) -> None:
         os.umask(mask)
         os.chmod(tmp, 0o666 & ~mask)  # mkstemp makes 0600: give the file the usual mode
         os.replace(tmp, p)
-    except BaseException:
-        try:
+    except OSError as exc:
+        raise OutputError(p, exc) from None
+    finally:
+        if tmp is not None and os.path.exists(tmp):
             os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise

@@ -18,7 +18,8 @@ import optuna
 from optuna.trial import TrialState
 
 from fuzzynav import __version__
-from fuzzynav.errors import FuzzynavError
+from fuzzynav.errors import FuzzynavError, OutputError
+from fuzzynav.fileio import make_dir
 from fuzzynav.experiment import run_on_log
 from fuzzynav.fuzzy import FuzzySystem, load_fis, save_fis
 from fuzzynav.tuning.evaluate import run_table, summary
@@ -82,7 +83,9 @@ def export_rules(cfg, study, out, trial_number=None, pareto_index=None, cache_di
     """Write the rule files of a trial with provenance and expected metrics.
 
     The files are written complete (with their ``expected`` block) into a temporary
-    directory beside ``out`` and then moved into place: an error leaves no partial file.
+    directory beside ``out`` and then moved into place: an error leaves no partial file,
+    and a read-only directory or a full disk is one :class:`OutputError` with the old
+    files unchanged.
     """
     trial = choose_trial(study, cfg, trial_number, pareto_index)
     systems = systems_of(cfg, trial)
@@ -91,9 +94,11 @@ def export_rules(cfg, study, out, trial_number=None, pareto_index=None, cache_di
     test = run_table(ev, systems, cfg.test)
     held_out = summary(test).iloc[0].to_dict() if not test.empty else {}
     created = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
-    parent = next(iter(paths.values())).parent
-    parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=".export-", dir=parent))
+    parent = make_dir(next(iter(paths.values())).parent)
+    try:
+        tmp = Path(tempfile.mkdtemp(prefix=".export-", dir=parent))
+    except OSError as exc:  # a read-only directory
+        raise OutputError(parent, exc) from None
     try:
         staged = {name: tmp / p.name for name, p in paths.items()}
         for name, fis in systems.items():
@@ -115,6 +120,10 @@ def export_rules(cfg, study, out, trial_number=None, pareto_index=None, cache_di
         _write_expected(cfg, staged, ev)
         for name, p in paths.items():
             os.replace(staged[name], p)
+    except OutputError as exc:  # named the staged file: name the one asked for
+        raise OutputError(out, exc.reason) from None
+    except OSError as exc:
+        raise OutputError(out, exc) from None
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return list(paths.values())

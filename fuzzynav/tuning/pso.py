@@ -101,7 +101,7 @@ def _trials_of(study, it):
 def _evaluate(study, cfg, swarm_params, it, workers, storage, cache_dir):
     """Enqueue the particles of a swarm not in the study yet, let the workers evaluate
     every queued one, return the values in particle order (inf: failed)."""
-    from fuzzynav.tuning.run import _spawn
+    from fuzzynav.tuning.run import supervise
     from fuzzynav.tuning.study import n_finished, run_worker
 
     have = _trials_of(study, it)
@@ -124,10 +124,7 @@ def _evaluate(study, cfg, swarm_params, it, workers, storage, cache_dir):
     if workers == 1:
         run_worker(cfg, total, storage, 0, cache_dir)
     else:
-        procs = [_spawn(cfg, total, storage, w, cache_dir) for w in range(workers)]
-        bad = [p.wait() for p in procs]
-        if any(bad):
-            raise FuzzynavError(f"PSO: worker(s) failed (exit codes {bad})")
+        supervise(cfg, study, total, workers, storage, cache_dir)  # restarts dead workers
     return _recorded(study, it, len(swarm_params))
 
 

@@ -5,7 +5,9 @@ Writes into a directory: ``trials.csv`` (pandas table of every trial), ``history
 its fANOVA needs scikit-learn -- of the structural
 parameters), ``pareto.png`` (multi-objective studies), ``mf_<controller>.png`` (the tuned
 membership functions), ``report.md`` (summary, rule tables, the train/test table beside the
-EKF, the paper's rules and the compared baselines).
+EKF, the paper's rules and the compared baselines).  Every file is written atomically: a
+read-only directory or a full disk is one :class:`~fuzzynav.errors.OutputError` line, the
+files of an earlier report unchanged.
 """
 from __future__ import annotations
 
@@ -19,6 +21,7 @@ import pandas as pd
 from fuzzynav import plots
 from fuzzynav.fuzzy.describe import rule_markdown
 from fuzzynav.errors import FuzzynavError
+from fuzzynav.fileio import make_dir, write_atomic
 from fuzzynav.tuning.evaluate import format_summary, run_table
 from fuzzynav.tuning.export import choose_trial, systems_of
 from fuzzynav.tuning.objective import Evaluator
@@ -129,8 +132,8 @@ def _best_trial_section(cfg, trial, out, cache_dir, evaluate) -> list:
         compare = tuple(dict.fromkeys(cfg.compare))
         train = run_table(ev, systems, cfg.train, compare)
         test = run_table(ev, systems, cfg.test, compare)
-        pd.concat([train.assign(set="train"), test.assign(set="test")]).to_csv(
-            out / "runs.csv", index=False)
+        runs = pd.concat([train.assign(set="train"), test.assign(set="test")])
+        write_atomic(out / "runs.csv", lambda tmp: runs.to_csv(tmp, index=False))
         lines += ["## Train and held-out test (ratio of RMS error to the EKF; < 1 is better)",
                   "", "```", format_summary(train, test), "```", ""]
     return lines
@@ -138,10 +141,9 @@ def _best_trial_section(cfg, trial, out, cache_dir, evaluate) -> list:
 
 def write_report(cfg, study, out_dir, cache_dir=None, evaluate: bool = True) -> Path:
     """Write the report directory; returns the path of ``report.md``."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = make_dir(out_dir)
     df = trials_frame(study)
-    df.to_csv(out / "trials.csv", index=False)
+    write_atomic(out / "trials.csv", lambda tmp: df.to_csv(tmp, index=False))
     figs = [_history(study, cfg, out / "history.png"),
             _importances(study, cfg, out / "importances.png"),
             _pareto(study, cfg, out / "pareto.png")]
@@ -157,6 +159,5 @@ def write_report(cfg, study, out_dir, cache_dir=None, evaluate: bool = True) -> 
         lines += ["", f"No best trial yet: {exc}.", ""]
     else:
         lines += _best_trial_section(cfg, trial, out, cache_dir, evaluate)
-    path = out / "report.md"
-    path.write_text("\n".join(lines) + "\n")
-    return path
+    text = "\n".join(lines) + "\n"
+    return write_atomic(out / "report.md", lambda tmp: Path(tmp).write_text(text))

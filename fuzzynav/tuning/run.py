@@ -1,7 +1,15 @@
-"""Run a study: create it once, then one or more worker processes on the same storage."""
+"""Run a study: create it once, then one or more worker processes on the same storage.
+
+The parent supervises its workers: it polls every one of them (so a worker that dies is
+reaped at once and never lingers as a zombie), fails and re-enqueues the trial a dead worker
+left ``RUNNING`` (:func:`fuzzynav.tuning.study.reap_stale`), and starts a replacement while
+the study is short of its total.  A worker that exits with code 2 (a user error such as
+repeated failed trials) is not restarted: the run ends with that error.
+"""
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -9,15 +17,100 @@ import time
 from tqdm.auto import tqdm
 
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.tuning.study import n_finished, open_study, run_worker
+from fuzzynav.tuning.study import n_finished, open_study, reap_stale, run_worker
+from fuzzynav.tuning.warmup import warm_up
+
+#: a worker is started with this program instead of ``python -m``, which would put the
+#: current directory first on its import path (a stray ``inspect.py`` there broke workers)
+WORKER_BOOT = ("import sys\n"
+               "if sys.path and sys.path[0] in ('', '.'):\n"
+               "    del sys.path[0]\n"
+               "from fuzzynav.tuning.worker import main\n"
+               "sys.exit(main())\n")
+#: replacements the parent starts for workers that died, per worker slot
+MAX_RESTARTS = 3
+#: the exit code of a worker that stopped on a user error (not restarted)
+USER_ERROR = 2
 
 
-def _spawn(cfg, total, storage, index, cache_dir):
-    cmd = [sys.executable, "-m", "fuzzynav.tuning.worker", str(cfg.path), "--total", str(total),
+def worker_command(cfg, total, storage, index, cache_dir) -> list:
+    """The command line of study worker ``index`` (see :data:`WORKER_BOOT`)."""
+    cmd = [sys.executable, "-c", WORKER_BOOT, str(cfg.path), "--total", str(total),
            "--index", str(index), "--storage", storage or cfg.storage_url]
     if cache_dir:
         cmd += ["--cache", str(cache_dir)]
-    return subprocess.Popen(cmd, env=dict(os.environ, PYTHONWARNINGS="ignore"))
+    return cmd
+
+
+def _spawn(cfg, total, storage, index, cache_dir):
+    return subprocess.Popen(worker_command(cfg, total, storage, index, cache_dir),
+                            env=dict(os.environ, PYTHONWARNINGS="ignore"))
+
+
+def _exit_text(code: int) -> str:
+    if code < 0:
+        try:
+            return f"killed by {signal.Signals(-code).name}"
+        except ValueError:
+            return f"killed by signal {-code}"
+    return f"exit code {code}"
+
+
+def supervise(cfg, study, total, workers, storage=None, cache_dir=None, on_poll=None):
+    """Run ``workers`` worker processes until they stop; restart the ones that die.
+
+    Parameters
+    ----------
+    cfg : StudyConfig
+    study : optuna.Study
+        The study the workers run (the parent's handle, used to reap and count).
+    total : int
+        Finished trials the workers stop at.
+    workers : int
+    storage, cache_dir
+        Passed to the workers.
+    on_poll : callable, optional
+        Called about twice a second (progress display).
+
+    Raises
+    ------
+    FuzzynavError
+        A worker stopped on a user error, or workers kept dying, and the study is short of
+        ``total``.
+    """
+    procs = {i: _spawn(cfg, total, storage, i, cache_dir) for i in range(workers)}
+    restarts = dict.fromkeys(procs, 0)
+    errors = []
+    try:
+        while procs:
+            time.sleep(0.5)
+            for i, p in list(procs.items()):
+                code = p.poll()  # poll every worker: reaps the dead (no zombie)
+                if code is None:
+                    continue
+                del procs[i]
+                if code == 0:
+                    continue
+                reap_stale(study, cfg.stale_after_s)  # its RUNNING trial: FAIL + retry
+                if code != USER_ERROR and restarts[i] < MAX_RESTARTS \
+                        and n_finished(study) < total:
+                    restarts[i] += 1
+                    tqdm.write(f"fuzzynav: worker {i} {_exit_text(code)}; its trial will be "
+                               "retried, worker restarted", file=sys.stderr)
+                    procs[i] = _spawn(cfg, total, storage, i, cache_dir)
+                else:
+                    errors.append((i, code))
+            if on_poll is not None:
+                on_poll()
+    finally:  # interrupted: stop and reap the workers still running
+        for p in procs.values():
+            p.kill()
+            p.wait()
+    reap_stale(study, cfg.stale_after_s)
+    done = n_finished(study)
+    if errors and (done < total or any(code == USER_ERROR for _, code in errors)):
+        what = "; ".join(f"worker {i} {_exit_text(code)}" for i, code in errors)
+        raise FuzzynavError(f"study {cfg.name!r}: {what}; {done} of {total} trials finished")
 
 
 def run_study(cfg, trials=None, workers: int = 1, storage=None, cache_dir=None,
@@ -47,6 +140,7 @@ def run_study(cfg, trials=None, workers: int = 1, storage=None, cache_dir=None,
     if workers > 1 and cfg.path is None:
         raise FuzzynavError("several workers need the study config as a file")
     study = open_study(cfg, storage, create=True)
+    warm_up(cfg, cache_dir, progress)  # a cold cache compiles: say so, once, here
     if cfg.sampler == "pso":
         from fuzzynav.tuning.pso import run_pso
 
@@ -59,13 +153,8 @@ def run_study(cfg, trials=None, workers: int = 1, storage=None, cache_dir=None,
                    progress=lambda n: (bar.update(min(n, total) - bar.n)))
     else:
         _prepare_cache(cfg, cache_dir)
-        procs = [_spawn(cfg, total, storage, i, cache_dir) for i in range(workers)]
-        while any(p.poll() is None for p in procs):
-            time.sleep(0.5)
-            bar.update(min(n_finished(study), total) - bar.n)
-        bad = [p.returncode for p in procs if p.returncode not in (0, None)]
-        if bad:
-            raise FuzzynavError(f"{len(bad)} worker(s) failed (exit codes {bad})")
+        supervise(cfg, study, total, workers, storage, cache_dir,
+                  on_poll=lambda: bar.update(min(n_finished(study), total) - bar.n))
     bar.update(min(n_finished(study), total) - bar.n)
     bar.close()
     return study

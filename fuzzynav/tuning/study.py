@@ -76,10 +76,10 @@ def make_storage(url: str, heartbeat: bool = True):
     """An Optuna storage from ``journal:PATH`` or an RDB URL."""
     path = journal_path(url)
     if path is not None:
-        from optuna.storages.journal import JournalFileBackend, JournalStorage
+        from fuzzynav.tuning.journal import open_journal
 
         os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-        return JournalStorage(JournalFileBackend(path))
+        return open_journal(path)  # repairs a record cut off by a full disk
     kw = {}
     if heartbeat:
         kw = dict(heartbeat_interval=10, grace_period=60,
@@ -163,13 +163,20 @@ def n_finished(study) -> int:
 
 
 def _alive(pid: int) -> bool:
+    """Whether process ``pid`` runs (a zombie -- dead, not yet reaped by its parent -- does
+    not: signal 0 still reaches it, so it is told apart by its state in ``/proc``)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
     except PermissionError:
         return True
-    return True
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as fh:
+            state = fh.read().rsplit(b")", 1)[1].split()[0]
+    except (OSError, IndexError):  # no /proc (macOS): signal 0 is all we know
+        return True
+    return state not in (b"Z", b"X")
 
 
 def _owner(t, now: float):

@@ -1,4 +1,5 @@
 """Rule files: lossless JSON round trip, schema, atomic writes, in-memory construction."""
+import errno
 import json
 import os
 from pathlib import Path
@@ -7,6 +8,7 @@ import jsonschema
 import numpy as np
 import pytest
 
+from fuzzynav.errors import OutputError
 from fuzzynav.fuzzy import (Antecedent, FisError, FuzzySystem, Operators, Rule, Term,
                             Variable, load_fis, save_fis)
 from fuzzynav.fuzzy.io import schema, to_dict
@@ -80,18 +82,28 @@ def test_rule_files_of_the_papers_have_the_required_structure():
     assert eq.name == "equal1" and eq.params[1] == 1.0
 
 
-def test_save_is_atomic(tmp_path, monkeypatch):
+def _fail_with(err):
+    def fail(*args, **kwargs):
+        raise OSError(err, os.strerror(err))
+    return fail
+
+
+@pytest.mark.parametrize("target,err", [("replace", errno.ENOSPC), ("fsync", errno.ENOSPC),
+                                        ("mkstemp", errno.EROFS)])
+def test_save_is_atomic(tmp_path, monkeypatch, target, err):
+    """A full disk (at the write or at the rename) or a read-only directory (simulated: the
+    tests run as root, whom chmod does not stop): one OutputError naming the file, the old
+    file unchanged, no temporary file left."""
+    import tempfile
+
     fis = load_fis(ROR)
     path = tmp_path / "r.json"
     save_fis(fis, path)
     before = path.read_bytes()
-
-    def boom(src, dst):
-        raise OSError("disk full")
-
-    monkeypatch.setattr(os, "replace", boom)
-    with pytest.raises(OSError, match="disk full"):
+    monkeypatch.setattr(tempfile if target == "mkstemp" else os, target, _fail_with(err))
+    with pytest.raises(OutputError) as info:
         save_fis(load_fis(GPS), path)
+    assert str(info.value) == f"{path}: cannot write it: {os.strerror(err)} (nothing was changed)"
     assert path.read_bytes() == before
     assert os.listdir(tmp_path) == ["r.json"]  # no temporary file left behind
 

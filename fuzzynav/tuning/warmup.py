@@ -1,0 +1,92 @@
+"""Compile the kernels a trial needs once, in the parent, before the workers start.
+
+On a machine where numba's cache for this version of the package is empty, the first trial
+compiles every kernel of the filter loop (about a minute on two cores), during which a study
+would sit at "0/60 trials".  :func:`warm_up` does that work first, under a message that says
+so with a live count of the kernels compiled and the time spent; the workers then load the
+kernels from the cache.  With a warm cache it does nothing.
+"""
+from __future__ import annotations
+
+import os
+import threading
+from contextlib import contextmanager
+from pathlib import Path
+
+from tqdm.auto import tqdm
+
+MESSAGE = "compiling kernels (first run only, about a minute)"
+
+
+def kernel_cache():
+    """numba's cache directory keyed to this package's sources (None when not keyed:
+    ``FUZZYNAV_NUMBA_CACHE=0`` leaves numba's own per-file caches, not counted here)."""
+    import numba
+
+    if os.environ.get("FUZZYNAV_NUMBA_CACHE", "1") == "0" or not numba.config.CACHE_DIR:
+        return None
+    return Path(numba.config.CACHE_DIR)
+
+
+def compiled_count(cache) -> int:
+    """Compiled kernels in the cache (one index file each)."""
+    return sum(1 for _ in cache.rglob("*.nbi")) if cache is not None and cache.is_dir() else 0
+
+
+def is_cold(cache=None) -> bool:
+    """Whether the keyed kernel cache is empty (the next run compiles everything)."""
+    cache = kernel_cache() if cache is None else cache
+    return cache is not None and compiled_count(cache) == 0
+
+
+def compile_by_running(cfg, cache_dir=None) -> None:
+    """Run one candidate (the templates' own rules) and the baseline on the first training
+    run: the code path of every trial, so every kernel a trial needs gets compiled."""
+    from fuzzynav.fuzzy import load_fis
+    from fuzzynav.tuning.objective import Evaluator
+
+    ev = Evaluator(cfg, cache_dir)
+    scenario, seed = cfg.train[0]
+    systems = {c.name: load_fis(c.template) for c in cfg.controllers}
+    _, metrics = ev.run_systems(systems, scenario, seed)
+    ev.ratios(metrics, scenario, seed)
+
+
+@contextmanager
+def compiling(progress: bool = True):
+    """Say that kernels are being compiled, with a live count, while the body runs -- if the
+    kernel cache is cold when it starts; yields whether it is.
+
+    Enter it before anything imports the filters: importing them (loading a study config
+    does) already compiles the kernels that have explicit signatures.
+    """
+    cache = kernel_cache()
+    if not is_cold(cache):
+        yield False
+        return
+    bar = tqdm(desc=MESSAGE, total=None, unit=" kernels", disable=not progress,
+               bar_format="{desc}: {n} kernels compiled, {elapsed}")
+    done = threading.Event()
+
+    def count():
+        while not done.wait(1.0):
+            bar.update(compiled_count(cache) - bar.n)
+
+    watcher = threading.Thread(target=count, daemon=True)
+    watcher.start()
+    try:
+        yield True
+    finally:
+        done.set()
+        watcher.join()
+        bar.update(compiled_count(cache) - bar.n)
+        bar.close()
+
+
+def warm_up(cfg, cache_dir=None, progress: bool = True) -> bool:
+    """Compile the kernels of ``cfg``'s trials here when the cache is cold (see
+    :func:`compiling`); returns whether it was."""
+    with compiling(progress) as cold:
+        if cold:
+            compile_by_running(cfg, cache_dir)
+    return cold
