@@ -239,19 +239,8 @@ def discretize(F, q_diag, dt, Phi, Qd, work):
     work : (n, n) scratch.
     """
     n = F.shape[0]
-    # work = F @ F (F is sparse: skip zero entries)
-    work[:, :] = 0.0
-    for i in range(n):
-        for k in range(n):
-            fik = F[i, k]
-            if fik != 0.0:
-                for j in range(n):
-                    work[i, j] += fik * F[k, j]
+    transition(F, dt, Phi, work)
     h2 = 0.5 * dt * dt
-    for i in range(n):
-        for j in range(n):
-            Phi[i, j] = F[i, j] * dt + work[i, j] * h2
-        Phi[i, i] += 1.0
     # Qd = Q dt + (F Q + Q F^T) dt^2/2 + F Q F^T dt^3/3 with diagonal Q
     h3 = dt * dt * dt / 3.0
     for i in range(n):
@@ -266,3 +255,22 @@ def discretize(F, q_diag, dt, Phi, Qd, work):
                 s += q_diag[i] * dt
             Qd[i, j] = s
             Qd[j, i] = s
+
+
+@nb.njit(cache=True)
+def transition(F, dt, Phi, work):
+    """Second-order transition matrix ``Phi = I + F dt + (F dt)^2 / 2`` (``work``: scratch)."""
+    n = F.shape[0]
+    # work = F @ F (F is sparse: skip zero entries)
+    work[:, :] = 0.0
+    for i in range(n):
+        for k in range(n):
+            fik = F[i, k]
+            if fik != 0.0:
+                for j in range(n):
+                    work[i, j] += fik * F[k, j]
+    h2 = 0.5 * dt * dt
+    for i in range(n):
+        for j in range(n):
+            Phi[i, j] = F[i, j] * dt + work[i, j] * h2
+        Phi[i, i] += 1.0
