@@ -12,7 +12,8 @@ phi-model piece mapped through ``A`` (derivation in docs/navigation.md):
   (:func:`st_process_noise`, :func:`discretize_dense`);
 * measurement rows ``H_ST = H A^-1``: attitude columns gain ``H_vel [v x]``
   (:func:`st_measurement`), so the measurement models keep writing phi-model rows;
-* feedback ``dv = u + [v x] phi`` before the velocity is corrected (:func:`st_to_phi`);
+* feedback ``dv = u + [v x] phi`` before the velocity is corrected (:func:`st_to_phi`),
+  and ``P`` re-expressed about the corrected velocity (:func:`st_reset`);
 * covariances ``P_ST = A P A^T`` (:func:`st_covariance`, for P0).
 
 The loop selects a model by the integer codes of :data:`ERROR_MODELS`, so it compiles once.
@@ -153,6 +154,28 @@ def st_to_phi(x, nav):
     p0, p1, p2 = x[X_ATT], x[X_ATT + 1], x[X_ATT + 2]
     for i in range(3):
         x[X_VEL + i] += S[i, 0] * p0 + S[i, 1] * p1 + S[i, 2] * p2
+
+
+@nb.njit(cache=True)
+def st_reset(P, x):
+    """Re-express ``P_ST`` about the corrected velocity (``x``: the phi-model correction).
+
+    ``u`` is defined with the computed velocity, which the feedback moves by ``-dv``:
+    ``u_new = u_old + [dv x] phi`` to first order, so ``P <- G P G^T`` with
+    ``G = I + [dv x]`` in the velocity-attitude block.  Without it, a velocity correction
+    under a large attitude uncertainty reads as heading information the data do not hold.
+    """
+    n = P.shape[0]
+    d0, d1, d2 = x[X_VEL], x[X_VEL + 1], x[X_VEL + 2]
+    D = np.array([[0.0, -d2, d1], [d2, 0.0, -d0], [-d1, d0, 0.0]])
+    for j in range(n):  # rows
+        a0, a1, a2 = P[X_ATT, j], P[X_ATT + 1, j], P[X_ATT + 2, j]
+        for i in range(3):
+            P[X_VEL + i, j] += D[i, 0] * a0 + D[i, 1] * a1 + D[i, 2] * a2
+    for i in range(n):  # columns
+        a0, a1, a2 = P[i, X_ATT], P[i, X_ATT + 1], P[i, X_ATT + 2]
+        for j in range(3):
+            P[i, X_VEL + j] += D[j, 0] * a0 + D[j, 1] * a1 + D[j, 2] * a2
 
 
 @nb.njit(cache=True)

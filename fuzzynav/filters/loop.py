@@ -21,7 +21,7 @@ import numpy as np
 from fuzzynav.filters import kalman
 from fuzzynav.filters.error_model import block_end, discretize, fill_F
 from fuzzynav.filters.error_st import EM_ST, discretize_dense, st_measurement, \
-    st_process_noise, st_system, st_to_phi, st_velocity_variance
+    st_process_noise, st_reset, st_system, st_to_phi, st_velocity_variance
 from fuzzynav.filters.layout import COUPLE_ACCEL, COUPLE_GYRO, N_CORE, X_ATT, X_POS, X_VEL
 from fuzzynav.nav.earth import radii_nb
 from fuzzynav.nav.layout import NAV_H, NAV_LAT, NAV_LON, NAV_Q, NAV_SIZE, NAV_VEL, PREV_LLA, \
@@ -301,6 +301,7 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
             Qacc[:, :] = 0.0
             if em == EM_ST:
                 st_to_phi(x, nav)
+                st_reset(P, x)
             _feedback(nav, prev, xs, x)
             quat_to_dcm_into(nav, C)
             ev_flag[e] = EV_ACCEPTED
