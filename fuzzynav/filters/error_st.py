@@ -27,6 +27,7 @@ import numpy as np
 
 from fuzzynav.errors import InputFileError
 from fuzzynav.filters.error_model import transition
+from fuzzynav.filters.kalman import sparse_left_mul
 from fuzzynav.filters.layout import X_ATT, X_VEL
 from fuzzynav.nav.earth import OMEGA_IE, gravity_nb
 from fuzzynav.nav.layout import NAV_H, NAV_LAT, NAV_VEL
@@ -114,13 +115,7 @@ def discretize_dense(F, Qc, dt, Phi, Qd, work):
     """
     n = F.shape[0]
     transition(F, dt, Phi, work)
-    work[:, :] = 0.0  # work = F Qc
-    for i in range(n):
-        for k in range(n):
-            fik = F[i, k]
-            if fik != 0.0:
-                for j in range(n):
-                    work[i, j] += fik * Qc[k, j]
+    sparse_left_mul(F, Qc, work)  # work = F Qc
     h2, h3 = 0.5 * dt * dt, dt * dt * dt / 3.0
     for i in range(n):
         for j in range(i, n):
