@@ -13,6 +13,7 @@ import numpy as np
 from fuzzynav import units
 from fuzzynav.errors import InputFileError
 from fuzzynav.filters.error_model import MODEL_15, ErrorModel
+from fuzzynav.filters.error_st import error_model_code
 
 
 def _per_block(values, n_blocks, name):
@@ -49,6 +50,10 @@ class FilterConfig:
         Rate of the recorded solution [Hz] (rounded to a whole number of IMU samples).
     extra_noise_si : tuple of (sigma, q) per ``model.extra`` block
         Initial 1-sigma and driving-noise density (SI) of each extra block.
+    error_model : {"phi", "st"}
+        The error definition: the classical phi model, or the state-transformation model
+        (velocity error ``dv - [v x] phi``, :mod:`fuzzynav.filters.error_st`).  Initial
+        sigmas above are always of the phi-model states; the ST model maps them.
     """
 
     model: ErrorModel = MODEL_15
@@ -65,6 +70,10 @@ class FilterConfig:
     max_prop_dt_s: float = 1.0
     out_rate_hz: float = 10.0
     extra_noise_si: tuple = ()
+    error_model: str = "phi"
+
+    def __post_init__(self):
+        error_model_code(self.error_model)  # refuse an unknown name here, not in the loop
 
     def with_(self, **changes) -> "FilterConfig":
         """A copy with some fields changed."""

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
+from fuzzynav.filters.kalman import sparse_left_mul
 from fuzzynav.filters.layout import (BLOCK_KINDS, CORE, COUPLE_ACCEL, COUPLE_GYRO, X_ATT,
                                      X_POS, X_VEL, StateLayout, kind_of)
 from fuzzynav.nav.earth import E2, OMEGA_IE, gravity_nb, radii_nb
@@ -239,19 +240,8 @@ def discretize(F, q_diag, dt, Phi, Qd, work):
     work : (n, n) scratch.
     """
     n = F.shape[0]
-    # work = F @ F (F is sparse: skip zero entries)
-    work[:, :] = 0.0
-    for i in range(n):
-        for k in range(n):
-            fik = F[i, k]
-            if fik != 0.0:
-                for j in range(n):
-                    work[i, j] += fik * F[k, j]
+    transition(F, dt, Phi, work)
     h2 = 0.5 * dt * dt
-    for i in range(n):
-        for j in range(n):
-            Phi[i, j] = F[i, j] * dt + work[i, j] * h2
-        Phi[i, i] += 1.0
     # Qd = Q dt + (F Q + Q F^T) dt^2/2 + F Q F^T dt^3/3 with diagonal Q
     h3 = dt * dt * dt / 3.0
     for i in range(n):
@@ -266,3 +256,15 @@ def discretize(F, q_diag, dt, Phi, Qd, work):
                 s += q_diag[i] * dt
             Qd[i, j] = s
             Qd[j, i] = s
+
+
+@nb.njit(cache=True)
+def transition(F, dt, Phi, work):
+    """Second-order transition matrix ``Phi = I + F dt + (F dt)^2 / 2`` (``work``: scratch)."""
+    n = F.shape[0]
+    sparse_left_mul(F, F, work)  # work = F @ F
+    h2 = 0.5 * dt * dt
+    for i in range(n):
+        for j in range(n):
+            Phi[i, j] = F[i, j] * dt + work[i, j] * h2
+        Phi[i, i] += 1.0

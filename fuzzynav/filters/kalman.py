@@ -41,6 +41,19 @@ def propagate(P, Phi, Qd, work):
 
 
 @nb.njit(cache=True)
+def sparse_left_mul(A, B, out):
+    """``out = A B`` for square ``A``, skipping the zeros of ``A`` (the system matrices)."""
+    n = A.shape[0]
+    out[:, :] = 0.0
+    for i in range(n):
+        for k in range(n):
+            a = A[i, k]
+            if a != 0.0:
+                for j in range(n):
+                    out[i, j] += a * B[k, j]
+
+
+@nb.njit(cache=True)
 def times_Ht(A, H, m, out):
     """``out[:, :m] = A H^T`` for the first ``m`` rows of H, skipping H's zeros."""
     n = A.shape[0]

@@ -20,6 +20,8 @@ import numpy as np
 
 from fuzzynav.filters import kalman
 from fuzzynav.filters.error_model import block_end, discretize, fill_F
+from fuzzynav.filters.error_st import EM_ST, discretize_dense, st_measurement, \
+    st_process_noise, st_reset, st_system, st_to_phi, st_velocity_variance
 from fuzzynav.filters.layout import COUPLE_ACCEL, COUPLE_GYRO, N_CORE, X_ATT, X_POS, X_VEL
 from fuzzynav.nav.earth import radii_nb
 from fuzzynav.nav.layout import NAV_H, NAV_LAT, NAV_LON, NAV_Q, NAV_SIZE, NAV_VEL, PREV_LLA, \
@@ -45,12 +47,14 @@ class Start(NamedTuple):
 
 
 class Model(NamedTuple):
-    """Error model: ``q_diag`` per state and the sensor blocks' start, coupling and 1/tau."""
+    """Error model: ``q_diag`` per state, the sensor blocks' start, coupling and 1/tau, and
+    the error-model code (:data:`fuzzynav.filters.error_st.ERROR_MODELS`)."""
 
     q_diag: np.ndarray
     blk_start: np.ndarray
     blk_kind: np.ndarray
     blk_inv_tau: np.ndarray
+    error_model: int
 
 
 class Events(NamedTuple):
@@ -150,7 +154,7 @@ def _bias_totals(xs, blk_start, blk_kind, bg, ba):
 
 
 @nb.njit(cache=True)
-def _record(j, t, nav, xs, P, out_t, out_nav, out_xs, out_sig):
+def _record(j, t, nav, xs, P, out_t, out_nav, out_xs, out_sig, em):
     out_t[j] = t
     for i in range(NAV_SIZE):
         out_nav[j, i] = nav[i]
@@ -158,6 +162,9 @@ def _record(j, t, nav, xs, P, out_t, out_nav, out_xs, out_sig):
         out_xs[j, i] = xs[i]
     for i in range(P.shape[0]):
         out_sig[j, i] = math.sqrt(max(P[i, i], 0.0))
+    if em == EM_ST:  # report the sigma of the velocity error itself, as the phi model does
+        for i in range(3):
+            out_sig[j, X_VEL + i] = math.sqrt(max(st_velocity_variance(P, nav, i), 0.0))
 
 
 @nb.njit(cache=True)
@@ -175,7 +182,7 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
     # plain local names: the loop body reads as the algorithm, and numba sees bare arrays
     dth, dv, time_s = imu
     nav0, xs0, P0 = start
-    q_diag, blk_start, blk_kind, blk_inv_tau = model
+    q_diag, blk_start, blk_kind, blk_inv_tau, em = model
     ev_t, ev_s, ev_data = events
     s_meas, s_mpar, s_adapt, afp, afp_off, aip, aip_off, ast, ast_off, s_gate = sensors
     max_prop_dt, out_stride = settings
@@ -201,6 +208,7 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
     Phi = np.zeros((n, n))
     Qd = np.zeros((n, n))
     Qacc = np.zeros((n, n))
+    Qc = np.zeros((n, n))
     work = np.zeros((n, n))
     AP = np.zeros((n, n))
     H = np.zeros((M, n))
@@ -228,7 +236,7 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
     while e < E and ev_t[e] < time_s[0] - 1e-9:
         ev_flag[e] = EV_BEFORE_START
         e += 1
-    _record(0, time_s[0], nav, xs, P, out_t, out_nav, out_xs, out_sig)
+    _record(0, time_s[0], nav, xs, P, out_t, out_nav, out_xs, out_sig, em)
     for k in range(N):
         dt = time_s[k + 1] - time_s[k]
         _bias_totals(xs, blk_start, blk_kind, bg, ba)
@@ -248,7 +256,7 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
         while e < E and ev_t[e] <= t + 1e-9:
             if tau > 0.0:
                 _propagate(P, Qacc, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd, work, qd,
-                           blk_start, blk_kind, blk_inv_tau)
+                           blk_start, blk_kind, blk_inv_tau, em, Qc)
                 tau = 0.0
             s = ev_s[e]
             a = s_adapt[s]
@@ -259,6 +267,8 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
                 ev_flag[e] = EV_EMPTY
                 e += 1
                 continue
+            if em == EM_ST:  # the models write phi-model rows: H_ST = H A^-1
+                st_measurement(H, m, nav)
             kalman.innovation_cov(P, H, m, PHt, HPH)
             adapt_fns[a](afp[afp_off[s]:afp_off[s + 1]], aip[aip_off[s]:aip_off[s + 1]],
                          ast[ast_off[s]:ast_off[s + 1]], z[:m], HPH, R, chan, m, out_a, diag)
@@ -289,6 +299,9 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
             kalman.gain(L, m, PHt, K, wv)
             kalman.joseph_update(P, H, R, m, z, PHt, K, x, AP, APHt)
             Qacc[:, :] = 0.0
+            if em == EM_ST:
+                st_to_phi(x, nav)
+                st_reset(P, x)
             _feedback(nav, prev, xs, x)
             quat_to_dcm_into(nav, C)
             ev_flag[e] = EV_ACCEPTED
@@ -297,10 +310,10 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
                 return ST_COVARIANCE, k + 1
         if tau >= max_prop_dt - 1e-12:
             _propagate(P, Qacc, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd, work, qd,
-                       blk_start, blk_kind, blk_inv_tau)
+                       blk_start, blk_kind, blk_inv_tau, em, Qc)
             tau = 0.0
         if (k + 1) % out_stride == 0:
-            _record((k + 1) // out_stride, t, nav, xs, P, out_t, out_nav, out_xs, out_sig)
+            _record((k + 1) // out_stride, t, nav, xs, P, out_t, out_nav, out_xs, out_sig, em)
     return ST_OK, N
 
 
@@ -328,8 +341,10 @@ def _innovation(HPH, R, m, S, L, z, wv, ev_r, ev_S, ev_nis, e):
 
 @nb.njit(cache=True)
 def _propagate(P, Qacc, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd, work, qd,
-               blk_start, blk_kind, blk_inv_tau):
-    """Propagate P over the accumulated interval and decay Gauss-Markov estimates."""
+               blk_start, blk_kind, blk_inv_tau, em, Qc):
+    """Propagate P over the accumulated interval and decay Gauss-Markov estimates.
+
+    ``em`` selects the error model; the ST model maps the phi model's F and noise."""
     for i in range(3):
         fm[i] = sumf[i] / tau
         sumf[i] = 0.0
@@ -337,7 +352,12 @@ def _propagate(P, Qacc, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd, work, qd,
             Cm[i, j] = sumC[i, j] / tau
             sumC[i, j] = 0.0
     fill_F(F, nav, Cm, fm, blk_start, blk_kind, blk_inv_tau)
-    discretize(F, qd, tau, Phi, Qd, work)
+    if em == EM_ST:
+        st_system(F, nav)
+        st_process_noise(Qc, qd, nav)
+        discretize_dense(F, Qc, tau, Phi, Qd, work)
+    else:
+        discretize(F, qd, tau, Phi, Qd, work)
     kalman.propagate(P, Phi, Qd, work)
     n = P.shape[0]
     for i in range(n):

@@ -141,3 +141,9 @@ def config_overrides(options) -> dict:
 @register_filter("ekf", "EKF with the nominal noise the sensors and the IMU datasheet claim")
 def _ekf(ctx: FilterContext) -> FilterSetup:
     return FilterSetup(config_from_imu(ctx.imu_noise, **config_overrides(ctx.options)))
+
+
+@register_filter("ekf-st", "EKF with the state-transformation error model (ST-EKF, Wang et al. 2018)")
+def _ekf_st(ctx: FilterContext) -> FilterSetup:
+    return FilterSetup(config_from_imu(ctx.imu_noise, **{**config_overrides(ctx.options),
+                                                          "error_model": "st"}))

@@ -10,6 +10,7 @@ from fuzzynav.errors import FuzzynavError
 from fuzzynav.filters import adaptation, measurements
 from fuzzynav.filters.adaptation import N_DIAG, NoAdaptation
 from fuzzynav.filters.config import FilterConfig
+from fuzzynav.filters.error_st import EM_ST, error_model_code, st_covariance
 from fuzzynav.filters.layout import N_CORE
 from fuzzynav.filters import loop
 from fuzzynav.filters.result import EventLog, FilterResult
@@ -130,9 +131,11 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
               flag=np.zeros(E, np.int64), diag=np.full((E, N_DIAG), np.nan))
     nav0 = strapdown.make_nav(init.lla, init.vel_n, init.q_bn)
     adapt_fns, _ = adaptation.kernel_table()
+    em = error_model_code(config.error_model)
+    P0 = st_covariance(config.P0(), init.vel_n) if em == EM_ST else config.P0()
     status, done = loop.run_loop(
-        loop.Imu(dth, dv, time_s), loop.Start(nav0, np.zeros(n - N_CORE), config.P0()),
-        loop.Model(config.q_diag(), blk_start, blk_kind, blk_inv_tau),
+        loop.Imu(dth, dv, time_s), loop.Start(nav0, np.zeros(n - N_CORE), P0),
+        loop.Model(config.q_diag(), blk_start, blk_kind, blk_inv_tau, em),
         loop.Events(tb["ev_t"], tb["ev_s"], tb["ev_data"]),
         loop.Sensors(tb["s_meas"], tb["s_mpar"], tb["s_adapt"], tb["afp"], tb["afp_off"],
                      tb["aip"], tb["aip_off"], tb["ast"], tb["ast_off"], tb["gate"]),
