@@ -15,22 +15,13 @@ import pytest
 
 from fuzzynav.cli import EXIT_BROKEN_PIPE, MAX_MESSAGE, main
 from fuzzynav.cli.nav import MAX_MC
+from tests.cli.test_bad_values import _one_line, _run
 
 ROOT = Path(__file__).resolve().parents[2]
 TINY = ROOT / "tests" / "tuning" / "data" / "tiny.toml"
 QUICKSTART = ROOT / "studies" / "quickstart.toml"
 GPS = ROOT / "rules" / "paper000_gps_sins.json"
 LONG = 200_000
-
-
-def _run(capsys, *argv):
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def _one_line(err):
-    return err.count("\n") == 1 and err.startswith("fuzzynav: error: ") and "Traceback" not in err
 
 
 class _FailingStdout:
