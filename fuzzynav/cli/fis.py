@@ -35,9 +35,12 @@ def _assignment(text: str):
     try:
         if not sep:
             raise ValueError
-        return name.strip(), float(value)
+        number = float(value)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected NAME=VALUE, got {text!r}") from None
+    if not math.isfinite(number):  # would print a table of NaN as if it were a surface
+        raise argparse.ArgumentTypeError(f"VALUE must be a finite number, got {text!r}")
+    return name.strip(), number
 
 
 def register(subparsers) -> None:

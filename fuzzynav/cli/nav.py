@@ -5,7 +5,7 @@ import json
 import os
 from pathlib import Path
 
-from fuzzynav.cli.values import check_count, check_t_start, write_stdout
+from fuzzynav.cli.values import check_count, check_t_start
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.fileio import safe_stem
 from fuzzynav.metrics import check_finite_metrics
@@ -99,16 +99,55 @@ def filter_options(args) -> dict:
     return opts
 
 
+#: most Monte-Carlo runs of one command: each keeps its metrics (and its seed list is built
+#: up front), so a typo such as ``--mc 2000000000`` would end in an out-of-memory crash
+MAX_MC = 100_000
+
+#: largest seed: seeds go into int64 columns of the results table (numpy takes any >= 0)
+MAX_SEED = 2**63 - 1
+
+
 def check_common(args) -> None:
     """Refuse meaningless values of the options every run shares."""
     check_count("--mc", args.mc)
+    if args.mc > MAX_MC:
+        raise FuzzynavError(f"--mc must be <= {MAX_MC} (each run is simulated and kept in "
+                            f"memory; split a larger experiment), got {args.mc}")
     check_count("--seed", args.seed, lo=0)
+    if args.seed + args.mc - 1 > MAX_SEED:
+        raise FuzzynavError(f"--seed {args.seed} with --mc {args.mc}: the last seed must be "
+                            f"<= {MAX_SEED} (a 64-bit integer)")
+
+
+def check_rules(args, filters, option: str) -> None:
+    """Refuse rule files that no filter would read, and missing ones, before any work.
+
+    ``--rules`` goes to every filter of the run and ``NAME@RULES`` to one; a filter that
+    takes no rule files would silently run without them.
+    """
+    from fuzzynav.filters.catalog import find_rule_file
+    from fuzzynav.filters.named import get_filter, list_filters, parse_filter_spec
+
+    takers = ", ".join(f.name for f in list_filters() if f.takes_rules)
+    specs = [parse_filter_spec(f) for f in filters]
+    for spec, (name, own) in zip(filters, specs):
+        if own and not get_filter(name).takes_rules:
+            raise FuzzynavError(f"{option} {spec}: filter {name!r} takes no rule files "
+                                f"(filters that do: {takers})")
+    if args.rules and not any(get_filter(name).takes_rules for name, _ in specs):
+        names = ", ".join(repr(name) for name, _ in specs)
+        raise FuzzynavError(f"--rules: filter{'s' if len(specs) > 1 else ''} {names} "
+                            f"take{'' if len(specs) > 1 else 's'} no rule files (filters "
+                            f"that do: {takers})")
+    for path in [*(args.rules or []), *(r for _, own in specs for r in own.get("rules", []))]:
+        find_rule_file(path)
 
 
 def _cmd_run(args) -> int:
     if (args.scenario is None) == (args.data is None):
         raise FuzzynavError("give either a SCENARIO or --data KIND:DIR")
     check_common(args)
+    check_rules(args, [args.filter], "--filter")
     if args.data:
         from fuzzynav.realdata import run_recording
 
@@ -128,6 +167,7 @@ def _cmd_compare(args) -> int:
     if len(filters) < 2:
         raise FuzzynavError("--filters needs at least two comma-separated filter names")
     check_common(args)
+    check_rules(args, filters, "--filters")
     labels, claims = claims_for(str(args.scenario))
     return run_scenario_filters(args, filters, baseline=filters[0], claims=claims,
                                 claim_labels=labels)
@@ -146,20 +186,19 @@ def run_scenario_filters(args, filters, baseline=None, claims=None, claim_labels
                      progress=not args.json and args.mc > 1)
     check_finite_metrics(df)  # a diverged run: no table at all, exit 3
     if args.json:
-        write_stdout(json.dumps(_json_summary(df, scn, filters, seeds), indent=2,
-                                allow_nan=False), "JSON output")
+        print(json.dumps(_json_summary(df, scn, filters, seeds), indent=2, allow_nan=False))
     else:
         header = ["RMS error", *filters]
         if baseline is not None:
             header += [f"{f} vs {baseline}" for f in filters if f != baseline]
         header += list(claim_labels)
         bad = df[df["completed"] < 1]
-        write_stdout(f"scenario {scn.name} ({scn.duration_s:.0f} s), seeds "
-                     f"{seeds[0]}..{seeds[-1]}"
-                     + (" — mean ± 95 % CI over seeds" if len(seeds) > 1 else "") + "\n"
-                     + render(header, comparison_rows(df, filters, baseline, claims=claims))
-                     + (f"\nwarning: {len(bad)} run(s) stopped early (covariance lost)"
-                        if len(bad) else ""), "results table")
+        print(f"scenario {scn.name} ({scn.duration_s:.0f} s), seeds "
+              f"{seeds[0]}..{seeds[-1]}"
+              + (" — mean ± 95 % CI over seeds" if len(seeds) > 1 else "") + "\n"
+              + render(header, comparison_rows(df, filters, baseline, claims=claims))
+              + (f"\nwarning: {len(bad)} run(s) stopped early (covariance lost)"
+                 if len(bad) else ""))
     if args.plot:
         _plot_first_seed(scn, filters, seeds[0], args)
     return 0

@@ -2,10 +2,8 @@
 from __future__ import annotations
 
 import math
-import sys
 
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.fileio import output_errors
 
 
 def check_count(option: str, value, lo: int = 1, hi: int | None = None) -> None:
@@ -25,10 +23,3 @@ def check_t_start(value: float, duration_s: float, option: str = "--t-start") ->
     if value >= duration_s:
         raise FuzzynavError(f"{option} {value:g} s is at or after the end of the run "
                             f"({duration_s:g} s): no epoch would be scored")
-
-
-def write_stdout(text: str, what: str) -> None:
-    """Print ``text``; a full disk or a closed pipe behind stdout is one clear error."""
-    with output_errors("<stdout>", what):
-        print(text)
-        sys.stdout.flush()

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fuzzynav.errors import DataMissingError, FuzzynavError
+from fuzzynav.errors import DataMissingError, FuzzynavError, InputFileError
 from fuzzynav.filters import adaptation, measurements
 from fuzzynav.filters.adaptation.classical import (ConstantScale, FadingMemory, Huber, SageHusa,
                                                    VariationalBayes)
@@ -41,6 +41,10 @@ def find_rule_file(name) -> Path:
     p = Path(name)
     if p.is_file():
         return p
+    if p.is_dir():
+        raise InputFileError(p, "", "is a directory, not a rule file")
+    if p.exists():  # /dev/null, a FIFO: reading it would give nothing or hang
+        raise InputFileError(p, "", "not a regular file (a rule file is a .json or .fis file)")
     if p.parent == Path("."):
         for d in rules_dirs():
             if (d / p.name).is_file():
@@ -99,7 +103,8 @@ def _base(ctx: FilterContext):
 
 
 @register_filter("fuzzy", "fuzzy adaptive KF: each rule file (--rules FILE, repeatable) "
-                          "binds the adapter it names; default: paper 000's two controllers")
+                          "binds the adapter it names; default: paper 000's two controllers",
+                 takes_rules=True)
 def _fuzzy(ctx: FilterContext) -> FilterSetup:
     given = ctx.options.get("rules")
     if given:

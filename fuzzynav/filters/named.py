@@ -62,16 +62,17 @@ class NamedFilter:
     name: str
     description: str
     make: Callable
+    takes_rules: bool = False  # reads rule files (``rules`` option): others refuse them
 
 
 FILTERS = Registry("filter", "fuzzynav.filters", ("catalog",))
 
 
-def register_filter(name: str, description: str):
+def register_filter(name: str, description: str, takes_rules: bool = False):
     """Decorator registering ``make(context) -> FilterSetup`` under ``name``."""
 
     def deco(fn):
-        FILTERS.add(name, NamedFilter(name, description, fn))
+        FILTERS.add(name, NamedFilter(name, description, fn, takes_rules))
         return fn
 
     return deco
@@ -80,7 +81,8 @@ def register_filter(name: str, description: str):
 def register_alias(alias: str, name: str) -> None:
     """Register ``alias`` as another name of the filter ``name`` (listed as an alias)."""
     target = FILTERS[name]
-    FILTERS.add(alias, NamedFilter(alias, f"alias of {name!r}", target.make))
+    FILTERS.add(alias, NamedFilter(alias, f"alias of {name!r}", target.make,
+                                   target.takes_rules))
 
 
 def parse_filter_spec(spec: str):

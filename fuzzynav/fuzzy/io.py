@@ -113,8 +113,9 @@ def _check_header(doc, path):
 MAX_QUOTE = 200
 
 
-def _brief(value) -> str:
-    """``repr(value)``, cut to :data:`MAX_QUOTE` characters and then saying what it was."""
+def brief(value) -> str:
+    """``repr(value)``, cut to :data:`MAX_QUOTE` characters and then saying what it was
+    (a 200 000-character name in a message would bury what was wrong with it)."""
     text = repr(value)
     if len(text) <= MAX_QUOTE:
         return text
@@ -134,7 +135,7 @@ def schema_message(error) -> str:
     msg = error.message
     full = repr(error.instance)
     if len(full) > MAX_QUOTE and full in msg:
-        msg = msg.replace(full, _brief(error.instance))
+        msg = msg.replace(full, brief(error.instance))
     if len(msg) > 3 * MAX_QUOTE:  # a long value quoted some other way (a safety net)
         msg = f"{msg[:3 * MAX_QUOTE]}... (message cut from {len(msg)} characters)"
     return msg

@@ -88,6 +88,14 @@ def resolve_mounting(text):
                            f"{', '.join(builtin_mountings())}; or auto, none)")
 
 
+def _is_dir(path: Path) -> bool:
+    """``path.is_dir()``, False where the system refuses to look (a name too long)."""
+    try:
+        return path.is_dir()
+    except OSError:
+        return False
+
+
 def parse_data_spec(spec: str) -> tuple[DataSource, Path, str | None]:
     """Split ``KIND:DIR[:SESSION]`` and check the parts.
 
@@ -113,7 +121,7 @@ def parse_data_spec(spec: str) -> tuple[DataSource, Path, str | None]:
     kind, sep, rest = str(spec).partition(":")
     directory, session = rest, None
     head, colon, tail = rest.rpartition(":")
-    if colon and not Path(rest).expanduser().is_dir():
+    if colon and not _is_dir(Path(rest).expanduser()):
         directory, session = head, tail
     if not sep or not kind or not directory or session == "":
         raise FuzzynavError(f"--data: expected KIND:DIR or KIND:DIR:SESSION (e.g. rtklib:"
@@ -121,6 +129,6 @@ def parse_data_spec(spec: str) -> tuple[DataSource, Path, str | None]:
     if kind not in SOURCES:
         raise UnknownNameError("data source kind", kind, SOURCES)
     path = Path(directory).expanduser()
-    if not path.is_dir():
+    if not _is_dir(path):
         raise DataMissingError(f"{path}: recording directory not found (--data {spec})")
     return SOURCES[kind], path, session

@@ -26,6 +26,7 @@ from pathlib import Path
 
 from fuzzynav.errors import FuzzynavError, InputFileError
 from fuzzynav.filters.adaptation.binding import WINDOW_RANGE
+from fuzzynav.fuzzy.io import brief
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
 
 SAMPLERS = ("tpe", "random", "qmc", "cmaes", "nsga2", "pso")
@@ -111,9 +112,9 @@ def _user_file(t: Table, key: str, path: Path, suffixes: tuple, what: str) -> Pa
     """Refuse a path that is not a ``suffixes`` file or that lies in a system directory."""
     real = path.resolve()
     if path.suffix.lower() not in suffixes:
-        raise t.error(key, f"must be a {what} ({' or '.join(suffixes)}), got {str(path)!r}")
+        raise t.error(key, f"must be a {what} ({' or '.join(suffixes)}), got {brief(str(path))}")
     if any(real.is_relative_to(d) for d in _SYSTEM_DIRS):
-        raise t.error(key, f"{str(path)!r} is a system file, not a {what}")
+        raise t.error(key, f"{brief(str(path))} is a system file, not a {what}")
     return path
 
 
@@ -152,7 +153,7 @@ def _filter_name(t: Table, key: str, name) -> str:
     from fuzzynav.filters.named import get_filter
 
     if not isinstance(name, str):
-        raise t.error(key, f"must be a filter name, got {name!r}")
+        raise t.error(key, f"must be a filter name, got {brief(name)}")
     try:
         get_filter(name)
     except FuzzynavError as exc:
@@ -270,7 +271,7 @@ def study_config_from_dict(doc: dict, path: Path | None = None) -> StudyConfig:
     name = top.string("name", path.stem if path is not None else "study")
     if not _NAME_RE.match(name):
         raise top.error("name", "must be letters, digits, '_', '.' or '-' (it names the "
-                                f"journal file and the Optuna study), got {name!r}")
+                                f"journal file and the Optuna study), got {brief(name)}")
     desc = top.string("description", "")
     st = top.table("study")
     pso_t = st.table("pso", required=False)

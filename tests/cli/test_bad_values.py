@@ -152,7 +152,7 @@ def test_json_to_a_full_disk(capsys, monkeypatch, sim_cache):
     monkeypatch.setattr(sys, "stdout", _FullStdout())
     code = main(["run", str(TINY), "--json", "--cache", str(sim_cache)])
     err = capsys.readouterr().err
-    assert code == 2 and _one_line(err) and "JSON output" in err and "No space left" in err
+    assert code == 2 and _one_line(err) and "stdout" in err and "No space left" in err
 
 
 # -- diverged runs ---------------------------------------------------------------------------

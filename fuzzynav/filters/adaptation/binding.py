@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from fuzzynav.errors import InputFileError
 from fuzzynav.filters import adaptation, measurements
 from fuzzynav.filters.adaptation import window
+from fuzzynav.fuzzy.io import MAX_QUOTE, brief
 
 #: the DoM/ROR window in epochs, inclusive bounds
 WINDOW_RANGE = (1, 10000)
@@ -35,6 +36,8 @@ class _Where:
         self.source = source
 
     def error(self, where: str, what: str) -> InputFileError:
+        if len(where) > MAX_QUOTE:  # a path through a long key: the message quotes it briefly
+            where = f"{where[:MAX_QUOTE]}..."
         return InputFileError(self.source, "$.binding" + (f".{where}" if where else ""), what)
 
     def mapping(self, value, where: str, known=None) -> dict:
@@ -44,12 +47,12 @@ class _Where:
         for key in value:
             if known is not None and key not in known:
                 at = f"{where}.{key}" if where else str(key)
-                raise self.error(at, f"unknown key {key!r}; known: {', '.join(known)}")
+                raise self.error(at, f"unknown key {brief(key)}; known: {', '.join(known)}")
         return value
 
     def name(self, value, where: str, what: str) -> str:
         if not isinstance(value, str) or not value:
-            raise self.error(where, f"must name {what} (a non-empty string), got {value!r}")
+            raise self.error(where, f"must name {what} (a non-empty string), got {brief(value)}")
         return value
 
 
@@ -110,7 +113,7 @@ class Binding:
         doc = w.mapping(fis.binding, "", _KEYS)
         if adapter is not None and doc.get("adapter") != adapter:
             raise w.error("adapter", f"this policy needs adapter {adapter!r}; the rule file "
-                                     f"is bound to {doc.get('adapter')!r}")
+                                     f"is bound to {brief(doc.get('adapter'))}")
         adapter = _adapter(w, doc.get("adapter"))
         return cls(adapter=adapter.name, inputs=_inputs(w, doc.get("inputs"), fis),
                    outputs=_outputs(w, doc.get("outputs"), fis, adapter.role),
@@ -153,7 +156,7 @@ class Binding:
             if b.channel != "all" and b.channel not in model.channels:
                 raise _Where(source).error(
                     f"inputs.{b.name}.channel", f"the {model.kind} model has no channel "
-                    f"{b.channel!r} (channels: {', '.join(model.channels + ('all',))})")
+                    f"{brief(b.channel)} (channels: {', '.join(model.channels + ('all',))})")
 
 
 def _adapter(w: _Where, name):
@@ -161,7 +164,7 @@ def _adapter(w: _Where, name):
     fuzzy = {k: cls for k, cls in adaptation.ADAPTERS.load().items()
              if getattr(cls, "role", "")}
     if name not in fuzzy:
-        raise w.error("adapter", f"unknown fuzzy adapter {name!r}; known: "
+        raise w.error("adapter", f"unknown fuzzy adapter {brief(name)}; known: "
                                  f"{', '.join(sorted(fuzzy))}")
     return fuzzy[name]
 
@@ -177,11 +180,11 @@ def _input(w: _Where, name: str, spec) -> InputBinding:
     spec = w.mapping(spec, where, _INPUT_KEYS)
     stat = spec.get("statistic")
     if stat not in window.STATISTICS:
-        raise w.error(f"{where}.statistic", f"unknown statistic {stat!r}; "
+        raise w.error(f"{where}.statistic", f"unknown statistic {brief(stat)}; "
                                             f"known: {', '.join(window.STATISTICS)}")
     chan = spec.get("channel", "all")
     if chan not in known_channels():
-        raise w.error(f"{where}.channel", f"unknown channel {chan!r}; "
+        raise w.error(f"{where}.channel", f"unknown channel {brief(chan)}; "
                                           f"known: {', '.join(known_channels())}")
     return InputBinding(name, stat, chan)
 
@@ -208,7 +211,7 @@ def _outputs(w: _Where, doc, fis, role: str) -> tuple:
             raise w.error(f"outputs.{name}", f"names no output of the fuzzy system "
                                              f"(outputs: {', '.join(fis.output_names)})")
         if target != role:
-            raise w.error(f"outputs.{name}", f"unknown target {target!r}; this adapter's "
+            raise w.error(f"outputs.{name}", f"unknown target {brief(target)}; this adapter's "
                                              f"output drives {role!r}")
         out.append(OutputBinding(name, target))
     if len(out) != 1:
@@ -220,12 +223,12 @@ def _window(w: _Where, n) -> int:
     lo, hi = WINDOW_RANGE
     if not isinstance(n, int) or isinstance(n, bool) or not lo <= n <= hi:
         raise w.error("window", f"must be an integer number of epochs in {lo}..{hi}, "
-                                f"got {n!r}")
+                                f"got {brief(n)}")
     return n
 
 
 def _normalisation(w: _Where, value) -> str:
     if value not in window.DOM_NORMALISATIONS:
-        raise w.error("normalisation", f"unknown normalisation {value!r}; known: "
+        raise w.error("normalisation", f"unknown normalisation {brief(value)}; known: "
                                        f"{', '.join(window.DOM_NORMALISATIONS)}")
     return value
