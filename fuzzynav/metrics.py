@@ -149,7 +149,7 @@ def improvement_ci(baseline, candidate, level: float = 0.95, n_boot: int = 2000,
     return Estimate(point, float(lo), float(hi), int(b.size))
 
 
-def check_finite_metrics(df) -> None:
+def check_finite_metrics(df, required=None, source: str = "scenario") -> None:
     """Refuse a table of runs with a non-finite metric (a diverged filter run).
 
     Parameters
@@ -158,24 +158,34 @@ def check_finite_metrics(df) -> None:
         One row per run with columns ``filter``, ``scenario``, ``seed``, the metrics
         (``rms_*``, ``max_*``) and optionally ``completed`` and ``error``; a row with an
         ``error`` (a filter that could not run, recorded as such) is not a diverged run.
+    required : pandas.DataFrame of bool, optional
+        Which cells must be finite, for metrics that may legitimately be NaN (its columns
+        are the metrics checked, e.g. the drift of a recording's complete outages); default:
+        every ``rms_*`` and ``max_*`` cell.
+    source : str
+        What the ``scenario`` column names, in the message ("scenario", "recording").
 
     Raises
     ------
     RunDivergedError
         Naming the first such run's filter, scenario and seed and how many there are.
     """
-    metrics = [c for c in df.columns if c.startswith(("rms_", "max_"))]
+    metrics = list(required.columns) if required is not None else \
+        [c for c in df.columns if c.startswith(("rms_", "max_"))]
     values = df[metrics].to_numpy(dtype=float)
-    bad = ~np.isfinite(values).all(axis=1)
+    nonfinite = ~np.isfinite(values)
+    if required is not None:
+        nonfinite &= required.to_numpy(dtype=bool)
+    bad = nonfinite.any(axis=1)
     if "error" in df.columns:
         bad &= df["error"].isna().to_numpy()
     if not bad.any():
         return
     i = int(np.flatnonzero(bad)[0])
     row = df.iloc[i]
-    j = int(np.flatnonzero(~np.isfinite(values[i]))[0])
+    j = int(np.flatnonzero(nonfinite[i])[0])
     stopped = " (it stopped early: covariance lost)" if row.get("completed", 1.0) < 1 else ""
-    raise RunDivergedError(f"filter {row['filter']} diverged on scenario {row['scenario']} "
+    raise RunDivergedError(f"filter {row['filter']} diverged on {source} {row['scenario']} "
                            f"seed {int(row['seed'])}{stopped}: {metrics[j]} = {values[i, j]}; "
                            f"{int(bad.sum())} of {len(df)} run(s) have non-finite metrics, "
                            "no table printed")

@@ -99,22 +99,24 @@ def load_recording(spec, args):
 
 def run_recording(spec, filter_name, options, args) -> int:
     """Load, run the protocol on ``args.mc`` seeds, print the table or JSON, plot if asked."""
-    from fuzzynav.realdata.validate import metrics_table, validate
+    from fuzzynav.cli.values import write_stdout
+    from fuzzynav.realdata.validate import check_finite, metrics_table, validate
 
     settings = settings_from(args)
     rec = load_recording(spec, args)
     seeds = list(range(args.seed, args.seed + args.mc))
     vals = [validate(rec, filter_name, settings, s, options) for s in seeds]
     df = metrics_table(vals)
+    check_finite(df, rec, spec)  # a diverged run: no table at all, exit 3
     if args.json:
-        print(json.dumps(json_summary(spec, rec, vals, df), indent=2))
+        write_stdout(json.dumps(json_summary(spec, rec, vals, df), indent=2), "JSON summary")
     else:
-        print(text_summary(spec, rec, vals, df))
+        write_stdout(text_summary(spec, rec, vals, df), "results table")
     if args.plot:
         from fuzzynav.realdata.figures import write_figures
 
         for path in write_figures(vals[0], rec, Path(args.plot)):
-            print(f"wrote {path}")
+            write_stdout(f"wrote {path}", "progress line")
     return 0
 
 
@@ -177,7 +179,8 @@ def _clean(x):
 
 
 def json_summary(spec, rec, vals, df) -> dict:
-    """Everything of the run as JSON-ready data (NaN -> null)."""
+    """Everything of the run as JSON-ready data (NaN -> null: only the metrics that may be
+    NaN, :func:`~fuzzynav.realdata.validate.required_metrics`, reach it)."""
     from fuzzynav.metrics import mean_ci
     from fuzzynav.realdata.mems import CONSUMER_MEMS
     from fuzzynav.realdata.validate import FEEDS

@@ -129,3 +129,40 @@ def metrics_table(validations) -> pd.DataFrame:
     rows = [{"filter": FEEDS[name], "seed": v.seed, "filter_name": v.filter, **run.metrics}
             for v in validations for name, run in v.runs.items()]
     return pd.DataFrame(rows)
+
+
+#: metrics of every run that are always defined on a recording: a NaN is a diverged filter
+POSITION_METRICS = ("rms_pos_e_m", "rms_pos_n_m", "rms_pos_u_m", "rms_pos_h_m", "rms_pos_m",
+                    "max_pos_h_m")
+VELOCITY_METRICS = ("rms_vel_e_mps", "rms_vel_n_mps", "rms_vel_u_mps", "rms_vel_mps")
+#: defined when the run has at least one complete outage
+DRIFT_METRICS = ("drift_h_rms_m", "drift_h_max_m", "outage_max_h_m")
+
+
+def required_metrics(df: pd.DataFrame, rec) -> pd.DataFrame:
+    """Which metrics of :func:`metrics_table` must be finite (bool, one row per run).
+
+    Legitimately NaN, so not required: the attitude RMS (a recording has no attitude
+    truth); the velocity RMS when the reference lacks velocities; the drift of an outage
+    that is not complete (:mod:`~fuzzynav.realdata.score`), and the drift summaries of a
+    run without complete outages; ``rms_pos_h_aided_m``, whose epochs are a subset of
+    ``rms_pos_h_m``'s -- it is NaN only when every scored epoch is inside an outage.
+    """
+    n_done = df["n_outages"].to_numpy()
+    vel = bool(np.isfinite(rec.reference.z[:, 3:6]).all())
+    req = {m: np.ones(len(df), bool) for m in POSITION_METRICS}
+    req.update({m: np.full(len(df), vel) for m in VELOCITY_METRICS})
+    req.update({m: n_done >= 1 for m in DRIFT_METRICS})
+    drifts = [c for c in df.columns if c.startswith("drift_h_m_")]
+    req.update({c: n_done >= int(c.rsplit("_", 1)[1]) for c in drifts})
+    return pd.DataFrame(req, index=df.index)
+
+
+def check_finite(df: pd.DataFrame, rec, spec) -> None:
+    """Refuse (:class:`~fuzzynav.errors.RunDivergedError`) a table of runs in which a
+    metric that must be finite (:func:`required_metrics`) is not: a diverged filter."""
+    from fuzzynav.metrics import check_finite_metrics
+
+    runs = df.assign(filter=df["filter_name"],
+                     scenario=[f"{spec} ({feed})" for feed in df["filter"]])
+    check_finite_metrics(runs, required_metrics(df, rec), source="recording")

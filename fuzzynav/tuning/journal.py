@@ -73,11 +73,13 @@ def salvage(data: bytes):
 
 
 def _backup(path) -> str:
+    """Copy the journal to a free ``.bak`` name, atomically: a full disk leaves no partial
+    backup (which would push the next repair's backup to ``.1.bak``)."""
     bak, k = f"{path}.bak", 0
     while os.path.exists(bak):
         k += 1
         bak = f"{path}.{k}.bak"
-    shutil.copy2(path, bak)
+    write_atomic(bak, lambda tmp: shutil.copyfile(path, tmp), what="journal backup")
     return bak
 
 
@@ -99,10 +101,13 @@ def repair(path) -> str | None:
     kept, n, nbytes = salvage(data)
     if n == 0:
         return None
+    bak = None
     try:
         bak = _backup(path)
         write_atomic(path, lambda tmp: Path(tmp).write_bytes(kept))
     except (OSError, OutputError) as exc:
+        if bak is not None:  # the journal is unchanged: its backup would only mislead
+            os.unlink(bak)
         why = exc.reason if isinstance(exc, OutputError) else (exc.strerror or exc)
         raise FuzzynavError(f"{path}: the journal has {n} damaged record(s) ({nbytes} bytes) "
                             f"and cannot be repaired: {why}") from None

@@ -122,6 +122,24 @@ def test_batch_counts_clamped_rows_and_flags_each_row():
     assert_same_up_to_rounding(Y[[0, 1, 2, 4]], Y2[[0, 1, 2, 4]])
 
 
+@pytest.mark.parametrize("doc", list(_docs())[::5], ids=lambda d: "-".join(d["operators"].values()))
+def test_a_batch_row_is_bit_identical_to_the_sample_alone(doc):
+    # exact on purpose (docs/reliability.md promises it): both batch entry points run the same
+    # scalar kernel, eval_compiled, once per row with no sum across rows, so a row cannot
+    # depend on the others or on the batch length; a kernel that vectorised across rows or
+    # summed in another order would break this
+    cf = load_fis(doc).compile()
+    X = np.random.default_rng(8).uniform(-1.3, 1.3, (64, cf.n_inputs))
+    Y, _ = eval_compiled_batch(cf.fparams, cf.iparams, X)
+    y, work = np.empty(cf.n_outputs), np.empty(cf.work_size)
+    for k in range(len(X)):
+        alone = np.empty((1, cf.n_outputs))
+        eval_compiled_into(cf.fparams, cf.iparams, X[k:k + 1].copy(), alone,
+                           np.empty(1, dtype=np.int64))
+        eval_compiled(cf.fparams, cf.iparams, X[k].copy(), y, work)
+        assert (Y[k] == alone[0]).all() and (Y[k] == y).all(), k
+
+
 def test_no_rule_fired_flag_and_default():
     rng = np.random.default_rng(3)
     inputs = [{"name": "x", "range": [0.0, 1.0], "terms": [

@@ -23,10 +23,10 @@ ARGS = ("--filter", "ekf", "--outage-period", "30", "--outage-duration", "10",
 WEEK_S = 7 * 86400
 
 
-def run_cli(directory):
+def run_cli(directory, *extra):
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(["run", "--data", f"rtklib:{directory}", *ARGS])
+        code = main(["run", "--data", f"rtklib:{directory}", *ARGS, *extra])
     return code, out.getvalue(), err.getvalue()
 
 

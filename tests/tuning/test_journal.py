@@ -2,13 +2,16 @@
 complete record is kept, the cut one dropped and named, the original kept as ``.bak``."""
 from __future__ import annotations
 
+import errno
 import json
 import os
+import shutil
 import socket
 import time
 from pathlib import Path
 
 import optuna
+import pytest
 from optuna.trial import TrialState
 
 from fuzzynav.cli import main
@@ -110,3 +113,46 @@ def test_a_record_appended_after_the_cut_one_is_kept(tmp_path, monkeypatch, caps
     assert len(study.get_trials(states=(TrialState.COMPLETE,))) == 2
     assert path.read_bytes() == data
     assert os.path.exists(f"{path}.bak")
+
+
+def _enospc():
+    return OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+
+def _copy_half(src, dst):
+    """shutil.copyfile on a disk that fills up halfway through the copy."""
+    data = Path(src).read_bytes()
+    with open(dst, "wb") as fh:
+        fh.write(data[:len(data) // 2])
+    raise _enospc()
+
+
+def _write_half(self, data):
+    """Path.write_bytes on a disk that fills up halfway through."""
+    with open(self, "wb") as fh:
+        fh.write(data[:len(data) // 2])
+    raise _enospc()
+
+
+@pytest.mark.parametrize("failing", ["backup", "journal"])
+def test_a_repair_on_a_full_disk_changes_nothing(tmp_path, monkeypatch, capsys, failing):
+    monkeypatch.setattr(Objective, "_run", _fake_run(_dead_pid()))
+    cfg = load_study_config(write_study(tmp_path, study={"trials": 2}))
+    run_study(cfg, progress=False)
+    path = Path(cfg.storage_url[len("journal:"):])
+    cut = path.read_bytes()[:-20]
+    path.write_bytes(cut)
+    before = sorted(p.name for p in path.parent.iterdir())
+    if failing == "backup":  # the disk fills up while the original is copied
+        monkeypatch.setattr(shutil, "copyfile", _copy_half)
+    else:  # the backup fits, the repaired journal does not
+        monkeypatch.setattr(Path, "write_bytes", _write_half)
+
+    code = main(["study", "report", str(cfg.path), "--no-eval", "--out", str(tmp_path / "r")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2
+    assert len(err) == 1 and str(path) in err[0] and "cannot be repaired" in err[0]
+    assert os.strerror(errno.ENOSPC) in err[0]
+    assert path.read_bytes() == cut  # the journal as found
+    # no backup (partial or whole) and no temporary file: the next repair starts afresh
+    assert sorted(p.name for p in path.parent.iterdir()) == before

@@ -1,0 +1,65 @@
+"""A filter that diverges on a recording: one line, exit 3, no table (docs/reliability.md)."""
+import dataclasses
+import json
+import types
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from fuzzynav.realdata import validate as validate_mod
+from fuzzynav.realdata.validate import required_metrics
+from tests.realdata.test_damaged_recordings import drive, run_cli  # noqa: F401 (fixture)
+
+
+def _nan_from_halfway(monkeypatch):
+    """Every filter run returns NaN positions from its middle on, as a diverged filter
+    would, while still reporting that it ran to the end."""
+    real = validate_mod.run_named
+
+    def run(*args, **kwargs):
+        res = real(*args, **kwargs)
+        lla = res.lla.copy()
+        lla[len(lla) // 2:] = np.nan
+        return dataclasses.replace(res, lla=lla)
+
+    monkeypatch.setattr(validate_mod, "run_named", run)
+
+
+@pytest.mark.parametrize("extra", [(), ("--json",)], ids=["table", "json"])
+def test_a_diverged_run_on_a_recording_exits_3_without_a_table(drive, monkeypatch,  # noqa: F811
+                                                               extra):
+    _nan_from_halfway(monkeypatch)
+    code, out, err = run_cli(drive, *extra)
+    assert code == 3, err
+    assert out == ""  # no table, and no JSON with null in place of the NaN
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    assert f"filter ekf diverged on recording rtklib:{drive} (GNSS throughout) seed 0" in err
+    assert "rms_pos_e_m = nan" in err and "2 of 2 run(s)" in err
+
+
+def test_the_same_drive_without_the_fault_exits_0(drive):  # noqa: F811
+    # its attitude RMS is NaN (no attitude truth on a recording): that must not trip it
+    code, out, err = run_cli(drive, "--json")
+    assert code == 0, err
+    feeds = json.loads(out)["feeds"]
+    assert feeds["GNSS throughout"]["rms_att_deg"]["mean"] is None
+    assert np.isfinite(feeds["GNSS throughout"]["rms_pos_h_m"]["mean"])
+
+
+def test_which_metrics_may_be_nan():
+    df = pd.DataFrame({"rms_pos_h_m": [1.0, 1.0], "rms_att_deg": [np.nan, np.nan],
+                       "rms_vel_mps": [np.nan, np.nan], "n_outages": [2.0, 1.0],
+                       "drift_h_m_1": [3.0, 3.0], "drift_h_m_2": [4.0, np.nan],
+                       "drift_h_rms_m": [3.5, 3.0]})
+    z = np.zeros((5, 6))
+    z[:, 3:6] = np.nan  # a reference without velocities
+    req = required_metrics(df, types.SimpleNamespace(reference=types.SimpleNamespace(z=z)))
+    assert "rms_att_deg" not in req and "rms_pos_h_aided_m" not in req
+    assert req["rms_pos_h_m"].all() and not req["rms_vel_mps"].any()
+    assert req["drift_h_m_1"].all()
+    # the second run completed only one outage: its second drift is legitimately NaN
+    assert req["drift_h_m_2"].tolist() == [True, False]
+    z[:, 3:6] = 0.0
+    req = required_metrics(df, types.SimpleNamespace(reference=types.SimpleNamespace(z=z)))
+    assert req["rms_vel_mps"].all()
