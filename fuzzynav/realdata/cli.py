@@ -98,8 +98,10 @@ def load_recording(spec, args):
 
 
 def run_recording(spec, filter_name, options, args) -> int:
-    """Load, run the protocol on ``args.mc`` seeds, print the table or JSON, plot if asked."""
-    from fuzzynav.cli.values import write_stdout
+    """Load, run the protocol on ``args.mc`` seeds, print the table or JSON, plot if asked.
+
+    stdout failures (full disk, closed pipe) are handled once, in :func:`fuzzynav.cli.main`.
+    """
     from fuzzynav.realdata.validate import check_finite, metrics_table, validate
 
     settings = settings_from(args)
@@ -109,14 +111,14 @@ def run_recording(spec, filter_name, options, args) -> int:
     df = metrics_table(vals)
     check_finite(df, rec, spec)  # a diverged run: no table at all, exit 3
     if args.json:
-        write_stdout(json.dumps(json_summary(spec, rec, vals, df), indent=2), "JSON summary")
+        print(json.dumps(json_summary(spec, rec, vals, df), indent=2))
     else:
-        write_stdout(text_summary(spec, rec, vals, df), "results table")
+        print(text_summary(spec, rec, vals, df))
     if args.plot:
         from fuzzynav.realdata.figures import write_figures
 
         for path in write_figures(vals[0], rec, Path(args.plot)):
-            write_stdout(f"wrote {path}", "progress line")
+            print(f"wrote {path}")
     return 0
 
 
