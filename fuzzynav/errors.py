@@ -54,7 +54,7 @@ class OutputError(FuzzynavError):
     should be, a name too long).
 
     Raised after the temporary file is removed: the file at ``path``, if there was one, is
-    as it was.
+    as it was, and so is every other file unless ``written`` names it.
 
     Parameters
     ----------
@@ -64,15 +64,23 @@ class OutputError(FuzzynavError):
         What the system said.
     what : str, optional
         What the file is ("simulation cache", "figure"); named in the message.
+    written : list of str or os.PathLike, optional
+        Files already moved into place when a group of files failed part-way (see
+        :func:`fuzzynav.fileio.publish_all`): the message lists them instead of saying
+        that nothing was changed.
     """
 
-    def __init__(self, path, reason, what: str = ""):
+    def __init__(self, path, reason, what: str = "", written=()):
         self.path = str(path)
         if isinstance(reason, OSError) and reason.strerror:
             reason = reason.strerror
         self.reason = str(reason)
+        self.what = what
+        self.written = [str(p) for p in written]
         thing = f"the {what}" if what else "it"
-        super().__init__(f"{self.path}: cannot write {thing}: {self.reason} (nothing was changed)")
+        changed = (f"files written before it: {', '.join(self.written)}" if self.written
+                   else "nothing was changed")
+        super().__init__(f"{self.path}: cannot write {thing}: {self.reason} ({changed})")
 
     def __str__(self) -> str:
         return self.args[0]

@@ -5,12 +5,15 @@ figure or a cache file should get the usual mode (0666 minus the umask) like any
 user writes.  :func:`publish` sets that mode and moves the temporary file into place;
 :func:`write_atomic` does the whole round and turns a failure (read-only directory, full
 disk) into one :class:`~fuzzynav.errors.OutputError` line, leaving no temporary file.
+:func:`staged` does the same for a group of files (a report directory, a set of rule
+files): all are written complete into a temporary directory, then moved into place.
 """
 from __future__ import annotations
 
 import hashlib
 import os
 import re
+import shutil
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
@@ -110,3 +113,80 @@ def write_atomic(path, write, suffix: str = ".tmp", what: str = "") -> Path:
         if tmp is not None and os.path.exists(tmp):
             os.unlink(tmp)
     return path
+
+
+def publish_all(pairs, what: str = "") -> None:
+    """``os.replace`` each ``(source, target)`` pair, in order.
+
+    Parameters
+    ----------
+    pairs : iterable of (path, path)
+        Complete files (on disk, with their final mode) and where they go; each source on
+        the same file system as its target, so that each move is one rename.
+    what : str, optional
+        What the files are, for the error message.
+
+    Raises
+    ------
+    OutputError
+        A rename failed (near impossible once the files are written): it names the target
+        that was not replaced and lists the targets already replaced before it.
+    """
+    done = []
+    for source, target in pairs:
+        try:
+            os.replace(source, target)
+        except OSError as exc:
+            raise OutputError(target, exc, what, written=done) from None
+        done.append(target)
+
+
+def _renamed(exc: OutputError, tmp: Path, directory: Path) -> OutputError:
+    """``exc`` naming the file in ``directory`` that the staged file in ``tmp`` stands for."""
+    path = Path(exc.path)
+    if path == tmp or tmp in path.parents:
+        path = directory / path.relative_to(tmp)
+    return OutputError(path, exc.reason, exc.what, written=exc.written)
+
+
+@contextmanager
+def staged(directory, what: str = "", last=()):
+    """Write a group of files into ``directory`` all at once, or not at all.
+
+    Yields a temporary directory inside ``directory`` (so every move is a rename on one
+    file system); the caller writes its files there, complete.  When the block ends, every
+    file in it is moved onto the same name in ``directory`` (the names in ``last`` after the
+    others: an index such as ``report.md`` appears once what it refers to is there); the
+    temporary directory is removed in any case.
+
+    Parameters
+    ----------
+    directory : str or os.PathLike
+        Created if missing.
+    what : str, optional
+        What the files are, for the error message.
+    last : sequence of str
+        File names to move after all others.
+
+    Raises
+    ------
+    OutputError
+        The block failed writing a file (named by its final name in ``directory``), the
+        temporary directory could not be made, or a final rename failed (the message then
+        lists the files moved before it).  Otherwise ``directory`` is as it was.
+    """
+    directory = make_dir(directory, what)
+    try:
+        tmp = Path(tempfile.mkdtemp(prefix=".staged-", dir=directory))
+    except OSError as exc:  # a read-only directory
+        raise OutputError(directory, exc, what) from None
+    try:
+        yield tmp
+        names = sorted((p.name for p in tmp.iterdir()), key=lambda n: (n in last, n))
+        publish_all([(tmp / n, directory / n) for n in names], what)
+    except OutputError as exc:
+        raise _renamed(exc, tmp, directory) from None
+    except OSError as exc:
+        raise OutputError(directory, exc, what) from None
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)

@@ -9,17 +9,14 @@ from disk) gives on the first test run — the regression tests re-run it.
 from __future__ import annotations
 
 import datetime as _dt
-import os
-import shutil
-import tempfile
 from pathlib import Path
 
 import optuna
 from optuna.trial import TrialState
 
 from fuzzynav import __version__
-from fuzzynav.errors import FuzzynavError, OutputError
-from fuzzynav.fileio import make_dir
+from fuzzynav.errors import FuzzynavError
+from fuzzynav.fileio import staged
 from fuzzynav.experiment import run_on_log
 from fuzzynav.fuzzy import FuzzySystem, load_fis, save_fis
 from fuzzynav.tuning.evaluate import run_table, summary
@@ -83,8 +80,9 @@ def export_rules(cfg, study, out, trial_number=None, pareto_index=None, cache_di
     """Write the rule files of a trial with provenance and expected metrics.
 
     The files are written complete (with their ``expected`` block) into a temporary
-    directory beside ``out`` and then moved into place: an error leaves no partial file,
-    and a read-only directory or a full disk is one :class:`OutputError` with the old
+    directory beside ``out`` and then moved into place together
+    (:func:`fuzzynav.fileio.staged`): an error leaves no partial file, and a read-only
+    directory or a full disk is one :class:`~fuzzynav.errors.OutputError` with the old
     files unchanged.
     """
     trial = choose_trial(study, cfg, trial_number, pareto_index)
@@ -94,13 +92,8 @@ def export_rules(cfg, study, out, trial_number=None, pareto_index=None, cache_di
     test = run_table(ev, systems, cfg.test)
     held_out = summary(test).iloc[0].to_dict() if not test.empty else {}
     created = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
-    parent = make_dir(next(iter(paths.values())).parent)
-    try:
-        tmp = Path(tempfile.mkdtemp(prefix=".export-", dir=parent))
-    except OSError as exc:  # a read-only directory
-        raise OutputError(parent, exc) from None
-    try:
-        staged = {name: tmp / p.name for name, p in paths.items()}
+    with staged(next(iter(paths.values())).parent) as tmp:
+        files = {name: tmp / p.name for name, p in paths.items()}
         for name, fis in systems.items():
             prov = {
                 "study": cfg.name, "config": str(cfg.path) if cfg.path else None,
@@ -116,16 +109,8 @@ def export_rules(cfg, study, out, trial_number=None, pareto_index=None, cache_di
                     if k.endswith("ratio") or k == "score"},
                 "package_version": __version__, "created": created,
             }
-            save_fis(_with(fis, provenance=prov), staged[name])
-        _write_expected(cfg, staged, ev)
-        for name, p in paths.items():
-            os.replace(staged[name], p)
-    except OutputError as exc:  # named the staged file: name the one asked for
-        raise OutputError(out, exc.reason) from None
-    except OSError as exc:
-        raise OutputError(out, exc) from None
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+            save_fis(_with(fis, provenance=prov), files[name])
+        _write_expected(cfg, files, ev)
     return list(paths.values())
 
 

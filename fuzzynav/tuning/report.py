@@ -5,9 +5,10 @@ Writes into a directory: ``trials.csv`` (pandas table of every trial), ``history
 its fANOVA needs scikit-learn -- of the structural
 parameters), ``pareto.png`` (multi-objective studies), ``mf_<controller>.png`` (the tuned
 membership functions), ``report.md`` (summary, rule tables, the train/test table beside the
-EKF, the paper's rules and the compared baselines).  Every file is written atomically: a
-read-only directory or a full disk is one :class:`~fuzzynav.errors.OutputError` line, the
-files of an earlier report unchanged.
+EKF, the paper's rules and the compared baselines).  All files are written complete into a
+temporary directory and then moved into place together: a read-only directory, a full disk
+or an error part-way is one :class:`~fuzzynav.errors.OutputError` line, with the files of an
+earlier report unchanged and none of the new ones published.
 """
 from __future__ import annotations
 
@@ -21,7 +22,7 @@ import pandas as pd
 from fuzzynav import plots
 from fuzzynav.fuzzy.describe import rule_markdown
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.fileio import make_dir, write_atomic
+from fuzzynav.fileio import staged, write_atomic
 from fuzzynav.tuning.evaluate import format_summary, run_table
 from fuzzynav.tuning.export import choose_trial, systems_of
 from fuzzynav.tuning.objective import Evaluator
@@ -140,8 +141,18 @@ def _best_trial_section(cfg, trial, out, cache_dir, evaluate) -> list:
 
 
 def write_report(cfg, study, out_dir, cache_dir=None, evaluate: bool = True) -> Path:
-    """Write the report directory; returns the path of ``report.md``."""
-    out = make_dir(out_dir)
+    """Write the report directory; returns the path of ``report.md``.
+
+    Every file is built in a temporary directory inside ``out_dir`` and all are moved into
+    place at the end (``report.md`` last), so a failure part-way leaves ``out_dir`` as it
+    was (see :func:`fuzzynav.fileio.staged`).
+    """
+    with staged(out_dir, last=("report.md",)) as tmp:
+        _write_files(cfg, study, tmp, cache_dir, evaluate)
+    return Path(out_dir) / "report.md"
+
+
+def _write_files(cfg, study, out: Path, cache_dir, evaluate: bool) -> None:
     df = trials_frame(study)
     write_atomic(out / "trials.csv", lambda tmp: df.to_csv(tmp, index=False))
     figs = [_history(study, cfg, out / "history.png"),
@@ -160,4 +171,4 @@ def write_report(cfg, study, out_dir, cache_dir=None, evaluate: bool = True) -> 
     else:
         lines += _best_trial_section(cfg, trial, out, cache_dir, evaluate)
     text = "\n".join(lines) + "\n"
-    return write_atomic(out / "report.md", lambda tmp: Path(tmp).write_text(text))
+    write_atomic(out / "report.md", lambda tmp: Path(tmp).write_text(text))
