@@ -1,7 +1,7 @@
 """Compile the kernels a trial needs once, in the parent, before the workers start.
 
 On a machine where numba's cache for this version of the package is empty, the first trial
-compiles every kernel of the filter loop (about a minute on two cores), during which a study
+compiles every kernel of the filter loop (about a minute and a half on two cores), during which a study
 would sit at "0/60 trials".  :func:`warm_up` does that work first, under a message that says
 so with a live count of the kernels compiled and the time spent; the workers then load the
 kernels from the cache.  With a warm cache it does nothing.
@@ -15,7 +15,7 @@ from pathlib import Path
 
 from tqdm.auto import tqdm
 
-MESSAGE = "compiling kernels (first run only, about a minute)"
+MESSAGE = "compiling kernels (first run only, about a minute and a half)"
 
 
 def kernel_cache():

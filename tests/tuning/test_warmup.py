@@ -32,7 +32,7 @@ def test_a_cold_cache_is_compiled_here_under_a_message(fake_compile, capsys):
     assert warmup.is_cold()
     assert warmup.warm_up(cfg=None, cache_dir="sim") is True
     err = capsys.readouterr().err
-    assert "compiling kernels (first run only, about a minute): 2 kernels compiled" in err
+    assert "compiling kernels (first run only, about a minute and a half): 2 kernels compiled" in err
     assert calls == ["sim"] and not warmup.is_cold()
     # warm now: nothing compiled, nothing said
     assert warmup.warm_up(cfg=None, cache_dir="sim") is False
