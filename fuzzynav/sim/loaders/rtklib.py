@@ -31,7 +31,6 @@ second just before the first IMU sample, counted from 1970 in the GPS time scale
 """
 from __future__ import annotations
 
-import glob
 import io
 from dataclasses import dataclass
 from pathlib import Path
@@ -43,6 +42,7 @@ from fuzzynav.errors import DataMissingError, InputFileError
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.sim.loaders import checks, increments, timetag
 from fuzzynav.sim.loaders.mounting import Mounting
+from fuzzynav.sim.loaders.recording_files import find_files
 from fuzzynav.sim.loaders.rtkpos import read_pos
 from fuzzynav.sim.sensors import SensorData
 
@@ -125,60 +125,6 @@ class Recording:
 
         return initial_state(self.imu, self.gnss, heading_rad=heading_rad,
                              forward_known=self.mounting is not None, **kw)
-
-
-# -- files --------------------------------------------------------------------------------
-def _one(directory: Path, pattern: str, what: str, several: str) -> Path:
-    found = sorted(directory.glob(pattern))
-    if not found:
-        raise DataMissingError(f"{directory}: no {what} ({pattern}) in the recording directory")
-    if len(found) > 1:
-        raise InputFileError(directory, pattern, "several files match ("
-                             + ", ".join(p.name for p in found) + f"); {several}")
-    return found[0]
-
-
-def sessions(directory) -> list[str]:
-    """The ``<id>`` of every ``imu_<id>.csv`` in ``directory``, sorted."""
-    return sorted(p.stem[len("imu_"):] for p in Path(directory).glob("imu_*.csv"))
-
-
-def _imu_file(directory: Path, session) -> Path:
-    """``imu_<session>.csv``, or the only IMU file; errors list the sessions there are."""
-    ids = ", ".join(sessions(directory)) or "none"
-    if session is None:
-        return _one(directory, "imu_*.csv", "IMU file",
-                    f"choose a session ({ids}) with session=\"<id>\" (command line: "
-                    "--data KIND:DIR:SESSION)")
-    sid = str(session)
-    # the id becomes part of a file name and a glob pattern: a plain name only
-    if not sid or sid != Path(sid).name or glob.escape(sid) != sid:
-        raise InputFileError(directory, "session", f"{sid!r} is not a session id (a plain "
-                                                   f"name; sessions here: {ids})")
-    imu = directory / f"imu_{sid}.csv"
-    if not imu.exists():
-        raise DataMissingError(f"{directory}: no session {sid!r} (no {imu.name}); sessions "
-                               f"here: {ids}")
-    return imu
-
-
-def find_files(directory, session=None) -> dict:
-    """The IMU CSV, its tag and the GNSS solution in ``directory`` (clear errors if not)."""
-    directory = Path(directory)
-    if not directory.is_dir():
-        raise DataMissingError(f"{directory}: recording directory not found")
-    imu = _imu_file(directory, session)
-    tag = imu.with_name(imu.name + ".tag")
-    if not tag.is_file():
-        raise DataMissingError(f"{tag}: time-tag file of {imu.name} not found")
-    session_id = imu.stem[len("imu_"):]
-    pos = _one(directory, f"{glob.escape('gnss_' + session_id)}*.pos", "GNSS solution",
-               "keep one solution per session in the directory")
-    for what, path in (("IMU file", imu), ("time-tag file", tag), ("GNSS solution", pos)):
-        if not path.is_file():
-            raise InputFileError(path, "", f"not a regular file (a directory?); the {what} "
-                                           "must be one")
-    return {"imu": imu, "tag": tag, "pos": pos}
 
 
 def _data_lines(lines, first: int, last: int) -> np.ndarray:
