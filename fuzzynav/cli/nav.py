@@ -161,7 +161,7 @@ def _cmd_run(args) -> int:
 
 
 def _cmd_compare(args) -> int:
-    from fuzzynav.claims import claims_for
+    from fuzzynav.claims import claims_for, rows_for
 
     filters = [f.strip() for f in args.filters.split(",") if f.strip()]
     if len(filters) < 2:
@@ -170,13 +170,14 @@ def _cmd_compare(args) -> int:
     check_rules(args, filters, "--filters")
     labels, claims = claims_for(str(args.scenario))
     return run_scenario_filters(args, filters, baseline=filters[0], claims=claims,
-                                claim_labels=labels)
+                                claim_labels=labels, rows=rows_for(str(args.scenario)))
 
 
-def run_scenario_filters(args, filters, baseline=None, claims=None, claim_labels=()) -> int:
+def run_scenario_filters(args, filters, baseline=None, claims=None, claim_labels=(),
+                         rows=()) -> int:
     """Simulate, run ``filters`` on ``args.mc`` seeds, print the table, plot if asked."""
     from fuzzynav.experiment import monte_carlo
-    from fuzzynav.report import comparison_rows, render
+    from fuzzynav.report import NAV_ROWS, comparison_rows, render
     from fuzzynav.sim.scenario import load_scenario
 
     scn = load_scenario(args.scenario)
@@ -196,7 +197,8 @@ def run_scenario_filters(args, filters, baseline=None, claims=None, claim_labels
         print(f"scenario {scn.name} ({scn.duration_s:.0f} s), seeds "
               f"{seeds[0]}..{seeds[-1]}"
               + (" — mean ± 95 % CI over seeds" if len(seeds) > 1 else "") + "\n"
-              + render(header, comparison_rows(df, filters, baseline, claims=claims))
+              + render(header, comparison_rows(df, filters, baseline, rows=rows or NAV_ROWS,
+                                              claims=claims))
               + (f"\nwarning: {len(bad)} run(s) stopped early (covariance lost)"
                  if len(bad) else ""))
     if args.plot:

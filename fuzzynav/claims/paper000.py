@@ -1,10 +1,12 @@
-"""Published results of the source papers, printed beside ours — never asserted in tests.
+"""Paper 000's published results, printed beside ours — never asserted in tests.
 
 Each entry maps a metric key to the paper's ``(EKF, FAKF, improvement %)`` as printed in the
 paper (see ../shared/seeds/DIGEST.md).  They come from the authors' own simulation, whose
 trajectory, noise and tuning are not published; they are references, not targets.
 """
 from __future__ import annotations
+
+from fuzzynav.claims import PaperClaims, register
 
 #: Paper 000, Table 2 (RMS, EKF -> FAKF).  Roll is not simulated there.
 PAPER000_TABLE2 = {
@@ -19,10 +21,8 @@ PAPER000_TABLE2 = {
 }
 
 
-def claims_for(scenario_name: str):
-    """``(labels, {metric: values})`` of the claims matching a scenario, or ``((), {})``."""
-    if scenario_name.startswith("paper000"):
-        table = {k: (f"{e:g}", f"{f:g}", f"{i:+.1f} %") for k, (e, f, i) in
-                 PAPER000_TABLE2.items()}
-        return ("paper EKF (claim)", "paper FAKF (claim)", "paper impr. (claim)"), table
-    return (), {}
+register(PaperClaims(
+    prefix="paper000",
+    labels=("paper EKF (claim)", "paper FAKF (claim)", "paper impr. (claim)"),
+    table={k: (f"{e:g}", f"{f:g}", f"{i:+.1f} %") for k, (e, f, i) in PAPER000_TABLE2.items()},
+))
