@@ -76,7 +76,7 @@ class MeasurementModel:
                                    self.channels + ("all",)) from None
 
 
-MODELS = Registry("measurement model", __name__, ("gnss", "polarization", "nhc"))
+MODELS = Registry("measurement model", __name__, ("gnss", "polarization", "nhc", "magnetometer"))
 
 
 def register(model: MeasurementModel) -> MeasurementModel:
