@@ -305,7 +305,7 @@ class Spec:
                 "err_vel_enu_mps": err_v[keep], "outlier_mask": outlier[keep],
                 "outage_windows": windows,
                 "true_sigma": self.true_sigma(time_s)[keep]}
-        return SensorData(kind="gnss", time_s=time_s[keep], z=z[keep], sigma=sigma[keep],
+        return SensorData(kind=self.kind, time_s=time_s[keep], z=z[keep], sigma=sigma[keep],
                           meta=meta)
 
     # -- TOML ---------------------------------------------------------------------------
@@ -313,7 +313,7 @@ class Spec:
     def from_dict(cls, d: dict, where: str) -> "Spec":
         """Parse a sensor table (``kind`` already checked); errors name ``where.key``."""
         t = Table(d, where)
-        t.string("kind", "gnss", choices=("gnss",))
+        t.string("kind", cls.kind, choices=(cls.kind,))
         f = cls.__dataclass_fields__
         kw = {"rate_hz": t.number("rate_hz", f["rate_hz"].default, lo=0.0, hi=100.0,
                                   lo_open=True),
@@ -340,6 +340,7 @@ class Spec:
                                                "and outage_duration_s")
         if kw["outage_duration_s"] >= kw["outage_period_s"] > 0.0:
             raise t.error("outage_duration_s", "must be shorter than outage_period_s")
+        kw.update(cls.extra_fields(t))
         t.finish()
         spec = cls(**kw)
         claimed = spec.claimed_sigma()
@@ -350,6 +351,11 @@ class Spec:
                 raise t.error(key, f"the claimed 1-sigma is zero on some axis (give {key} "
                                    "> 0, or a non-zero noise)")
         return spec
+
+    @classmethod
+    def extra_fields(cls, t: Table) -> dict:
+        """Keys a variant (e.g. ``bds``) reads beyond these; none here."""
+        return {}
 
     def to_dict(self) -> dict:
         """The sensor table (TOML-ready, ``None`` fields left out, ``kind`` included)."""
