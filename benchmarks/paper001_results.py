@@ -20,11 +20,10 @@ import numpy as np
 import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _report import machine  # noqa: E402
+from _report import machine, write_results  # noqa: E402
 
 from fuzzynav.claims.paper001 import PAPER001_COMBINED  # noqa: E402
 from fuzzynav.experiment import run_on_log  # noqa: E402
-from fuzzynav.fileio import publish  # noqa: E402
 from fuzzynav.filters.named import parse_filter_spec  # noqa: E402
 from fuzzynav.metrics import errors_vs_trajectory, mean_ci  # noqa: E402
 from fuzzynav.report import render  # noqa: E402
@@ -154,12 +153,7 @@ def main(argv=None):
         "### The variants: horizontal position and heading RMS", "", variant_table(dfs), "",
         f"![heading error through the disturbance](figures/{fig.name})"])
     doc = ROOT / "docs" / "paper001.md"
-    body = doc.read_text()
-    a, b = "<!-- results:begin -->", "<!-- results:end -->"
-    body = body.split(a)[0] + a + "\n" + text + "\n" + b + body.split(b)[1]
-    tmp = doc.with_suffix(".md.tmp")
-    tmp.write_text(body)
-    publish(tmp, doc)
+    write_results(doc, text)
     print(text)
 
 

@@ -24,14 +24,14 @@ The antenna sits at ``lever_arm_b_m`` (body RFU, metres) from the IMU:
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 
 from fuzzynav.errors import InputFileError
 from fuzzynav.nav import attitude, earth
 from fuzzynav.sim.gauss_markov import gauss_markov_series
-from fuzzynav.sim.sensors import SensorData, epoch_indices, register
+from fuzzynav.sim.sensors import SensorData, epoch_indices, register, spec_table
 from fuzzynav.sim.tomltable import Table
 
 _ZERO3 = (0.0, 0.0, 0.0)
@@ -359,16 +359,7 @@ class Spec:
 
     def to_dict(self) -> dict:
         """The sensor table (TOML-ready, ``None`` fields left out, ``kind`` included)."""
-        out = {"kind": self.kind}
-        for k, v in asdict(self).items():
-            if v is None:
-                continue
-            if k == "noise_windows":
-                v = [dict(w) for w in v]
-            elif isinstance(v, tuple):
-                v = [list(x) if isinstance(x, tuple) else x for x in v]
-            out[k] = v
-        return out
+        return spec_table(self)
 
 
 def antenna_truth(truth, idx, lever_arm_b_m):

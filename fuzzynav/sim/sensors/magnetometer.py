@@ -28,7 +28,7 @@ and sign convention.
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -36,7 +36,7 @@ from fuzzynav import units
 from fuzzynav.errors import InputFileError
 from fuzzynav.nav import attitude
 from fuzzynav.sim import geomag
-from fuzzynav.sim.sensors import SensorData, epoch_indices, register
+from fuzzynav.sim.sensors import SensorData, epoch_indices, register, spec_table
 from fuzzynav.sim.tomltable import Table
 
 _IDENTITY = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
@@ -245,14 +245,5 @@ class Spec:
         return cls(**kw)
 
     def to_dict(self) -> dict:
-        """The sensor table (TOML-ready, ``None`` left out, ``kind`` included)."""
-        out = {"kind": self.kind}
-        for k, v in asdict(self).items():
-            if v is None:
-                continue
-            if k == "disturbances":
-                v = [dict(x) for x in v]
-            elif isinstance(v, tuple):
-                v = [list(x) if isinstance(x, tuple) else x for x in v]
-            out[k] = v
-        return out
+        """The sensor table (TOML-ready, ``None`` fields left out, ``kind`` included)."""
+        return spec_table(self)
