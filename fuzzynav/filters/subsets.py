@@ -16,7 +16,9 @@ from fuzzynav.filters.named import FilterContext, get_filter, register_filter
 #: the magnetometer controller the ``fuzzy-*`` subsets use without ``--rules``
 PAPER001_MAG_RULES = "paper001_mag.json"
 
-#: paper 001's sensor groups, by kind
+#: paper 001's local filters (each with the SINS as common reference), by sensor kind
+LOCAL_GROUPS = (("bds",), ("polarization",), ("magnetometer",))
+#: paper 001's pairs, by kind
 PAIRS = {"bds-pol": ("bds", "polarization"), "bds-mag": ("bds", "magnetometer"),
          "pol-mag": ("polarization", "magnetometer")}
 _WORDS = {"bds": "BDS", "polarization": "polarization", "magnetometer": "magnetometer"}
