@@ -52,3 +52,13 @@ def write_section(name: str, body: str) -> None:
     with os.fdopen(fd, "w") as fh:
         fh.write(text)
     publish(tmp, DOC)
+
+
+def write_results(doc: Path, text: str) -> None:
+    """Replace the ``<!-- results:begin -->`` ... ``<!-- results:end -->`` part of ``doc``."""
+    body = doc.read_text()
+    a, b = "<!-- results:begin -->", "<!-- results:end -->"
+    body = body.split(a)[0] + a + "\n" + text + "\n" + b + body.split(b)[1]
+    tmp = doc.with_suffix(".md.tmp")
+    tmp.write_text(body)
+    publish(tmp, doc)

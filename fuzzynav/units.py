@@ -35,3 +35,5 @@ MPS_PSH = 1.0 / 60.0
 DPH_PSH = DPH / 60.0
 #: parts per million (scale factor) [-]
 PPM = 1e-6
+#: nanotesla (magnetic flux density) [T]
+NT = 1e-9

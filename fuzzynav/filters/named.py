@@ -7,7 +7,7 @@ with :func:`register_filter`; the CLI, the experiment runner and studies look th
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
@@ -41,20 +41,40 @@ class FilterSetup:
     """Everything :func:`fuzzynav.filters.runner.run_filter` needs besides the data.
 
     ``sigma_override`` replaces the claimed sigma of a sensor's epochs (sensor name ->
-    (M, m) array), e.g. with the simulator's true noise.
+    (M, m) array), e.g. with the simulator's true noise.  ``use_sensors`` restricts the
+    filter to some sensors (names or kinds, see :func:`select_sensors`; empty = all).
     """
 
     config: FilterConfig
     adapters: dict = field(default_factory=dict)
     sensor_options: dict = field(default_factory=dict)
     sigma_override: dict = field(default_factory=dict)
+    use_sensors: tuple = ()
 
     def sensors_for(self, sensors: dict) -> dict:
-        """The sensor streams as this filter sees them (sigma overrides applied)."""
-        from dataclasses import replace
-
+        """The sensor streams as this filter sees them (subset and sigma overrides applied)."""
+        if self.use_sensors:
+            sensors = select_sensors(sensors, self.use_sensors)
         return {nm: replace(d, sigma=self.sigma_override[nm]) if nm in self.sigma_override
                 else d for nm, d in sensors.items()}
+
+
+def select_sensors(sensors: dict, wanted) -> dict:
+    """The streams of ``sensors`` whose name or kind is in ``wanted`` (a name or a list).
+
+    The same sensor groups serve single filters restricted to a subset (the ``sensors``
+    option of every named filter) and the local filters of a filter bank.  A wanted entry
+    that matches no stream is an error (a typo would otherwise drop a sensor silently).
+    """
+    from fuzzynav.errors import FuzzynavError
+
+    wanted = (wanted,) if isinstance(wanted, str) else tuple(wanted)
+    for w in wanted:
+        if not any(w in (nm, d.kind) for nm, d in sensors.items()):
+            have = ", ".join(f"{nm} ({d.kind})" for nm, d in sorted(sensors.items()))
+            raise FuzzynavError(f"sensors: no sensor named or of kind {w!r} in this run "
+                                f"(sensors: {have or 'none'})")
+    return {nm: d for nm, d in sensors.items() if nm in wanted or d.kind in wanted}
 
 
 @dataclass(frozen=True)
@@ -65,17 +85,33 @@ class NamedFilter:
     takes_rules: bool = False  # reads rule files (``rules`` option): others refuse them
 
 
-FILTERS = Registry("filter", "fuzzynav.filters", ("catalog",))
+FILTERS = Registry("filter", "fuzzynav.filters", ("catalog", "subsets"))
 
 
 def register_filter(name: str, description: str, takes_rules: bool = False):
-    """Decorator registering ``make(context) -> FilterSetup`` under ``name``."""
+    """Decorator registering ``make(context) -> FilterSetup`` under ``name``.
+
+    Every named filter takes the option ``sensors`` (sensor names or kinds): it then sees
+    and uses only those streams (:func:`select_sensors`).
+    """
 
     def deco(fn):
-        FILTERS.add(name, NamedFilter(name, description, fn, takes_rules))
+        FILTERS.add(name, NamedFilter(name, description, _with_sensor_subset(fn), takes_rules))
         return fn
 
     return deco
+
+
+def _with_sensor_subset(make):
+    def wrapped(ctx: FilterContext) -> FilterSetup:
+        wanted = ctx.options.get("sensors")
+        if not wanted:
+            return make(ctx)
+        wanted = (wanted,) if isinstance(wanted, str) else tuple(wanted)
+        sub = replace(ctx, sensors=select_sensors(ctx.sensors, wanted))
+        return replace(make(sub), use_sensors=wanted)
+
+    return wrapped
 
 
 def register_alias(alias: str, name: str) -> None:

@@ -91,7 +91,7 @@ BAD = [
     (dict(train={"seeds": []}), "train.seeds", "non-empty array"),
     (dict(train={"seeds": [-1]}), "train.seeds", "non-negative"),
     (dict(train={"scenarios": []}), "train.scenarios", "non-empty array"),
-    (dict(train={"scenarios": ["paper001"]}), "train.scenarios[0]", "unknown scenario"),
+    (dict(train={"scenarios": ["paper999"]}), "train.scenarios[0]", "unknown scenario"),
     (dict(test={"scenarios": ["paper000", "nowhere/x.toml"]}), "test.scenarios[1]",
      "not found"),
     (dict(train={"seed": [1]}), "train.seed", "unknown key"),

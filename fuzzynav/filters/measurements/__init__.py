@@ -76,7 +76,8 @@ class MeasurementModel:
                                    self.channels + ("all",)) from None
 
 
-MODELS = Registry("measurement model", __name__, ("gnss", "polarization", "nhc"))
+MODELS = Registry("measurement model", __name__, ("gnss", "polarization", "nhc", "magnetometer",
+                                                  "bds"))
 
 
 def register(model: MeasurementModel) -> MeasurementModel:

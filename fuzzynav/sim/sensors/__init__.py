@@ -12,14 +12,14 @@ measurement model of the same name (:mod:`fuzzynav.filters.measurements`).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
 from fuzzynav.registry import Registry
 
 #: kind name -> Spec class
-SENSOR_KINDS = Registry("sensor kind", __name__, ("gnss", "polarization"))
+SENSOR_KINDS = Registry("sensor kind", __name__, ("gnss", "polarization", "magnetometer", "bds"))
 
 
 def register(kind: str):
@@ -35,6 +35,23 @@ def register(kind: str):
 def spec_class(kind: str) -> type:
     """The ``Spec`` class registered for ``kind`` (clear error when unknown)."""
     return SENSOR_KINDS.lookup(kind)
+
+
+def spec_table(spec, rename=None) -> dict:
+    """A sensor ``Spec`` as its scenario table (TOML-ready, what ``from_dict`` reads back).
+
+    ``kind`` first, ``None`` fields left out, tuples as lists, nested dataclasses (noise
+    windows, disturbance zones) as tables; ``rename`` maps field names to TOML keys.
+    """
+    rename = rename or {}
+    out = {"kind": spec.kind}
+    for k, v in asdict(spec).items():
+        if v is None:
+            continue
+        if isinstance(v, tuple):
+            v = [list(x) if isinstance(x, tuple) else x for x in v]
+        out[rename.get(k, k)] = v
+    return out
 
 
 def epoch_indices(truth, start_s: float, rate_hz: float) -> np.ndarray:

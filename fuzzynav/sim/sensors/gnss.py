@@ -24,14 +24,14 @@ The antenna sits at ``lever_arm_b_m`` (body RFU, metres) from the IMU:
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 
 from fuzzynav.errors import InputFileError
 from fuzzynav.nav import attitude, earth
 from fuzzynav.sim.gauss_markov import gauss_markov_series
-from fuzzynav.sim.sensors import SensorData, epoch_indices, register
+from fuzzynav.sim.sensors import SensorData, epoch_indices, register, spec_table
 from fuzzynav.sim.tomltable import Table
 
 _ZERO3 = (0.0, 0.0, 0.0)
@@ -305,7 +305,7 @@ class Spec:
                 "err_vel_enu_mps": err_v[keep], "outlier_mask": outlier[keep],
                 "outage_windows": windows,
                 "true_sigma": self.true_sigma(time_s)[keep]}
-        return SensorData(kind="gnss", time_s=time_s[keep], z=z[keep], sigma=sigma[keep],
+        return SensorData(kind=self.kind, time_s=time_s[keep], z=z[keep], sigma=sigma[keep],
                           meta=meta)
 
     # -- TOML ---------------------------------------------------------------------------
@@ -313,7 +313,7 @@ class Spec:
     def from_dict(cls, d: dict, where: str) -> "Spec":
         """Parse a sensor table (``kind`` already checked); errors name ``where.key``."""
         t = Table(d, where)
-        t.string("kind", "gnss", choices=("gnss",))
+        t.string("kind", cls.kind, choices=(cls.kind,))
         f = cls.__dataclass_fields__
         kw = {"rate_hz": t.number("rate_hz", f["rate_hz"].default, lo=0.0, hi=100.0,
                                   lo_open=True),
@@ -340,6 +340,7 @@ class Spec:
                                                "and outage_duration_s")
         if kw["outage_duration_s"] >= kw["outage_period_s"] > 0.0:
             raise t.error("outage_duration_s", "must be shorter than outage_period_s")
+        kw.update(cls.extra_fields(t))
         t.finish()
         spec = cls(**kw)
         claimed = spec.claimed_sigma()
@@ -351,18 +352,14 @@ class Spec:
                                    "> 0, or a non-zero noise)")
         return spec
 
+    @classmethod
+    def extra_fields(cls, t: Table) -> dict:
+        """Keys a variant (e.g. ``bds``) reads beyond these; none here."""
+        return {}
+
     def to_dict(self) -> dict:
         """The sensor table (TOML-ready, ``None`` fields left out, ``kind`` included)."""
-        out = {"kind": self.kind}
-        for k, v in asdict(self).items():
-            if v is None:
-                continue
-            if k == "noise_windows":
-                v = [dict(w) for w in v]
-            elif isinstance(v, tuple):
-                v = [list(x) if isinstance(x, tuple) else x for x in v]
-            out[k] = v
-        return out
+        return spec_table(self)
 
 
 def antenna_truth(truth, idx, lever_arm_b_m):
