@@ -6,6 +6,9 @@ specific force.  The covariance is propagated over the accumulated interval (wit
 slowly, so propagating every sample would cost ~100x more for no accuracy (see
 docs/benchmarks.md).  Measurement epochs go through the sensor's measurement model, its
 adaptation policy, optional chi-square gating, the Joseph update and closed-loop feedback.
+The filter is a bank of local filters over the one mechanization (:mod:`fuzzynav.filters.bank`):
+each measurement updates the local that owns its sensor, and the master fuses the locals and
+feeds the fused estimate back; the single filter is the bank of one, which skips the fusion.
 
 Memory is independent of the run length apart from the requested outputs (every
 ``out_stride`` samples) and the per-epoch event log.
@@ -19,6 +22,8 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.filters import kalman
+from fuzzynav.filters.bank_fusion import fuse, fusion_work, local_residual, propagate_state, \
+    share
 from fuzzynav.filters.error_model import block_end, discretize, fill_F
 from fuzzynav.filters.error_st import EM_ST, discretize_dense, st_measurement, \
     st_process_noise, st_reset, st_system, st_to_phi, st_velocity_variance
@@ -39,18 +44,38 @@ class Imu(NamedTuple):
 
 
 class Start(NamedTuple):
-    """Initial state: ``nav0`` (nav layout), sensor states ``xs0``, covariance ``P0``."""
+    """Initial state: ``nav0`` (nav layout) and sensor states ``xs0``."""
 
     nav0: np.ndarray
     xs0: np.ndarray
-    P0: np.ndarray
+
+
+class Bank(NamedTuple):
+    """The bank: local filter of each sensor, information shares ``beta`` (per local), reset
+    mode (1) or not (0), fusion period [s] (0 = after every accepted update)."""
+
+    local: np.ndarray
+    beta: np.ndarray
+    reset: int
+    period: float
+
+
+class BankState(NamedTuple):
+    """Per-local covariance ``P`` (L, n, n), error state ``x`` (L, n) and process-noise
+    densities ``qd`` (L, n) (initial values in, final values out); the last fused ``Pg``
+    (n, n) and ``xg`` (n,)."""
+
+    P: np.ndarray
+    x: np.ndarray
+    qd: np.ndarray
+    Pg: np.ndarray
+    xg: np.ndarray
 
 
 class Model(NamedTuple):
-    """Error model: ``q_diag`` per state, the sensor blocks' start, coupling and 1/tau, and
-    the error-model code (:data:`fuzzynav.filters.error_st.ERROR_MODELS`)."""
+    """Error model: the sensor blocks' start, coupling and 1/tau, and the error-model code
+    (:data:`fuzzynav.filters.error_st.ERROR_MODELS`)."""
 
-    q_diag: np.ndarray
     blk_start: np.ndarray
     blk_kind: np.ndarray
     blk_inv_tau: np.ndarray
@@ -89,12 +114,15 @@ class Settings(NamedTuple):
 
 
 class Outputs(NamedTuple):
-    """Recorded solution (every ``out_stride`` samples): time, nav, sensor states, sigma."""
+    """Recorded solution (every ``out_stride`` samples): time, nav, sensor states, the
+    fused sigma, and per local filter its error state ``xl`` and sigma ``sigl`` (K, L, n)."""
 
     t: np.ndarray
     nav: np.ndarray
     xs: np.ndarray
     sig: np.ndarray
+    xl: np.ndarray
+    sigl: np.ndarray
 
 
 class EventOutputs(NamedTuple):
@@ -154,48 +182,69 @@ def _bias_totals(xs, blk_start, blk_kind, bg, ba):
 
 
 @nb.njit(cache=True)
-def _record(j, t, nav, xs, P, out_t, out_nav, out_xs, out_sig, em):
+def _sigma_into(row, P, nav, em):
+    for i in range(P.shape[0]):
+        row[i] = math.sqrt(max(P[i, i], 0.0))
+    if em == EM_ST:  # report the sigma of the velocity error itself, as the phi model does
+        for i in range(3):
+            row[X_VEL + i] = math.sqrt(max(st_velocity_variance(P, nav, i), 0.0))
+
+
+@nb.njit(cache=True)
+def _record(j, t, nav, xs, st, fused, out, em):
+    """Record output ``j``; ``fused`` (P_g, x_g, work, valid) is the master's covariance
+    when the bank has several locals and ``valid`` is False, it is fused first."""
+    out_t, out_nav, out_xs, out_sig, out_xl, out_sigl = out
     out_t[j] = t
     for i in range(NAV_SIZE):
         out_nav[j, i] = nav[i]
     for i in range(xs.size):
         out_xs[j, i] = xs[i]
-    for i in range(P.shape[0]):
-        out_sig[j, i] = math.sqrt(max(P[i, i], 0.0))
-    if em == EM_ST:  # report the sigma of the velocity error itself, as the phi model does
-        for i in range(3):
-            out_sig[j, X_VEL + i] = math.sqrt(max(st_velocity_variance(P, nav, i), 0.0))
+    P3, X = st.P, st.x
+    for k in range(X.shape[0]):
+        _sigma_into(out_sigl[j, k], P3[k], nav, em)
+        for i in range(X.shape[1]):
+            out_xl[j, k, i] = X[k, i]
+    Pf, xf, work, valid = fused
+    if X.shape[0] == 1:
+        _sigma_into(out_sig[j], P3[0], nav, em)
+    elif valid or fuse(P3, X, Pf, xf, work):
+        _sigma_into(out_sig[j], Pf, nav, em)
 
 
 @nb.njit(cache=True)
-def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, out, evout):
-    """Run the filter over all IMU samples; returns ``(status, samples_done)``.
+def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fns, settings,
+             out, evout):
+    """Run the filter bank over all IMU samples; returns ``(status, samples_done)``.
 
     Arguments are the named tuples above (:class:`Imu`, :class:`Start`, :class:`Model`,
-    :class:`Events`, :class:`Sensors`, :class:`Settings`, :class:`Outputs`,
-    :class:`EventOutputs`) and the kernel tuples of the measurement models and adaptation
-    policies.  ``imu.time_s`` has N+1 entries (increment k spans ``time_s[k]..time_s[k+1]``).
-    Outputs are written into the preallocated ``out`` arrays (every ``out_stride`` samples,
-    starting with the initial state) and ``evout`` (one row per event); ``sensors.ast``
-    (adapter states) is updated in place.
+    :class:`Events`, :class:`Sensors`, :class:`Bank`, :class:`BankState`,
+    :class:`Settings`, :class:`Outputs`, :class:`EventOutputs`) and the kernel tuples of the
+    measurement models and adaptation policies.  ``imu.time_s`` has N+1 entries (increment
+    k spans ``time_s[k]..time_s[k+1]``).  Outputs are written into the preallocated ``out``
+    arrays (every ``out_stride`` samples, starting with the initial state) and ``evout``
+    (one row per event); ``sensors.ast`` (adapter states) and ``state`` are updated in place.
     """
     # plain local names: the loop body reads as the algorithm, and numba sees bare arrays
     dth, dv, time_s = imu
-    nav0, xs0, P0 = start
-    q_diag, blk_start, blk_kind, blk_inv_tau, em = model
+    nav0, xs0 = start
+    blk_start, blk_kind, blk_inv_tau, em = model
     ev_t, ev_s, ev_data = events
     s_meas, s_mpar, s_adapt, afp, afp_off, aip, aip_off, ast, ast_off, s_gate = sensors
+    s_local, beta, reset, period = bank
+    P3, X, QD, Pg, xg = state
     max_prop_dt, out_stride = settings
-    out_t, out_nav, out_xs, out_sig = out
     ev_r, ev_S, ev_nis, ev_flag, ev_diag = evout
-    n = P0.shape[0]
+    NL, n = X.shape
     M = ev_r.shape[1]
     N = dth.shape[0]
     E = ev_t.size
+    # a local's estimate survives between updates only in a bank of several locals that
+    # does not reset to the fused solution after every update
+    carry = NL > 1 and (reset == 0 or period > 0.0)
     nav = nav0.copy()
     prev = np.zeros(PREV_SIZE)
     init_prev(nav, prev)
-    P = P0.copy()
     xs = xs0.copy()
     C = np.zeros((3, 3))
     quat_to_dcm_into(nav, C)
@@ -207,7 +256,7 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
     F = np.zeros((n, n))
     Phi = np.zeros((n, n))
     Qd = np.zeros((n, n))
-    Qacc = np.zeros((n, n))
+    Qacc3 = np.zeros((NL, n, n))
     Qc = np.zeros((n, n))
     work = np.zeros((n, n))
     AP = np.zeros((n, n))
@@ -221,22 +270,26 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
     HPH = np.zeros((M, M))
     S = np.zeros((M, M))
     L = np.zeros((M, M))
-    x = np.zeros(n)
+    dx = np.zeros(n)
     wv = np.zeros(max(n, M))
     out_a = np.zeros(2 + M)
     diag = np.zeros(ev_diag.shape[1])
     aux = np.zeros(6)
-    qd = q_diag.copy()
     bg = np.zeros(3)
     ba = np.zeros(3)
     dth_c = np.zeros(3)
     dv_c = np.zeros(3)
+    fwork = fusion_work(n)
+    Pf = np.zeros((n, n))
+    xf = np.zeros(n)
+    fused_valid = False  # whether Pg is the fusion of the locals as they are now
+    t_fused = -math.inf
     tau = 0.0
     e = 0
     while e < E and ev_t[e] < time_s[0] - 1e-9:
         ev_flag[e] = EV_BEFORE_START
         e += 1
-    _record(0, time_s[0], nav, xs, P, out_t, out_nav, out_xs, out_sig, em)
+    _record(0, time_s[0], nav, xs, state, (Pf, xf, fwork, False), out, em)
     for k in range(N):
         dt = time_s[k + 1] - time_s[k]
         _bias_totals(xs, blk_start, blk_kind, bg, ba)
@@ -255,11 +308,13 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
         t = time_s[k + 1]
         while e < E and ev_t[e] <= t + 1e-9:
             if tau > 0.0:
-                _propagate(P, Qacc, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd, work, qd,
-                           blk_start, blk_kind, blk_inv_tau, em, Qc)
+                _propagate(state, Qacc3, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd,
+                           work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
                 tau = 0.0
+                fused_valid = False
             s = ev_s[e]
             a = s_adapt[s]
+            P, x, qd, Qacc = P3[s_local[s]], X[s_local[s]], QD[s_local[s]], Qacc3[s_local[s]]
             H[:, :] = 0.0
             m = meas_fns[s_meas[s]](nav, C, aux, ev_data[e], s_mpar[s], t - ev_t[e], z, H, R,
                                     chan)
@@ -269,6 +324,8 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
                 continue
             if em == EM_ST:  # the models write phi-model rows: H_ST = H A^-1
                 st_measurement(H, m, nav)
+            if carry:
+                local_residual(z, H, m, x)
             kalman.innovation_cov(P, H, m, PHt, HPH)
             adapt_fns[a](afp[afp_off[s]:afp_off[s + 1]], aip[aip_off[s]:aip_off[s + 1]],
                          ast[ast_off[s]:ast_off[s + 1]], z[:m], HPH, R, chan, m, out_a, diag)
@@ -289,7 +346,7 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
                 e += 1
                 continue
             if out_a[0] != 1.0:
-                kalman.scale_predicted(P, Qacc, out_a[0], H, m, x)
+                kalman.scale_predicted(P, Qacc, out_a[0], H, m, dx)
                 kalman.innovation_cov(P, H, m, PHt, HPH)
                 _form_S(HPH, R, m, S)
                 if not kalman.cholesky(S, m, L):  # the weighted S broke: skip the update
@@ -297,23 +354,42 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
                     e += 1
                     continue
             kalman.gain(L, m, PHt, K, wv)
-            kalman.joseph_update(P, H, R, m, z, PHt, K, x, AP, APHt)
+            kalman.joseph_update(P, H, R, m, z, PHt, K, dx, AP, APHt)
             Qacc[:, :] = 0.0
-            if em == EM_ST:
-                st_to_phi(x, nav)
-                st_reset(P, x)
-            _feedback(nav, prev, xs, x)
-            quat_to_dcm_into(nav, C)
+            for i in range(n):
+                x[i] += dx[i]
             ev_flag[e] = EV_ACCEPTED
             e += 1
-            if not kalman.covariance_ok(P):
+            fused_valid = False
+            if NL == 1:
+                if em == EM_ST:
+                    st_to_phi(x, nav)
+                    st_reset(P, x)
+                _feedback(nav, prev, xs, x)
+                x[:] = 0.0
+                ok = kalman.covariance_ok(P)
+            elif period <= 0.0 or t - t_fused >= period - 1e-9:
+                ok = fuse(P3, X, Pg, xg, fwork)
+                if ok:
+                    share(P3, X, Pg, xg, beta, reset)
+                    _feedback(nav, prev, xs, xg)
+                    t_fused = t
+                    fused_valid = True
+                    ok = kalman.covariance_ok(Pg)
+            else:
+                ok = kalman.covariance_ok(P)
+            quat_to_dcm_into(nav, C)
+            if not ok:
                 return ST_COVARIANCE, k + 1
         if tau >= max_prop_dt - 1e-12:
-            _propagate(P, Qacc, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd, work, qd,
-                       blk_start, blk_kind, blk_inv_tau, em, Qc)
+            _propagate(state, Qacc3, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd, work,
+                       dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
             tau = 0.0
+            fused_valid = False
         if (k + 1) % out_stride == 0:
-            _record((k + 1) // out_stride, t, nav, xs, P, out_t, out_nav, out_xs, out_sig, em)
+            _record((k + 1) // out_stride, t, nav, xs, state,
+                    (Pg, xg, fwork, fused_valid) if fused_valid else (Pf, xf, fwork, False),
+                    out, em)
     return ST_OK, N
 
 
@@ -340,11 +416,14 @@ def _innovation(HPH, R, m, S, L, z, wv, ev_r, ev_S, ev_nis, e):
 
 
 @nb.njit(cache=True)
-def _propagate(P, Qacc, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd, work, qd,
+def _propagate(state, Qacc3, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd, work, dx,
                blk_start, blk_kind, blk_inv_tau, em, Qc):
-    """Propagate P over the accumulated interval and decay Gauss-Markov estimates.
+    """Propagate every local's P (and, with ``carry``, its x) over the accumulated interval
+    and decay the shared Gauss-Markov estimates.
 
+    One ``F`` for all locals (one mechanization); each local its own noise densities.
     ``em`` selects the error model; the ST model maps the phi model's F and noise."""
+    P3, X, QD = state.P, state.x, state.qd
     for i in range(3):
         fm[i] = sumf[i] / tau
         sumf[i] = 0.0
@@ -354,15 +433,20 @@ def _propagate(P, Qacc, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd, work, qd,
     fill_F(F, nav, Cm, fm, blk_start, blk_kind, blk_inv_tau)
     if em == EM_ST:
         st_system(F, nav)
-        st_process_noise(Qc, qd, nav)
-        discretize_dense(F, Qc, tau, Phi, Qd, work)
-    else:
-        discretize(F, qd, tau, Phi, Qd, work)
-    kalman.propagate(P, Phi, Qd, work)
-    n = P.shape[0]
-    for i in range(n):
-        for j in range(n):
-            Qacc[i, j] += Qd[i, j]
+    n = F.shape[0]
+    for b in range(X.shape[0]):
+        if em == EM_ST:
+            st_process_noise(Qc, QD[b], nav)
+            discretize_dense(F, Qc, tau, Phi, Qd, work)
+        else:
+            discretize(F, QD[b], tau, Phi, Qd, work)
+        kalman.propagate(P3[b], Phi, Qd, work)
+        Qacc = Qacc3[b]
+        for i in range(n):
+            for j in range(n):
+                Qacc[i, j] += Qd[i, j]
+        if carry:
+            propagate_state(Phi, X[b], dx)
     for b in range(blk_start.size):
         if blk_inv_tau[b] > 0.0:
             d = math.exp(-tau * blk_inv_tau[b])

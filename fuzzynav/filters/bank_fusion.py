@@ -1,0 +1,128 @@
+"""The master of a filter bank as numba kernels: information fusion, sharing, shifts.
+
+The algebra and why the loop applies it as it does are in :mod:`fuzzynav.filters.bank`.
+Shapes: ``L`` local filters, ``n`` error states; ``P`` (L, n, n), ``x`` (L, n).  Work
+arrays are passed in, so nothing allocates inside the filter loop.
+"""
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from fuzzynav.filters import kalman
+
+
+@nb.njit(cache=True)
+def spd_inverse(A, out, L, col):
+    """``out = A^-1`` for a symmetric positive-definite ``A`` (n x n); False if not PD.
+
+    ``L`` (n x n) receives the Cholesky factor, ``col`` (n,) is scratch.
+    """
+    n = A.shape[0]
+    if not kalman.cholesky(A, n, L):
+        return False
+    for j in range(n):
+        for i in range(n):
+            col[i] = 0.0
+        col[j] = 1.0
+        kalman.chol_solve_vec(L, n, col, col)
+        for i in range(n):
+            out[i, j] = col[i]
+    for i in range(n):  # the solves agree to rounding only: keep it exactly symmetric
+        for j in range(i + 1, n):
+            v = 0.5 * (out[i, j] + out[j, i])
+            out[i, j] = v
+            out[j, i] = v
+    return True
+
+
+@nb.njit(cache=True)
+def fuse(P, x, Pg, xg, work):
+    """Information fusion ``Pg = (sum P_i^-1)^-1``, ``xg = Pg sum P_i^-1 x_i``; False if a
+    covariance is not positive definite.
+
+    The states are scaled by the first local's standard deviations ``d`` first
+    (``P_i -> D^-1 P_i D^-1``): the bias variances are ~1e-10 of the position variances, and
+    the inverses of the scaled matrices lose ~1e10 times less to rounding.  ``work`` is a
+    :func:`fusion_work` tuple.
+    """
+    d, Y, y, A, Ai, L, col = work
+    nl, n = x.shape
+    for i in range(n):
+        d[i] = math.sqrt(P[0, i, i])
+        y[i] = 0.0
+        for j in range(n):
+            Y[i, j] = 0.0
+    for k in range(nl):
+        for i in range(n):
+            for j in range(n):
+                A[i, j] = P[k, i, j] / (d[i] * d[j])
+        if not spd_inverse(A, Ai, L, col):
+            return False
+        for i in range(n):
+            s = 0.0
+            for j in range(n):
+                Y[i, j] += Ai[i, j]
+                s += Ai[i, j] * (x[k, j] / d[j])
+            y[i] += s
+    if not spd_inverse(Y, Ai, L, col):
+        return False
+    kalman.chol_solve_vec(L, n, y, y)  # L still holds the factor of Y
+    for i in range(n):
+        xg[i] = d[i] * y[i]
+        for j in range(n):
+            Pg[i, j] = d[i] * Ai[i, j] * d[j]
+    return True
+
+
+@nb.njit(cache=True)
+def share(P, x, Pg, xg, beta, reset):
+    """After feeding ``xg`` back to the shared navigation state: every local's error shifts
+    by ``-xg``; in reset mode the locals restart from the fused solution (``x_i = xg``, so
+    0 after the shift, and ``P_i = Pg / beta_i``)."""
+    nl, n = x.shape
+    for k in range(nl):
+        if reset:
+            for i in range(n):
+                x[k, i] = 0.0
+                for j in range(n):
+                    P[k, i, j] = Pg[i, j] / beta[k]
+        else:
+            for i in range(n):
+                x[k, i] -= xg[i]
+
+
+@nb.njit(cache=True)
+def propagate_state(Phi, x, tmp):
+    """``x <- Phi x`` (a local's error estimate carried between fusions)."""
+    n = x.size
+    for i in range(n):
+        s = 0.0
+        for j in range(n):
+            a = Phi[i, j]
+            if a != 0.0:
+                s += a * x[j]
+        tmp[i] = s
+    for i in range(n):
+        x[i] = tmp[i]
+
+
+@nb.njit(cache=True)
+def local_residual(z, H, m, x):
+    """``z <- z - H x``: the innovation of a local whose estimate ``x`` is not fed back yet."""
+    for r in range(m):
+        s = 0.0
+        for j in range(x.size):
+            h = H[r, j]
+            if h != 0.0:
+                s += h * x[j]
+        z[r] -= s
+
+
+@nb.njit(cache=True)
+def fusion_work(n):
+    """Scratch arrays of :func:`fuse`: ``(d, Y, y, A, Ai, L, col)``."""
+    return (np.zeros(n), np.zeros((n, n)), np.zeros(n), np.zeros((n, n)), np.zeros((n, n)),
+            np.zeros((n, n)), np.zeros(n))
