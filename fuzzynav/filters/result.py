@@ -49,8 +49,9 @@ class LocalStates:
 
     Attributes
     ----------
-    x : (K, L, n) each local's error state about the recorded navigation solution, at the
-        output epochs (its own estimate of the truth is the solution minus ``x``).
+    x : (K, L, n) each local's error state about the recorded navigation solution (its own
+        estimate of the truth is the solution minus ``x``), as of the local's last update or
+        covariance propagation: between measurement epochs it lags the solution.
     sigma : (K, L, n) each local's 1-sigma (the fused one is ``FilterResult.sigma``).
     P_end : (L, n, n) each local's covariance at the end of the run.
     P_fused : (n, n) the master's covariance at the last fusion (a bank of one never fuses:
