@@ -1,4 +1,4 @@
-"""The master of a filter bank as numba kernels: information fusion, sharing, shifts.
+"""The bank's numba kernels: propagation of every local, information fusion, sharing, shifts.
 
 The algebra and why the loop applies it as it does are in :mod:`fuzzynav.filters.bank`.
 Shapes: ``L`` local filters, ``n`` error states; ``P`` (L, n, n), ``x`` (L, n).  Work
@@ -12,6 +12,13 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.filters import kalman
+from fuzzynav.filters.error_model import block_end, discretize, fill_F
+from fuzzynav.filters.error_st import EM_ST, discretize_dense, st_process_noise, st_system
+from fuzzynav.filters.layout import N_CORE
+
+
+#: the local filter whose standard deviations scale the states for the fusion (any would do)
+REF_LOCAL = 0
 
 
 @nb.njit(cache=True)
@@ -51,7 +58,7 @@ def fuse(P, x, Pg, xg, work):
     d, Y, y, A, Ai, L, col = work
     nl, n = x.shape
     for i in range(n):
-        d[i] = math.sqrt(P[0, i, i])
+        d[i] = math.sqrt(P[REF_LOCAL, i, i])
         y[i] = 0.0
         for j in range(n):
             Y[i, j] = 0.0
@@ -126,3 +133,42 @@ def fusion_work(n):
     """Scratch arrays of :func:`fuse`: ``(d, Y, y, A, Ai, L, col)``."""
     return (np.zeros(n), np.zeros((n, n)), np.zeros(n), np.zeros((n, n)), np.zeros((n, n)),
             np.zeros((n, n)), np.zeros(n))
+
+
+@nb.njit(cache=True)
+def propagate_locals(state, Qacc3, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd, work,
+                     dx, blk_start, blk_kind, blk_inv_tau, em, Qc):
+    """Propagate every local's P (and, with ``carry``, its x) over the accumulated interval
+    and decay the shared Gauss-Markov estimates.
+
+    One ``F`` for all locals (one mechanization); each local its own noise densities.
+    ``em`` selects the error model; the ST model maps the phi model's F and noise."""
+    P3, X, QD = state.P, state.x, state.qd
+    for i in range(3):
+        fm[i] = sumf[i] / tau
+        sumf[i] = 0.0
+        for j in range(3):
+            Cm[i, j] = sumC[i, j] / tau
+            sumC[i, j] = 0.0
+    fill_F(F, nav, Cm, fm, blk_start, blk_kind, blk_inv_tau)
+    if em == EM_ST:
+        st_system(F, nav)
+    n = F.shape[0]
+    for b in range(X.shape[0]):
+        if em == EM_ST:
+            st_process_noise(Qc, QD[b], nav)
+            discretize_dense(F, Qc, tau, Phi, Qd, work)
+        else:
+            discretize(F, QD[b], tau, Phi, Qd, work)
+        kalman.propagate(P3[b], Phi, Qd, work)
+        Qacc = Qacc3[b]
+        for i in range(n):
+            for j in range(n):
+                Qacc[i, j] += Qd[i, j]
+        if carry:
+            propagate_state(Phi, X[b], dx)
+    for b in range(blk_start.size):
+        if blk_inv_tau[b] > 0.0:
+            d = math.exp(-tau * blk_inv_tau[b])
+            for i in range(blk_start[b], block_end(blk_start, b, n)):
+                xs[i - N_CORE] *= d

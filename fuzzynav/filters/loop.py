@@ -22,16 +22,14 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.filters import kalman
-from fuzzynav.filters.bank_fusion import fuse, fusion_work, local_residual, propagate_state, \
+from fuzzynav.filters.bank_fusion import fuse, fusion_work, local_residual, propagate_locals, \
     share
-from fuzzynav.filters.error_model import block_end, discretize, fill_F
-from fuzzynav.filters.error_st import EM_ST, discretize_dense, st_measurement, \
-    st_process_noise, st_reset, st_system, st_to_phi, st_velocity_variance
-from fuzzynav.filters.layout import COUPLE_ACCEL, COUPLE_GYRO, N_CORE, X_ATT, X_POS, X_VEL
-from fuzzynav.nav.earth import radii_nb
-from fuzzynav.nav.layout import NAV_H, NAV_LAT, NAV_LON, NAV_Q, NAV_SIZE, NAV_VEL, PREV_LLA, \
-    PREV_SIZE, PREV_VEL
-from fuzzynav.nav.strapdown import init_prev, mech_step, quat_mul, quat_to_dcm_into, rv2q, set_quat
+from fuzzynav.filters.error_st import EM_ST, st_measurement, st_reset, st_to_phi, \
+    st_velocity_variance
+from fuzzynav.filters.feedback import bias_totals, feedback
+from fuzzynav.filters.layout import X_VEL
+from fuzzynav.nav.layout import NAV_SIZE, PREV_SIZE
+from fuzzynav.nav.strapdown import init_prev, mech_step, quat_to_dcm_into
 
 
 
@@ -139,46 +137,6 @@ class EventOutputs(NamedTuple):
 EV_PENDING, EV_ACCEPTED, EV_GATED, EV_EMPTY, EV_BAD_S, EV_BEFORE_START = 0, 1, 2, 3, 4, 5
 # loop status
 ST_OK, ST_COVARIANCE = 0, 1
-
-
-@nb.njit(cache=True)
-def _feedback(nav, prev, xs, x):
-    """Apply the error-state estimate to the navigation and sensor estimates (then x = 0)."""
-    a0, a1, a2, a3 = rv2q(x[X_ATT], x[X_ATT + 1], x[X_ATT + 2])
-    q0, q1, q2, q3 = quat_mul(a0, a1, a2, a3, nav[NAV_Q], nav[NAV_Q + 1], nav[NAV_Q + 2],
-                              nav[NAV_Q + 3])
-    qn = 1.0 / math.sqrt(q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
-    set_quat(nav, q0 * qn, q1 * qn, q2 * qn, q3 * qn)
-    rm, rn = radii_nb(nav[NAV_LAT])
-    de, dn, du = x[X_POS], x[X_POS + 1], x[X_POS + 2]  # ENU metres
-    dlat = dn / (rm + nav[NAV_H])
-    dlon = de / ((rn + nav[NAV_H]) * math.cos(nav[NAV_LAT]))
-    for i in range(3):
-        nav[NAV_VEL + i] -= x[X_VEL + i]
-        prev[PREV_VEL + i] -= x[X_VEL + i]  # keep the midpoint extrapolation free of the jump
-    nav[NAV_LAT] -= dlat
-    nav[NAV_LON] -= dlon
-    nav[NAV_H] -= du
-    prev[PREV_LLA] -= dlat
-    prev[PREV_LLA + 1] -= dlon
-    prev[PREV_LLA + 2] -= du
-    for j in range(xs.size):
-        xs[j] += x[N_CORE + j]
-
-
-@nb.njit(cache=True)
-def _bias_totals(xs, blk_start, blk_kind, bg, ba):
-    """Sum the sensor-error blocks into total gyro and accelerometer bias estimates."""
-    for i in range(3):
-        bg[i] = 0.0
-        ba[i] = 0.0
-    for b in range(blk_start.size):
-        s0 = blk_start[b] - N_CORE
-        for i in range(3):
-            if blk_kind[b] == COUPLE_GYRO:
-                bg[i] += xs[s0 + i]
-            elif blk_kind[b] == COUPLE_ACCEL:
-                ba[i] += xs[s0 + i]
 
 
 @nb.njit(cache=True)
@@ -292,7 +250,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
     _record(0, time_s[0], nav, xs, state, (Pf, xf, fwork, False), out, em)
     for k in range(N):
         dt = time_s[k + 1] - time_s[k]
-        _bias_totals(xs, blk_start, blk_kind, bg, ba)
+        bias_totals(xs, blk_start, blk_kind, bg, ba)
         for i in range(3):
             dth_c[i] = dth[k, i] - bg[i] * dt
             dv_c[i] = dv[k, i] - ba[i] * dt
@@ -308,8 +266,8 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
         t = time_s[k + 1]
         while e < E and ev_t[e] <= t + 1e-9:
             if tau > 0.0:
-                _propagate(state, Qacc3, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd,
-                           work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
+                propagate_locals(state, Qacc3, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi,
+                                 Qd, work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
                 tau = 0.0
                 fused_valid = False
             s = ev_s[e]
@@ -365,14 +323,14 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
                 if em == EM_ST:
                     st_to_phi(x, nav)
                     st_reset(P, x)
-                _feedback(nav, prev, xs, x)
+                feedback(nav, prev, xs, x)
                 x[:] = 0.0
                 ok = kalman.covariance_ok(P)
             elif period <= 0.0 or t - t_fused >= period - 1e-9:
                 ok = fuse(P3, X, Pg, xg, fwork)
                 if ok:
                     share(P3, X, Pg, xg, beta, reset)
-                    _feedback(nav, prev, xs, xg)
+                    feedback(nav, prev, xs, xg)
                     t_fused = t
                     fused_valid = True
                     ok = kalman.covariance_ok(Pg)
@@ -382,8 +340,8 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
             if not ok:
                 return ST_COVARIANCE, k + 1
         if tau >= max_prop_dt - 1e-12:
-            _propagate(state, Qacc3, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd, work,
-                       dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
+            propagate_locals(state, Qacc3, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd,
+                             work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
             tau = 0.0
             fused_valid = False
         if (k + 1) % out_stride == 0:
@@ -413,42 +371,3 @@ def _innovation(HPH, R, m, S, L, z, wv, ev_r, ev_S, ev_nis, e):
         return False
     ev_nis[e] = kalman.nis(L, m, z, wv)
     return True
-
-
-@nb.njit(cache=True)
-def _propagate(state, Qacc3, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd, work, dx,
-               blk_start, blk_kind, blk_inv_tau, em, Qc):
-    """Propagate every local's P (and, with ``carry``, its x) over the accumulated interval
-    and decay the shared Gauss-Markov estimates.
-
-    One ``F`` for all locals (one mechanization); each local its own noise densities.
-    ``em`` selects the error model; the ST model maps the phi model's F and noise."""
-    P3, X, QD = state.P, state.x, state.qd
-    for i in range(3):
-        fm[i] = sumf[i] / tau
-        sumf[i] = 0.0
-        for j in range(3):
-            Cm[i, j] = sumC[i, j] / tau
-            sumC[i, j] = 0.0
-    fill_F(F, nav, Cm, fm, blk_start, blk_kind, blk_inv_tau)
-    if em == EM_ST:
-        st_system(F, nav)
-    n = F.shape[0]
-    for b in range(X.shape[0]):
-        if em == EM_ST:
-            st_process_noise(Qc, QD[b], nav)
-            discretize_dense(F, Qc, tau, Phi, Qd, work)
-        else:
-            discretize(F, QD[b], tau, Phi, Qd, work)
-        kalman.propagate(P3[b], Phi, Qd, work)
-        Qacc = Qacc3[b]
-        for i in range(n):
-            for j in range(n):
-                Qacc[i, j] += Qd[i, j]
-        if carry:
-            propagate_state(Phi, X[b], dx)
-    for b in range(blk_start.size):
-        if blk_inv_tau[b] > 0.0:
-            d = math.exp(-tau * blk_inv_tau[b])
-            for i in range(blk_start[b], block_end(blk_start, b, n)):
-                xs[i - N_CORE] *= d

@@ -11,6 +11,7 @@ import pytest
 
 from fuzzynav.errors import InputFileError
 from fuzzynav.filters.bank import BankSpec
+from fuzzynav.filters.layout import LAYOUT_15
 from fuzzynav.filters.named import FilterContext, get_filter
 from fuzzynav.filters.runner import run_filter
 from fuzzynav.nav import earth
@@ -18,6 +19,7 @@ from fuzzynav.sim.sensors import SensorData
 from tests.filters.simple_data import CONFIG, gnss_fixes, run_inputs, trajectory
 
 NHC_SIGMA = 0.05  # m/s
+POS, VEL = LAYOUT_15.pos, LAYOUT_15.vel
 #: a 0.1 deg heading prior: the locals' headings then stay within ~0.05 deg of the fused one,
 #: where second-order terms are small (with 1 deg, |f| dpsi^2 t^2 / 2 reaches 0.15 sigma in
 #: the first acceleration: a real second-order effect, not a bug)
@@ -108,17 +110,17 @@ def test_no_reset_locals_are_the_filters_alone(two_receivers):
         # recorded as of the last update, so compare at the GNSS epochs (whole seconds)
         at = np.isclose(fed.time_s, np.round(fed.time_s))
         x = fed.locals.x[at, k]
-        own_pos = enu_between(alone.lla[at], fed.lla[at]) + x[:, 6:9]
-        own_vel = alone.vel_n[at] - fed.vel_n[at] + x[:, 3:6]
+        own_pos = enu_between(alone.lla[at], fed.lla[at]) + x[:, POS]
+        own_vel = alone.vel_n[at] - fed.vel_n[at] + x[:, VEL]
         sig = alone.sigma[at]
         # equal up to second-order terms (F and H taken at the shared solution, ~0.5 m and
         # ~0.05 m/s away from the local's own): measured <= 5e-3 sigma for the estimates and
         # 3e-3 relative for the sigmas; a missing shift x_i -= x_g would be ~0.5 sigma
-        assert np.max(np.abs(own_pos) / sig[:, 6:9]) < 1e-2
-        assert np.max(np.abs(own_vel) / sig[:, 3:6]) < 1e-2
+        assert np.max(np.abs(own_pos) / sig[:, POS]) < 1e-2
+        assert np.max(np.abs(own_vel) / sig[:, VEL]) < 1e-2
         np.testing.assert_allclose(fed.locals.sigma[at, k], sig, rtol=1e-2)
         # ...and they are not trivially equal: the fused solution is elsewhere
-        assert np.median(np.abs(x[:, 6:9]) / sig[:, 6:9]) > 0.1
+        assert np.median(np.abs(x[:, POS]) / sig[:, POS]) > 0.1
 
 
 def test_fused_covariance_is_below_every_local(two_receivers):
