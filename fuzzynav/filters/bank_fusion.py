@@ -84,11 +84,42 @@ def fuse(P, x, Pg, xg, work):
     return True
 
 
+#: what the locals' covariances say about the master's (``master_covariance``): the last
+#: fusion is current; every local holds the master's ``P / beta_i`` (at the start, and in
+#: reset mode until a local updates without fusing); or only a new fusion tells
+FUSED_NOW, SHARED, STALE = 0, 1, 2
+
+
 @nb.njit(cache=True)
-def share(P, x, Pg, xg, beta, reset):
+def after_propagation(fstate, reset):
+    """The fusion state once every local has been propagated with ``Q / beta_i``."""
+    if fstate == STALE or (fstate == FUSED_NOW and not reset):
+        return STALE
+    return SHARED
+
+
+@nb.njit(cache=True)
+def master_covariance(P, x, beta, Pg, fstate, Pf, xf, work):
+    """The master's covariance now: ``Pg``, ``beta_1 P_1`` or a fusion into ``Pf`` (NaN if
+    that fails)."""
+    if fstate == FUSED_NOW:
+        return Pg
+    n = x.shape[1]
+    if fstate == SHARED:
+        for i in range(n):
+            for j in range(n):
+                Pf[i, j] = beta[REF_LOCAL] * P[REF_LOCAL, i, j]
+    elif not fuse(P, x, Pf, xf, work):
+        Pf[:, :] = np.nan
+    return Pf
+
+
+@nb.njit(cache=True)
+def share(P, x, Qacc, Pg, xg, beta, reset):
     """After feeding ``xg`` back to the shared navigation state: every local's error shifts
     by ``-xg``; in reset mode the locals restart from the fused solution (``x_i = xg``, so
-    0 after the shift, and ``P_i = Pg / beta_i``)."""
+    0 after the shift, and ``P_i = Pg / beta_i``, an updated covariance: nothing in it is
+    propagated noise any more, so the ``Qacc_i`` that adaptive weighting reads restart)."""
     nl, n = x.shape
     for k in range(nl):
         if reset:
@@ -96,6 +127,7 @@ def share(P, x, Pg, xg, beta, reset):
                 x[k, i] = 0.0
                 for j in range(n):
                     P[k, i, j] = Pg[i, j] / beta[k]
+                    Qacc[k, i, j] = 0.0
         else:
             for i in range(n):
                 x[k, i] -= xg[i]

@@ -22,8 +22,8 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.filters import kalman
-from fuzzynav.filters.bank_fusion import fuse, fusion_work, local_residual, propagate_locals, \
-    share
+from fuzzynav.filters.bank_fusion import FUSED_NOW, SHARED, STALE, after_propagation, fuse, \
+    fusion_work, local_residual, master_covariance, propagate_locals, share
 from fuzzynav.filters.error_st import EM_ST, st_measurement, st_reset, st_to_phi, \
     st_velocity_variance
 from fuzzynav.filters.feedback import bias_totals, feedback
@@ -149,9 +149,9 @@ def _sigma_into(row, P, nav, em):
 
 
 @nb.njit(cache=True)
-def _record(j, t, nav, xs, st, fused, out, em):
-    """Record output ``j``; ``fused`` (P_g, x_g, work, valid) is the master's covariance
-    when the bank has several locals and ``valid`` is False, it is fused first."""
+def _record(j, t, nav, xs, st, P_master, out, em):
+    """Record output ``j``; ``P_master`` is the master's covariance (see
+    :func:`~fuzzynav.filters.bank_fusion.master_covariance`)."""
     out_t, out_nav, out_xs, out_sig, out_xl, out_sigl = out
     out_t[j] = t
     for i in range(NAV_SIZE):
@@ -163,11 +163,7 @@ def _record(j, t, nav, xs, st, fused, out, em):
         _sigma_into(out_sigl[j, k], P3[k], nav, em)
         for i in range(X.shape[1]):
             out_xl[j, k, i] = X[k, i]
-    Pf, xf, work, valid = fused
-    if X.shape[0] == 1:
-        _sigma_into(out_sig[j], P3[0], nav, em)
-    elif valid or fuse(P3, X, Pf, xf, work):
-        _sigma_into(out_sig[j], Pf, nav, em)
+    _sigma_into(out_sig[j], P_master, nav, em)
 
 
 @nb.njit(cache=True)
@@ -240,14 +236,16 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
     fwork = fusion_work(n)
     Pf = np.zeros((n, n))
     xf = np.zeros(n)
-    fused_valid = False  # whether Pg is the fusion of the locals as they are now
+    fstate = SHARED  # every local starts from P0 / beta_i
     t_fused = -math.inf
     tau = 0.0
     e = 0
     while e < E and ev_t[e] < time_s[0] - 1e-9:
         ev_flag[e] = EV_BEFORE_START
         e += 1
-    _record(0, time_s[0], nav, xs, state, (Pf, xf, fwork, False), out, em)
+    _record(0, time_s[0], nav, xs, state,
+            P3[0] if NL == 1 else master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork),
+            out, em)
     for k in range(N):
         dt = time_s[k + 1] - time_s[k]
         bias_totals(xs, blk_start, blk_kind, bg, ba)
@@ -269,7 +267,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
                 propagate_locals(state, Qacc3, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi,
                                  Qd, work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
                 tau = 0.0
-                fused_valid = False
+                fstate = after_propagation(fstate, reset)
             s = ev_s[e]
             a = s_adapt[s]
             P, x, qd, Qacc = P3[s_local[s]], X[s_local[s]], QD[s_local[s]], Qacc3[s_local[s]]
@@ -318,7 +316,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
                 x[i] += dx[i]
             ev_flag[e] = EV_ACCEPTED
             e += 1
-            fused_valid = False
+            fstate = STALE
             if NL == 1:
                 if em == EM_ST:
                     st_to_phi(x, nav)
@@ -329,10 +327,10 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
             elif period <= 0.0 or t - t_fused >= period - 1e-9:
                 ok = fuse(P3, X, Pg, xg, fwork)
                 if ok:
-                    share(P3, X, Pg, xg, beta, reset)
+                    share(P3, X, Qacc3, Pg, xg, beta, reset)
                     feedback(nav, prev, xs, xg)
                     t_fused = t
-                    fused_valid = True
+                    fstate = FUSED_NOW
                     ok = kalman.covariance_ok(Pg)
             else:
                 ok = kalman.covariance_ok(P)
@@ -343,11 +341,10 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
             propagate_locals(state, Qacc3, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd,
                              work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
             tau = 0.0
-            fused_valid = False
+            fstate = after_propagation(fstate, reset)
         if (k + 1) % out_stride == 0:
-            _record((k + 1) // out_stride, t, nav, xs, state,
-                    (Pg, xg, fwork, fused_valid) if fused_valid else (Pf, xf, fwork, False),
-                    out, em)
+            _record((k + 1) // out_stride, t, nav, xs, state, P3[0] if NL == 1 else
+                    master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork), out, em)
     return ST_OK, N
 
 
