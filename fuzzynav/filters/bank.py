@@ -78,8 +78,8 @@ class BankSpec:
         ``reset``: after each fusion every local restarts from the fused solution
         (``x_i = x_g``, ``P_i = P_g / beta_i``); ``no-reset``: locals keep their own.
     fusion_period_s : float
-        Fuse (and feed back) at the first accepted update at least this long after the last
-        fusion [s]; 0 fuses after every accepted update.
+        Fuse (and feed back) at the first accepted update whose measurement time is at
+        least this long after the last fusion's [s]; 0 fuses after every accepted update.
     """
 
     locals: tuple

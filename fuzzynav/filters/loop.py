@@ -315,6 +315,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
             for i in range(n):
                 x[i] += dx[i]
             ev_flag[e] = EV_ACCEPTED
+            t_meas = ev_t[e]  # the fusion clock runs on measurement times, not IMU times
             e += 1
             fstate = STALE
             if NL == 1:
@@ -324,12 +325,12 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
                 feedback(nav, prev, xs, x)
                 x[:] = 0.0
                 ok = kalman.covariance_ok(P)
-            elif period <= 0.0 or t - t_fused >= period - 1e-9:
+            elif period <= 0.0 or t_meas - t_fused >= period - 1e-9:
                 ok = fuse(P3, X, Pg, xg, fwork)
                 if ok:
                     share(P3, X, Qacc3, Pg, xg, beta, reset)
                     feedback(nav, prev, xs, xg)
-                    t_fused = t
+                    t_fused = t_meas
                     fstate = FUSED_NOW
                     ok = kalman.covariance_ok(Pg)
             else:

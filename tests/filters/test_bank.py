@@ -169,3 +169,18 @@ def test_named_banks(data):
     assert get_filter("federated-reset").make(ctx).config.bank.mode == "reset"
     central = get_filter("centralized").make(ctx).config
     assert central.bank.locals == (("gnss", "nhc"),) and central.bank.beta == (1.0,)
+
+
+def test_a_fusion_period_lets_the_locals_run_between_fusions(data):
+    central = run(data)
+    fed = run(data, bank=BankSpec((("gnss",), ("nhc",)), mode="reset", fusion_period_s=1.0))
+    assert fed.ok
+    x = fed.locals.x
+    # the 10-Hz constraint updates of local 1 are held between the 1-s fusions ...
+    between = ~np.isclose(fed.time_s, np.round(fed.time_s)) & (fed.time_s > 2.0)
+    assert np.all(np.abs(x[between, 1, VEL]).max(axis=1) > 0.0)
+    # ... and local 0 (GNSS, once a second) restarts from the fused solution at every fusion
+    at = np.isclose(fed.time_s, np.round(fed.time_s)) & (fed.time_s > 0.5)
+    assert np.all(x[at, 0] == 0.0)  # set, not computed: exactly 0
+    # another filter than the centralized one, but the same solution within its sigma
+    assert np.all(np.abs(enu_between(fed.lla, central.lla)) < 3 * central.state_sigma("pos"))
