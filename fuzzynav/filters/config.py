@@ -12,6 +12,7 @@ import numpy as np
 
 from fuzzynav import units
 from fuzzynav.errors import InputFileError
+from fuzzynav.filters.bank import BankSpec
 from fuzzynav.filters.error_model import MODEL_15, ErrorModel
 from fuzzynav.filters.error_st import error_model_code
 
@@ -54,6 +55,9 @@ class FilterConfig:
         The error definition: the classical phi model, or the state-transformation model
         (velocity error ``dv - [v x] phi``, :mod:`fuzzynav.filters.error_st`).  Initial
         sigmas above are always of the phi-model states; the ST model maps them.
+    bank : BankSpec or None
+        Local filters and their master (:mod:`fuzzynav.filters.bank`); None is the single
+        filter with every sensor (the bank of one).
     """
 
     model: ErrorModel = MODEL_15
@@ -71,6 +75,7 @@ class FilterConfig:
     out_rate_hz: float = 10.0
     extra_noise_si: tuple = ()
     error_model: str = "phi"
+    bank: BankSpec | None = None
 
     def __post_init__(self):
         error_model_code(self.error_model)  # refuse an unknown name here, not in the loop

@@ -6,6 +6,9 @@ specific force.  The covariance is propagated over the accumulated interval (wit
 slowly, so propagating every sample would cost ~100x more for no accuracy (see
 docs/benchmarks.md).  Measurement epochs go through the sensor's measurement model, its
 adaptation policy, optional chi-square gating, the Joseph update and closed-loop feedback.
+The filter is a bank of local filters over the one mechanization (:mod:`fuzzynav.filters.bank`):
+each measurement updates the local that owns its sensor, and the master fuses the locals and
+feeds the fused estimate back; the single filter is the bank of one, which skips the fusion.
 
 Memory is independent of the run length apart from the requested outputs (every
 ``out_stride`` samples) and the per-epoch event log.
@@ -19,14 +22,14 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.filters import kalman
-from fuzzynav.filters.error_model import block_end, discretize, fill_F
-from fuzzynav.filters.error_st import EM_ST, discretize_dense, st_measurement, \
-    st_process_noise, st_reset, st_system, st_to_phi, st_velocity_variance
-from fuzzynav.filters.layout import COUPLE_ACCEL, COUPLE_GYRO, N_CORE, X_ATT, X_POS, X_VEL
-from fuzzynav.nav.earth import radii_nb
-from fuzzynav.nav.layout import NAV_H, NAV_LAT, NAV_LON, NAV_Q, NAV_SIZE, NAV_VEL, PREV_LLA, \
-    PREV_SIZE, PREV_VEL
-from fuzzynav.nav.strapdown import init_prev, mech_step, quat_mul, quat_to_dcm_into, rv2q, set_quat
+from fuzzynav.filters.bank_fusion import FUSED_NOW, SHARED, STALE, after_propagation, fuse, \
+    fusion_work, local_residual, master_covariance, propagate_locals, share
+from fuzzynav.filters.error_st import EM_ST, st_measurement, st_reset, st_to_phi, \
+    st_velocity_variance
+from fuzzynav.filters.feedback import bias_totals, feedback
+from fuzzynav.filters.layout import X_VEL
+from fuzzynav.nav.layout import NAV_SIZE, PREV_SIZE
+from fuzzynav.nav.strapdown import init_prev, mech_step, quat_to_dcm_into
 
 
 
@@ -39,18 +42,38 @@ class Imu(NamedTuple):
 
 
 class Start(NamedTuple):
-    """Initial state: ``nav0`` (nav layout), sensor states ``xs0``, covariance ``P0``."""
+    """Initial state: ``nav0`` (nav layout) and sensor states ``xs0``."""
 
     nav0: np.ndarray
     xs0: np.ndarray
-    P0: np.ndarray
+
+
+class Bank(NamedTuple):
+    """The bank: local filter of each sensor, information shares ``beta`` (per local), reset
+    mode (1) or not (0), fusion period [s] (0 = after every accepted update)."""
+
+    local: np.ndarray
+    beta: np.ndarray
+    reset: int
+    period: float
+
+
+class BankState(NamedTuple):
+    """Per-local covariance ``P`` (L, n, n), error state ``x`` (L, n) and process-noise
+    densities ``qd`` (L, n) (initial values in, final values out); the last fused ``Pg``
+    (n, n) and ``xg`` (n,)."""
+
+    P: np.ndarray
+    x: np.ndarray
+    qd: np.ndarray
+    Pg: np.ndarray
+    xg: np.ndarray
 
 
 class Model(NamedTuple):
-    """Error model: ``q_diag`` per state, the sensor blocks' start, coupling and 1/tau, and
-    the error-model code (:data:`fuzzynav.filters.error_st.ERROR_MODELS`)."""
+    """Error model: the sensor blocks' start, coupling and 1/tau, and the error-model code
+    (:data:`fuzzynav.filters.error_st.ERROR_MODELS`)."""
 
-    q_diag: np.ndarray
     blk_start: np.ndarray
     blk_kind: np.ndarray
     blk_inv_tau: np.ndarray
@@ -89,12 +112,15 @@ class Settings(NamedTuple):
 
 
 class Outputs(NamedTuple):
-    """Recorded solution (every ``out_stride`` samples): time, nav, sensor states, sigma."""
+    """Recorded solution (every ``out_stride`` samples): time, nav, sensor states, the
+    fused sigma, and per local filter its error state ``xl`` and sigma ``sigl`` (K, L, n)."""
 
     t: np.ndarray
     nav: np.ndarray
     xs: np.ndarray
     sig: np.ndarray
+    xl: np.ndarray
+    sigl: np.ndarray
 
 
 class EventOutputs(NamedTuple):
@@ -114,88 +140,65 @@ ST_OK, ST_COVARIANCE = 0, 1
 
 
 @nb.njit(cache=True)
-def _feedback(nav, prev, xs, x):
-    """Apply the error-state estimate to the navigation and sensor estimates (then x = 0)."""
-    a0, a1, a2, a3 = rv2q(x[X_ATT], x[X_ATT + 1], x[X_ATT + 2])
-    q0, q1, q2, q3 = quat_mul(a0, a1, a2, a3, nav[NAV_Q], nav[NAV_Q + 1], nav[NAV_Q + 2],
-                              nav[NAV_Q + 3])
-    qn = 1.0 / math.sqrt(q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
-    set_quat(nav, q0 * qn, q1 * qn, q2 * qn, q3 * qn)
-    rm, rn = radii_nb(nav[NAV_LAT])
-    de, dn, du = x[X_POS], x[X_POS + 1], x[X_POS + 2]  # ENU metres
-    dlat = dn / (rm + nav[NAV_H])
-    dlon = de / ((rn + nav[NAV_H]) * math.cos(nav[NAV_LAT]))
-    for i in range(3):
-        nav[NAV_VEL + i] -= x[X_VEL + i]
-        prev[PREV_VEL + i] -= x[X_VEL + i]  # keep the midpoint extrapolation free of the jump
-    nav[NAV_LAT] -= dlat
-    nav[NAV_LON] -= dlon
-    nav[NAV_H] -= du
-    prev[PREV_LLA] -= dlat
-    prev[PREV_LLA + 1] -= dlon
-    prev[PREV_LLA + 2] -= du
-    for j in range(xs.size):
-        xs[j] += x[N_CORE + j]
-
-
-@nb.njit(cache=True)
-def _bias_totals(xs, blk_start, blk_kind, bg, ba):
-    """Sum the sensor-error blocks into total gyro and accelerometer bias estimates."""
-    for i in range(3):
-        bg[i] = 0.0
-        ba[i] = 0.0
-    for b in range(blk_start.size):
-        s0 = blk_start[b] - N_CORE
+def _sigma_into(row, P, nav, em):
+    for i in range(P.shape[0]):
+        row[i] = math.sqrt(max(P[i, i], 0.0))
+    if em == EM_ST:  # report the sigma of the velocity error itself, as the phi model does
         for i in range(3):
-            if blk_kind[b] == COUPLE_GYRO:
-                bg[i] += xs[s0 + i]
-            elif blk_kind[b] == COUPLE_ACCEL:
-                ba[i] += xs[s0 + i]
+            row[X_VEL + i] = math.sqrt(max(st_velocity_variance(P, nav, i), 0.0))
 
 
 @nb.njit(cache=True)
-def _record(j, t, nav, xs, P, out_t, out_nav, out_xs, out_sig, em):
+def _record(j, t, nav, xs, st, P_master, out, em):
+    """Record output ``j``; ``P_master`` is the master's covariance (see
+    :func:`~fuzzynav.filters.bank_fusion.master_covariance`)."""
+    out_t, out_nav, out_xs, out_sig, out_xl, out_sigl = out
     out_t[j] = t
     for i in range(NAV_SIZE):
         out_nav[j, i] = nav[i]
     for i in range(xs.size):
         out_xs[j, i] = xs[i]
-    for i in range(P.shape[0]):
-        out_sig[j, i] = math.sqrt(max(P[i, i], 0.0))
-    if em == EM_ST:  # report the sigma of the velocity error itself, as the phi model does
-        for i in range(3):
-            out_sig[j, X_VEL + i] = math.sqrt(max(st_velocity_variance(P, nav, i), 0.0))
+    P3, X = st.P, st.x
+    for k in range(X.shape[0]):
+        _sigma_into(out_sigl[j, k], P3[k], nav, em)
+        for i in range(X.shape[1]):
+            out_xl[j, k, i] = X[k, i]
+    _sigma_into(out_sig[j], P_master, nav, em)
 
 
 @nb.njit(cache=True)
-def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, out, evout):
-    """Run the filter over all IMU samples; returns ``(status, samples_done)``.
+def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fns, settings,
+             out, evout):
+    """Run the filter bank over all IMU samples; returns ``(status, samples_done)``.
 
     Arguments are the named tuples above (:class:`Imu`, :class:`Start`, :class:`Model`,
-    :class:`Events`, :class:`Sensors`, :class:`Settings`, :class:`Outputs`,
-    :class:`EventOutputs`) and the kernel tuples of the measurement models and adaptation
-    policies.  ``imu.time_s`` has N+1 entries (increment k spans ``time_s[k]..time_s[k+1]``).
-    Outputs are written into the preallocated ``out`` arrays (every ``out_stride`` samples,
-    starting with the initial state) and ``evout`` (one row per event); ``sensors.ast``
-    (adapter states) is updated in place.
+    :class:`Events`, :class:`Sensors`, :class:`Bank`, :class:`BankState`,
+    :class:`Settings`, :class:`Outputs`, :class:`EventOutputs`) and the kernel tuples of the
+    measurement models and adaptation policies.  ``imu.time_s`` has N+1 entries (increment
+    k spans ``time_s[k]..time_s[k+1]``).  Outputs are written into the preallocated ``out``
+    arrays (every ``out_stride`` samples, starting with the initial state) and ``evout``
+    (one row per event); ``sensors.ast`` (adapter states) and ``state`` are updated in place.
     """
     # plain local names: the loop body reads as the algorithm, and numba sees bare arrays
     dth, dv, time_s = imu
-    nav0, xs0, P0 = start
-    q_diag, blk_start, blk_kind, blk_inv_tau, em = model
+    nav0, xs0 = start
+    blk_start, blk_kind, blk_inv_tau, em = model
     ev_t, ev_s, ev_data = events
     s_meas, s_mpar, s_adapt, afp, afp_off, aip, aip_off, ast, ast_off, s_gate = sensors
+    s_local, beta, reset, period = bank
+    P3, X, QD, Pg, xg = state
     max_prop_dt, out_stride = settings
-    out_t, out_nav, out_xs, out_sig = out
     ev_r, ev_S, ev_nis, ev_flag, ev_diag = evout
-    n = P0.shape[0]
+    NL, n = X.shape
     M = ev_r.shape[1]
     N = dth.shape[0]
     E = ev_t.size
+    # a local's estimate survives between updates only in a bank of several locals that
+    # does not reset to the fused solution after every update
+    carry = NL > 1 and (reset == 0 or period > 0.0)
     nav = nav0.copy()
     prev = np.zeros(PREV_SIZE)
     init_prev(nav, prev)
-    P = P0.copy()
     xs = xs0.copy()
     C = np.zeros((3, 3))
     quat_to_dcm_into(nav, C)
@@ -207,7 +210,7 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
     F = np.zeros((n, n))
     Phi = np.zeros((n, n))
     Qd = np.zeros((n, n))
-    Qacc = np.zeros((n, n))
+    Qacc3 = np.zeros((NL, n, n))
     Qc = np.zeros((n, n))
     work = np.zeros((n, n))
     AP = np.zeros((n, n))
@@ -221,25 +224,31 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
     HPH = np.zeros((M, M))
     S = np.zeros((M, M))
     L = np.zeros((M, M))
-    x = np.zeros(n)
+    dx = np.zeros(n)
     wv = np.zeros(max(n, M))
     out_a = np.zeros(2 + M)
     diag = np.zeros(ev_diag.shape[1])
     aux = np.zeros(6)
-    qd = q_diag.copy()
     bg = np.zeros(3)
     ba = np.zeros(3)
     dth_c = np.zeros(3)
     dv_c = np.zeros(3)
+    fwork = fusion_work(n)
+    Pf = np.zeros((n, n))
+    xf = np.zeros(n)
+    fstate = SHARED  # every local starts from P0 / beta_i
+    t_fused = -math.inf
     tau = 0.0
     e = 0
     while e < E and ev_t[e] < time_s[0] - 1e-9:
         ev_flag[e] = EV_BEFORE_START
         e += 1
-    _record(0, time_s[0], nav, xs, P, out_t, out_nav, out_xs, out_sig, em)
+    _record(0, time_s[0], nav, xs, state,
+            P3[0] if NL == 1 else master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork),
+            out, em)
     for k in range(N):
         dt = time_s[k + 1] - time_s[k]
-        _bias_totals(xs, blk_start, blk_kind, bg, ba)
+        bias_totals(xs, blk_start, blk_kind, bg, ba)
         for i in range(3):
             dth_c[i] = dth[k, i] - bg[i] * dt
             dv_c[i] = dv[k, i] - ba[i] * dt
@@ -255,11 +264,13 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
         t = time_s[k + 1]
         while e < E and ev_t[e] <= t + 1e-9:
             if tau > 0.0:
-                _propagate(P, Qacc, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd, work, qd,
-                           blk_start, blk_kind, blk_inv_tau, em, Qc)
+                propagate_locals(state, Qacc3, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi,
+                                 Qd, work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
                 tau = 0.0
+                fstate = after_propagation(fstate, reset)
             s = ev_s[e]
             a = s_adapt[s]
+            P, x, qd, Qacc = P3[s_local[s]], X[s_local[s]], QD[s_local[s]], Qacc3[s_local[s]]
             H[:, :] = 0.0
             m = meas_fns[s_meas[s]](nav, C, aux, ev_data[e], s_mpar[s], t - ev_t[e], z, H, R,
                                     chan)
@@ -269,6 +280,8 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
                 continue
             if em == EM_ST:  # the models write phi-model rows: H_ST = H A^-1
                 st_measurement(H, m, nav)
+            if carry:
+                local_residual(z, H, m, x)
             kalman.innovation_cov(P, H, m, PHt, HPH)
             adapt_fns[a](afp[afp_off[s]:afp_off[s + 1]], aip[aip_off[s]:aip_off[s + 1]],
                          ast[ast_off[s]:ast_off[s + 1]], z[:m], HPH, R, chan, m, out_a, diag)
@@ -289,7 +302,7 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
                 e += 1
                 continue
             if out_a[0] != 1.0:
-                kalman.scale_predicted(P, Qacc, out_a[0], H, m, x)
+                kalman.scale_predicted(P, Qacc, out_a[0], H, m, dx)
                 kalman.innovation_cov(P, H, m, PHt, HPH)
                 _form_S(HPH, R, m, S)
                 if not kalman.cholesky(S, m, L):  # the weighted S broke: skip the update
@@ -297,23 +310,42 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
                     e += 1
                     continue
             kalman.gain(L, m, PHt, K, wv)
-            kalman.joseph_update(P, H, R, m, z, PHt, K, x, AP, APHt)
+            kalman.joseph_update(P, H, R, m, z, PHt, K, dx, AP, APHt)
             Qacc[:, :] = 0.0
-            if em == EM_ST:
-                st_to_phi(x, nav)
-                st_reset(P, x)
-            _feedback(nav, prev, xs, x)
-            quat_to_dcm_into(nav, C)
+            for i in range(n):
+                x[i] += dx[i]
             ev_flag[e] = EV_ACCEPTED
+            t_meas = ev_t[e]  # the fusion clock runs on measurement times, not IMU times
             e += 1
-            if not kalman.covariance_ok(P):
+            fstate = STALE
+            if NL == 1:
+                if em == EM_ST:
+                    st_to_phi(x, nav)
+                    st_reset(P, x)
+                feedback(nav, prev, xs, x)
+                x[:] = 0.0
+                ok = kalman.covariance_ok(P)
+            elif period <= 0.0 or t_meas - t_fused >= period - 1e-9:
+                ok = fuse(P3, X, Pg, xg, fwork)
+                if ok:
+                    share(P3, X, Qacc3, Pg, xg, beta, reset)
+                    feedback(nav, prev, xs, xg)
+                    t_fused = t_meas
+                    fstate = FUSED_NOW
+                    ok = kalman.covariance_ok(Pg)
+            else:
+                ok = kalman.covariance_ok(P)
+            quat_to_dcm_into(nav, C)
+            if not ok:
                 return ST_COVARIANCE, k + 1
         if tau >= max_prop_dt - 1e-12:
-            _propagate(P, Qacc, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd, work, qd,
-                       blk_start, blk_kind, blk_inv_tau, em, Qc)
+            propagate_locals(state, Qacc3, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd,
+                             work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
             tau = 0.0
+            fstate = after_propagation(fstate, reset)
         if (k + 1) % out_stride == 0:
-            _record((k + 1) // out_stride, t, nav, xs, P, out_t, out_nav, out_xs, out_sig, em)
+            _record((k + 1) // out_stride, t, nav, xs, state, P3[0] if NL == 1 else
+                    master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork), out, em)
     return ST_OK, N
 
 
@@ -337,34 +369,3 @@ def _innovation(HPH, R, m, S, L, z, wv, ev_r, ev_S, ev_nis, e):
         return False
     ev_nis[e] = kalman.nis(L, m, z, wv)
     return True
-
-
-@nb.njit(cache=True)
-def _propagate(P, Qacc, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd, work, qd,
-               blk_start, blk_kind, blk_inv_tau, em, Qc):
-    """Propagate P over the accumulated interval and decay Gauss-Markov estimates.
-
-    ``em`` selects the error model; the ST model maps the phi model's F and noise."""
-    for i in range(3):
-        fm[i] = sumf[i] / tau
-        sumf[i] = 0.0
-        for j in range(3):
-            Cm[i, j] = sumC[i, j] / tau
-            sumC[i, j] = 0.0
-    fill_F(F, nav, Cm, fm, blk_start, blk_kind, blk_inv_tau)
-    if em == EM_ST:
-        st_system(F, nav)
-        st_process_noise(Qc, qd, nav)
-        discretize_dense(F, Qc, tau, Phi, Qd, work)
-    else:
-        discretize(F, qd, tau, Phi, Qd, work)
-    kalman.propagate(P, Phi, Qd, work)
-    n = P.shape[0]
-    for i in range(n):
-        for j in range(n):
-            Qacc[i, j] += Qd[i, j]
-    for b in range(blk_start.size):
-        if blk_inv_tau[b] > 0.0:
-            d = math.exp(-tau * blk_inv_tau[b])
-            for i in range(blk_start[b], block_end(blk_start, b, n)):
-                xs[i - N_CORE] *= d

@@ -85,7 +85,7 @@ class NamedFilter:
     takes_rules: bool = False  # reads rule files (``rules`` option): others refuse them
 
 
-FILTERS = Registry("filter", "fuzzynav.filters", ("catalog", "subsets"))
+FILTERS = Registry("filter", "fuzzynav.filters", ("catalog", "subsets", "bank_named"))
 
 
 def register_filter(name: str, description: str, takes_rules: bool = False):

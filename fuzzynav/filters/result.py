@@ -44,6 +44,27 @@ class EventLog:
 
 
 @dataclass(frozen=True)
+class LocalStates:
+    """The local filters of a bank (:mod:`fuzzynav.filters.bank`; one for a single filter).
+
+    Attributes
+    ----------
+    x : (K, L, n) each local's error state about the recorded navigation solution (its own
+        estimate of the truth is the solution minus ``x``), as of the local's last update or
+        covariance propagation: between measurement epochs it lags the solution.
+    sigma : (K, L, n) each local's 1-sigma (the fused one is ``FilterResult.sigma``).
+    P_end : (L, n, n) each local's covariance at the end of the run.
+    P_fused : (n, n) the master's covariance at the last fusion (a bank of one never fuses:
+        there it is the initial covariance).
+    """
+
+    x: np.ndarray
+    sigma: np.ndarray
+    P_end: np.ndarray
+    P_fused: np.ndarray
+
+
+@dataclass(frozen=True)
 class FilterResult:
     """Navigation solution, uncertainty and per-sensor logs of a run.
 
@@ -60,6 +81,7 @@ class FilterResult:
     events : sensor name -> :class:`EventLog`.
     status : ``"ok"`` or a description of why the run stopped early.
     layout : the :class:`~fuzzynav.filters.layout.StateLayout` of the error state.
+    locals : :class:`LocalStates` or None, the local filters of the bank.
     """
 
     time_s: np.ndarray
@@ -72,6 +94,7 @@ class FilterResult:
     events: dict = field(default_factory=dict)
     status: str = "ok"
     layout: StateLayout = LAYOUT_15
+    locals: LocalStates | None = None
 
     @property
     def att(self) -> np.ndarray:

@@ -6,14 +6,14 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import chi2
 
-from fuzzynav.errors import FuzzynavError
+from fuzzynav.errors import FuzzynavError, InputFileError
 from fuzzynav.filters import adaptation, measurements
 from fuzzynav.filters.adaptation import N_DIAG, NoAdaptation
 from fuzzynav.filters.config import FilterConfig
 from fuzzynav.filters.error_st import EM_ST, error_model_code, st_covariance
 from fuzzynav.filters.layout import N_CORE
 from fuzzynav.filters import loop
-from fuzzynav.filters.result import EventLog, FilterResult
+from fuzzynav.filters.result import EventLog, FilterResult, LocalStates
 from fuzzynav.nav import strapdown
 from fuzzynav.nav.layout import LLA_SLICE, NAV_SIZE, Q_SLICE, VEL_SLICE
 
@@ -121,30 +121,56 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
                         config.gate_probability)
     blk_start, blk_kind, blk_inv_tau = config.model.block_arrays()
     n = config.model.n_states
+    em = error_model_code(config.error_model)
+    bank, state = _bank(config, tb["names"], init, em)
     dt_nom = float(np.median(np.diff(time_s)))
     stride = max(1, int(round(1.0 / (config.out_rate_hz * dt_nom))))
-    K = dth.shape[0] // stride + 1
+    K, NL = dth.shape[0] // stride + 1, bank.beta.size
     E, M = tb["ev_t"].size, tb["M"]
     out = dict(t=np.full(K, np.nan), nav=np.full((K, NAV_SIZE), np.nan),
-               xs=np.full((K, n - N_CORE), np.nan), sig=np.full((K, n), np.nan))
+               xs=np.full((K, n - N_CORE), np.nan), sig=np.full((K, n), np.nan),
+               xl=np.full((K, NL, n), np.nan), sigl=np.full((K, NL, n), np.nan))
     ev = dict(r=np.full((E, M), np.nan), S=np.full((E, M), np.nan), nis=np.full(E, np.nan),
               flag=np.zeros(E, np.int64), diag=np.full((E, N_DIAG), np.nan))
     nav0 = strapdown.make_nav(init.lla, init.vel_n, init.q_bn)
     adapt_fns, _ = adaptation.kernel_table()
-    em = error_model_code(config.error_model)
-    P0 = st_covariance(config.P0(), init.vel_n) if em == EM_ST else config.P0()
     status, done = loop.run_loop(
-        loop.Imu(dth, dv, time_s), loop.Start(nav0, np.zeros(n - N_CORE), P0),
-        loop.Model(config.q_diag(), blk_start, blk_kind, blk_inv_tau, em),
+        loop.Imu(dth, dv, time_s), loop.Start(nav0, np.zeros(n - N_CORE)),
+        loop.Model(blk_start, blk_kind, blk_inv_tau, em),
         loop.Events(tb["ev_t"], tb["ev_s"], tb["ev_data"]),
         loop.Sensors(tb["s_meas"], tb["s_mpar"], tb["s_adapt"], tb["afp"], tb["afp_off"],
                      tb["aip"], tb["aip_off"], tb["ast"], tb["ast_off"], tb["gate"]),
-        tb["meas_fns"], adapt_fns, loop.Settings(float(config.max_prop_dt_s), int(stride)),
+        bank, state, tb["meas_fns"], adapt_fns,
+        loop.Settings(float(config.max_prop_dt_s), int(stride)),
         loop.Outputs(**out), loop.EventOutputs(**ev))
-    return _bundle(out, ev, tb, config, status, done, time_s)
+    return _bundle(out, ev, tb, config, status, done, time_s, state)
 
 
-def _bundle(out, ev, tb, config, status, done, time_s) -> FilterResult:
+def _bank(config: FilterConfig, names, init: InitialState, em: int):
+    """The loop's :class:`~fuzzynav.filters.loop.Bank` and initial
+    :class:`~fuzzynav.filters.loop.BankState`: local ``i`` starts from ``P0 / beta_i`` with
+    noise densities ``q / beta_i`` (no bank: the bank of one, every sensor, ``beta = 1``)."""
+    spec = config.bank
+    if spec is None:
+        local, beta, reset, period = np.zeros(max(len(names), 1), np.int64), (1.0,), 1, 0.0
+    else:
+        local, beta = spec.sensor_locals(names), spec.beta
+        reset, period = spec.mode_code(), float(spec.fusion_period_s)
+        if em == EM_ST and spec.n_local > 1:
+            raise InputFileError(None, "error_model", "a bank of several local filters needs "
+                                 "the phi error model, got 'st'")
+    P0 = st_covariance(config.P0(), init.vel_n) if em == EM_ST else config.P0()
+    b = np.asarray(beta, float)
+    n = P0.shape[0]
+    # beta = 1 divides exactly: the bank of one starts from the single filter's arrays
+    state = loop.BankState(P=np.ascontiguousarray(P0[None] / b[:, None, None]),
+                           x=np.zeros((b.size, n)),
+                           qd=np.ascontiguousarray(config.q_diag()[None] / b[:, None]),
+                           Pg=P0.copy(), xg=np.zeros(n))
+    return loop.Bank(local, b, int(reset), period), state
+
+
+def _bundle(out, ev, tb, config, status, done, time_s, state) -> FilterResult:
     keep = np.isfinite(out["t"])
     events = {}
     for i, (nm, mdl, bd) in enumerate(zip(tb["names"], tb["models"], tb["bounds"])):
@@ -160,4 +186,6 @@ def _bundle(out, ev, tb, config, status, done, time_s) -> FilterResult:
     return FilterResult(time_s=out["t"][keep], lla=nav[:, LLA_SLICE], vel_n=nav[:, VEL_SLICE],
                         q_bn=nav[:, Q_SLICE], sensor_states=out["xs"][keep],
                         sigma=out["sig"][keep], state_labels=layout.labels(), events=events,
-                        status=msg, layout=layout)
+                        status=msg, layout=layout,
+                        locals=LocalStates(out["xl"][keep], out["sigl"][keep], state.P,
+                                           state.Pg))

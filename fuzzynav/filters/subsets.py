@@ -1,4 +1,4 @@
-"""Named filters restricted to sensor subsets: the centralized reference and paper 001's pairs.
+"""Named filters restricted to sensor subsets: paper 001's pairs (``centralized`` is a bank).
 
 A subset filter is another named filter (``ekf``, ``fuzzy``, ...) run with the generic
 ``sensors`` option (sensor names or kinds, :func:`fuzzynav.filters.named.select_sensors`), so
@@ -37,12 +37,6 @@ def register_subset(name: str, base: str, sensors, description: str,
         return get_filter(base).make(replace(ctx, options=options))
 
     register_filter(name, description, takes_rules=takes_rules)(make)
-
-
-@register_filter("centralized", "one EKF with every sensor of the run: the optimal reference a "
-                                "federated filter should approach")
-def _centralized(ctx: FilterContext):
-    return get_filter("ekf").make(ctx)
 
 
 for _key, _group in PAIRS.items():

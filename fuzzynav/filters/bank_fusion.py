@@ -1,0 +1,206 @@
+"""The bank's numba kernels: propagation of every local, information fusion, sharing, shifts.
+
+The algebra and why the loop applies it as it does are in :mod:`fuzzynav.filters.bank`.
+Shapes: ``L`` local filters, ``n`` error states; ``P`` (L, n, n), ``x`` (L, n).  Work
+arrays are passed in, so nothing allocates inside the filter loop.
+"""
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from fuzzynav.filters import kalman
+from fuzzynav.filters.error_model import block_end, discretize, fill_F
+from fuzzynav.filters.error_st import EM_ST, discretize_dense, st_process_noise, st_system
+from fuzzynav.filters.layout import N_CORE
+
+
+#: the local filter whose standard deviations scale the states for the fusion (any would do)
+REF_LOCAL = 0
+
+
+@nb.njit(cache=True)
+def spd_inverse(A, out, L, col):
+    """``out = A^-1`` for a symmetric positive-definite ``A`` (n x n); False if not PD.
+
+    ``L`` (n x n) receives the Cholesky factor, ``col`` (n,) is scratch.
+    """
+    n = A.shape[0]
+    if not kalman.cholesky(A, n, L):
+        return False
+    for j in range(n):
+        for i in range(n):
+            col[i] = 0.0
+        col[j] = 1.0
+        kalman.chol_solve_vec(L, n, col, col)
+        for i in range(n):
+            out[i, j] = col[i]
+    for i in range(n):  # the solves agree to rounding only: keep it exactly symmetric
+        for j in range(i + 1, n):
+            v = 0.5 * (out[i, j] + out[j, i])
+            out[i, j] = v
+            out[j, i] = v
+    return True
+
+
+@nb.njit(cache=True)
+def fuse(P, x, Pg, xg, work):
+    """Information fusion ``Pg = (sum P_i^-1)^-1``, ``xg = Pg sum P_i^-1 x_i``; False if a
+    covariance is not positive definite.
+
+    The states are scaled by the first local's standard deviations ``d`` first
+    (``P_i -> D^-1 P_i D^-1``): the bias variances are ~1e-10 of the position variances, and
+    the inverses of the scaled matrices lose ~1e10 times less to rounding.  ``work`` is a
+    :func:`fusion_work` tuple.
+    """
+    d, Y, y, A, Ai, L, col = work
+    nl, n = x.shape
+    for i in range(n):
+        d[i] = math.sqrt(P[REF_LOCAL, i, i])
+        y[i] = 0.0
+        for j in range(n):
+            Y[i, j] = 0.0
+    for k in range(nl):
+        for i in range(n):
+            for j in range(n):
+                A[i, j] = P[k, i, j] / (d[i] * d[j])
+        if not spd_inverse(A, Ai, L, col):
+            return False
+        for i in range(n):
+            s = 0.0
+            for j in range(n):
+                Y[i, j] += Ai[i, j]
+                s += Ai[i, j] * (x[k, j] / d[j])
+            y[i] += s
+    if not spd_inverse(Y, Ai, L, col):
+        return False
+    kalman.chol_solve_vec(L, n, y, y)  # L still holds the factor of Y
+    for i in range(n):
+        xg[i] = d[i] * y[i]
+        for j in range(n):
+            Pg[i, j] = d[i] * Ai[i, j] * d[j]
+    return True
+
+
+#: what the locals' covariances say about the master's (``master_covariance``): the last
+#: fusion is current; every local holds the master's ``P / beta_i`` (at the start, and in
+#: reset mode until a local updates without fusing); or only a new fusion tells
+FUSED_NOW, SHARED, STALE = 0, 1, 2
+
+
+@nb.njit(cache=True)
+def after_propagation(fstate, reset):
+    """The fusion state once every local has been propagated with ``Q / beta_i``."""
+    if fstate == STALE or (fstate == FUSED_NOW and not reset):
+        return STALE
+    return SHARED
+
+
+@nb.njit(cache=True)
+def master_covariance(P, x, beta, Pg, fstate, Pf, xf, work):
+    """The master's covariance now: ``Pg``, ``beta_1 P_1`` or a fusion into ``Pf`` (NaN if
+    that fails)."""
+    if fstate == FUSED_NOW:
+        return Pg
+    n = x.shape[1]
+    if fstate == SHARED:
+        for i in range(n):
+            for j in range(n):
+                Pf[i, j] = beta[REF_LOCAL] * P[REF_LOCAL, i, j]
+    elif not fuse(P, x, Pf, xf, work):
+        Pf[:, :] = np.nan
+    return Pf
+
+
+@nb.njit(cache=True)
+def share(P, x, Qacc, Pg, xg, beta, reset):
+    """After feeding ``xg`` back to the shared navigation state: every local's error shifts
+    by ``-xg``; in reset mode the locals restart from the fused solution (``x_i = xg``, so
+    0 after the shift, and ``P_i = Pg / beta_i``, an updated covariance: nothing in it is
+    propagated noise any more, so the ``Qacc_i`` that adaptive weighting reads restart)."""
+    nl, n = x.shape
+    for k in range(nl):
+        if reset:
+            for i in range(n):
+                x[k, i] = 0.0
+                for j in range(n):
+                    P[k, i, j] = Pg[i, j] / beta[k]
+                    Qacc[k, i, j] = 0.0
+        else:
+            for i in range(n):
+                x[k, i] -= xg[i]
+
+
+@nb.njit(cache=True)
+def propagate_state(Phi, x, tmp):
+    """``x <- Phi x`` (a local's error estimate carried between fusions)."""
+    n = x.size
+    for i in range(n):
+        s = 0.0
+        for j in range(n):
+            a = Phi[i, j]
+            if a != 0.0:
+                s += a * x[j]
+        tmp[i] = s
+    for i in range(n):
+        x[i] = tmp[i]
+
+
+@nb.njit(cache=True)
+def local_residual(z, H, m, x):
+    """``z <- z - H x``: the innovation of a local whose estimate ``x`` is not fed back yet."""
+    for r in range(m):
+        s = 0.0
+        for j in range(x.size):
+            h = H[r, j]
+            if h != 0.0:
+                s += h * x[j]
+        z[r] -= s
+
+
+@nb.njit(cache=True)
+def fusion_work(n):
+    """Scratch arrays of :func:`fuse`: ``(d, Y, y, A, Ai, L, col)``."""
+    return (np.zeros(n), np.zeros((n, n)), np.zeros(n), np.zeros((n, n)), np.zeros((n, n)),
+            np.zeros((n, n)), np.zeros(n))
+
+
+@nb.njit(cache=True)
+def propagate_locals(state, Qacc3, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd, work,
+                     dx, blk_start, blk_kind, blk_inv_tau, em, Qc):
+    """Propagate every local's P (and, with ``carry``, its x) over the accumulated interval
+    and decay the shared Gauss-Markov estimates.
+
+    One ``F`` for all locals (one mechanization); each local its own noise densities.
+    ``em`` selects the error model; the ST model maps the phi model's F and noise."""
+    P3, X, QD = state.P, state.x, state.qd
+    for i in range(3):
+        fm[i] = sumf[i] / tau
+        sumf[i] = 0.0
+        for j in range(3):
+            Cm[i, j] = sumC[i, j] / tau
+            sumC[i, j] = 0.0
+    fill_F(F, nav, Cm, fm, blk_start, blk_kind, blk_inv_tau)
+    if em == EM_ST:
+        st_system(F, nav)
+    n = F.shape[0]
+    for b in range(X.shape[0]):
+        if em == EM_ST:
+            st_process_noise(Qc, QD[b], nav)
+            discretize_dense(F, Qc, tau, Phi, Qd, work)
+        else:
+            discretize(F, QD[b], tau, Phi, Qd, work)
+        kalman.propagate(P3[b], Phi, Qd, work)
+        Qacc = Qacc3[b]
+        for i in range(n):
+            for j in range(n):
+                Qacc[i, j] += Qd[i, j]
+        if carry:
+            propagate_state(Phi, X[b], dx)
+    for b in range(blk_start.size):
+        if blk_inv_tau[b] > 0.0:
+            d = math.exp(-tau * blk_inv_tau[b])
+            for i in range(blk_start[b], block_end(blk_start, b, n)):
+                xs[i - N_CORE] *= d

@@ -1,0 +1,84 @@
+"""Named filter banks: ``federated``, ``federated-reset`` and their reference ``centralized``.
+
+:func:`bank_setup` builds a bank from sensor groups; a paper's own combination of local
+filters is one call of it inside a registered filter, e.g. (paper 001's layout)::
+
+    @register_filter("p001-federated", "...")
+    def _p001(ctx):
+        return bank_setup(ctx, [("gnss",), ("polarization", "magnetometer")], "reset",
+                          beta=(0.5, 0.5))
+
+Options read here (from the Python API's filter options): ``fusion_period_s`` (default 0:
+fuse after every accepted update).
+"""
+from __future__ import annotations
+
+from fuzzynav.filters.bank import BankSpec
+from fuzzynav.filters.named import FilterContext, FilterSetup, config_from_imu, \
+    config_overrides, register_filter
+
+
+def sensor_groups(ctx: FilterContext, groups) -> tuple:
+    """Each group's sensor names: a group lists sensor names or kinds.
+
+    A name or kind that matches no sensor of the run is kept as it is, so that the bank's
+    check reports it as an unknown sensor.
+    """
+    out = []
+    for group in groups:
+        names = []
+        for item in ((group,) if isinstance(group, str) else group):
+            hits = sorted(nm for nm, d in ctx.sensors.items() if item in (nm, d.kind))
+            names += [nm for nm in hits or [item] if nm not in names]
+        out.append(tuple(names))
+    return tuple(out)
+
+
+def bank_setup(ctx: FilterContext, groups, mode: str = "no-reset", beta=None,
+               fusion_period_s: float | None = None, adapters=None) -> FilterSetup:
+    """A filter bank with one local filter per group of sensors.
+
+    Parameters
+    ----------
+    ctx : FilterContext
+    groups : sequence
+        Per local filter, a sensor name or kind, or a tuple of them.
+    mode : {"no-reset", "reset"}
+    beta : tuple of float, optional
+        Information shares (default equal).
+    fusion_period_s : float, optional
+        Default: the context's ``fusion_period_s`` option, else 0 (after every update).
+    adapters : dict, optional
+        Adaptation policy per sensor name (each runs in its sensor's local filter).
+
+    Returns
+    -------
+    FilterSetup
+    """
+    period = ctx.options.get("fusion_period_s", 0.0) if fusion_period_s is None \
+        else fusion_period_s
+    spec = BankSpec(sensor_groups(ctx, groups), beta, mode, float(period))
+    config = config_from_imu(ctx.imu_noise, **config_overrides(ctx.options)).with_(bank=spec)
+    return FilterSetup(config, dict(adapters or {}))
+
+
+def _by_kind(ctx: FilterContext) -> list:
+    return sorted({d.kind for d in ctx.sensors.values()})
+
+
+@register_filter("federated", "federated filter (Carlson 1990), no-reset: one local EKF per "
+                              "sensor kind, equal information shares, fused at every update")
+def _federated(ctx: FilterContext) -> FilterSetup:
+    return bank_setup(ctx, _by_kind(ctx), "no-reset")
+
+
+@register_filter("federated-reset", "federated filter (Carlson 1990), reset: locals restart "
+                                    "from the fused solution after every fusion")
+def _federated_reset(ctx: FilterContext) -> FilterSetup:
+    return bank_setup(ctx, _by_kind(ctx), "reset")
+
+
+@register_filter("centralized", "one EKF with every sensor: the reference of the federated "
+                                "filters (the same filter as ekf, as a bank of one)")
+def _centralized(ctx: FilterContext) -> FilterSetup:
+    return bank_setup(ctx, [tuple(sorted(ctx.sensors))], "reset")
