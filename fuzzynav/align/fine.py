@@ -111,9 +111,9 @@ def run_fine(epochs: Epochs, layout: AlignLayout, noise: AlignNoise = AlignNoise
     x = np.zeros(n)
     P = noise.p0(layout) if P0 is None else np.array(P0, dtype=float)
     R = R0.copy()
-    xs, Ps = np.zeros((K + 1, n)), np.zeros((K + 1, n, n))
+    x_hist, P_hist = np.zeros((K + 1, n)), np.zeros((K + 1, n, n))
     scale, ror = np.ones(K + 1), np.full(K + 1, np.nan)
-    xs[0], Ps[0] = x, P
+    x_hist[0], P_hist[0] = x, P
     if policy is not None:
         policy.reset(R0)
     for k in range(1, K + 1):
@@ -126,6 +126,6 @@ def run_fine(epochs: Epochs, layout: AlignLayout, noise: AlignNoise = AlignNoise
             R = policy.factor(z - H @ x, H @ P @ H.T + R) * R
             ror[k] = policy.last_ror
         x, P = _update(x, P, z, H, R)
-        xs[k], Ps[k] = x, P
+        x_hist[k], P_hist[k] = x, P
         scale[k] = np.trace(R) / np.trace(R0)
-    return FineResult(epochs.time_s, xs, Ps, scale, ror, layout)
+    return FineResult(epochs.time_s, x_hist, P_hist, scale, ror, layout)
