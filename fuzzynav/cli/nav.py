@@ -32,6 +32,9 @@ def register(sub) -> None:
                         "its own rule files); the first is the baseline of the improvement "
                         "column (default: %(default)s)")
     add_common_arguments(p)
+    p.add_argument("--align-threshold", type=float, metavar="ARCMIN",
+                   help="alignment scenarios: azimuth threshold of the alignment time "
+                        "(default: the scenario's, 10 arcmin)")
     p.set_defaults(func=_cmd_compare, data=None)
 
 
@@ -167,8 +170,14 @@ def _cmd_compare(args) -> int:
     if len(filters) < 2:
         raise FuzzynavError("--filters needs at least two comma-separated filter names")
     check_common(args)
-    check_rules(args, filters, "--filters")
     labels, claims = claims_for(str(args.scenario))
+    from fuzzynav.align.scenario import is_alignment_scenario
+
+    if is_alignment_scenario(str(args.scenario)):  # alignment filters: their own runner
+        from fuzzynav.align.cli import compare_alignment
+
+        return compare_alignment(args, filters, claims, labels, rows_for(str(args.scenario)))
+    check_rules(args, filters, "--filters")
     return run_scenario_filters(args, filters, baseline=filters[0], claims=claims,
                                 claim_labels=labels, rows=rows_for(str(args.scenario)))
 
