@@ -26,7 +26,7 @@ ALLOWED = {
     "metrics": {"nav"},
     "report": {"metrics"},
     "experiment": {"filters", "sim", "metrics", "nav"},
-    "align": {"filters", "fuzzy", "sim", "metrics", "report", "nav"},
+    "align": {"experiment", "filters", "fuzzy", "sim", "metrics", "report", "nav"},
     "realdata": {"filters", "sim", "metrics", "report", "nav", "plots"},
     "tuning": {"experiment", "filters", "fuzzy", "sim", "metrics", "report", "nav", "plots"},
     "claims": {"experiment", "filters", "sim", "metrics", "nav"},

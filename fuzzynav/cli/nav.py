@@ -22,6 +22,9 @@ def register(sub) -> None:
     p = sub.add_parser("run", help="run one filter on a scenario (or a recording) and print RMS")
     add_source_arguments(p)
     p.add_argument("--filter", default="ekf", help="named filter (see `fuzzynav scenarios`)")
+    p.add_argument("--align", metavar="ALIGN_FILTER",
+                   help="align on the scenario's opening rest with this alignment filter "
+                        "(align-kf, align-fuzzy, ...) and start the navigation from it")
     add_common_arguments(p)
     add_recording_arguments(p)
     p.set_defaults(func=_cmd_run)
@@ -160,6 +163,10 @@ def _cmd_run(args) -> int:
     if unused_recording_options(args):
         raise FuzzynavError(f"{', '.join(unused_recording_options(args))}: only with --data "
                             "(simulated scenarios take their settings from the scenario)")
+    if args.align:
+        from fuzzynav.align.cli import run_with_alignment
+
+        return run_with_alignment(args)
     return run_scenario_filters(args, [args.filter], baseline=None)
 
 

@@ -49,3 +49,17 @@ def test_bad_alignment_input_is_one_line(capsys, tmp_path):
     assert code == 2 and "lat_deg" in err and str(scn) in err and err.count("\n") == 1
     code, _, err = _run(capsys, "compare", "paper002", "--filters", "align-kf,nope")
     assert code == 2 and "unknown alignment filter 'nope'" in err
+
+
+def test_run_align_chains_alignment_and_navigation(capsys, sim_cache):
+    code, out, _ = _run(capsys, "run", "paper000-nominal", "--filter", "ekf", "--align",
+                        "align-kf", "--cache", str(sim_cache))
+    assert code == 0 and "aligned with align-kf" in out and "until 60 s" in out
+    level = float(next(line for line in out.splitlines()
+                        if line.startswith("aligned level error")).split()[-1])
+    # the level limit is the accelerometer bias over g: 100 ug -> 0.0057 deg per axis
+    assert level < 0.02
+    assert "heading (deg)" in out
+    code, _, err = _run(capsys, "run", "paper000-nominal", "--align", "nope", "--cache",
+                        str(sim_cache))
+    assert code == 2 and "unknown alignment filter 'nope'" in err
