@@ -82,7 +82,7 @@ def align_on_rest(log, align_filter="align-kf", rules=None):
     C, v, f = mechanize(_slice_imu(imu, k0, k1), c.C_bn, lat, h, step)
     ep = R.Epochs(imu.time_s[k0:k1 + 1:step], C, v, f, lat)
     noise = _noise(log, c.cov_phi)
-    policy = FuzzyRScaling(rules or DEFAULT_RULES) if spec.fuzzy else None
+    policy = FuzzyRScaling(DEFAULT_RULES if rules is None else rules) if spec.fuzzy else None
     res = run_fine(ep, spec.layout, noise, policy=policy)
     phi = res.estimate("att")[-1]
     return k1, attitude.rotvec_to_dcm(phi) @ C[-1], res.sigma("att")[-1]

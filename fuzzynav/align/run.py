@@ -123,7 +123,7 @@ def run_align_filter(name: str, scn: AlignScenario, log: AlignLog, ep: Epochs,
                      rules=None, fast_kw=None) -> AlignRun:
     """Run a named alignment filter on prepared epochs and score it against the truth."""
     spec = get_align_filter(name)
-    policy = FuzzyRScaling(rules or DEFAULT_RULES) if spec.fuzzy else None
+    policy = FuzzyRScaling(DEFAULT_RULES if rules is None else rules) if spec.fuzzy else None
     res = run_fine(ep, spec.layout, scn.noise, policy=policy)
     phi_hat = np.array(res.estimate("att"))
     if spec.fast:
