@@ -35,10 +35,10 @@ def _limits(log, lat):
     return np.array([-nab[1] / g, nab[0] / g, -eps[0] / w_n + np.tan(lat) * nab[0] / g])
 
 
-@pytest.mark.parametrize("name", ["align-kf", "align-kf12"])
-@pytest.mark.parametrize("heading, gyro, accel", [
-    (0.0, (0.02, -0.03, 0.01), (0.0, 0.0, 0.0)),
-    (30.0, (0.02, -0.03, 0.01), (100.0, -80.0, 50.0)),
+@pytest.mark.parametrize("name, heading, gyro, accel", [
+    ("align-kf", 0.0, (0.02, -0.03, 0.01), (0.0, 0.0, 0.0)),
+    ("align-kf", 30.0, (0.02, -0.03, 0.01), (100.0, -80.0, 50.0)),
+    ("align-kf12", 30.0, (0.02, -0.03, 0.01), (100.0, -80.0, 50.0)),
 ])
 def test_steady_state_errors_reach_the_analytic_limits(name, heading, gyro, accel):
     # noise-free, small initial misalignment (the open-loop solution's second-order terms,

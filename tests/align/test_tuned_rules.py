@@ -9,7 +9,7 @@ import pytest
 from fuzzynav.align import run as R
 from fuzzynav.align.experiment import metrics
 from fuzzynav.align.scenario import load_alignment_scenario
-from fuzzynav.align.tune import tune
+from fuzzynav.align.tune import Runs, tune
 from fuzzynav.fuzzy import load_fis
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -43,19 +43,34 @@ def test_tuned_alignment_rules_reproduce_their_expected_metrics(path):
     check(path)
 
 
+SHORT = """kind = "alignment"
+base = "paper002-rmismatch"
+name = "short"
+duration_s = 80.0
+[imu]
+rate_hz = 10.0
+"""
+
+
 def test_the_tuner_exports_a_rule_file_that_reproduces_itself(tmp_path):
+    scn = tmp_path / "short.toml"
+    scn.write_text(SHORT)
     cfg = tmp_path / "tune.toml"
     cfg.write_text(f'''template = "{ROOT / 'rules' / 'paper002_ror.json'}"
 output = "tuned.json"
-n_trials = 1
-train = ["paper002-rmismatch"]
+n_trials = 2
+train = ["{scn}"]
 train_seeds = [0]
 test = []
-expected_scenario = "paper002-rmismatch"
+expected_scenario = "{scn}"
 expected_seed = 3
 ''')
     summary = tune(cfg)
-    assert summary["train"]["tuned"] > 0
+    # the exported file scores what the study reported for its best trial
+    rescored, _ = Runs([(str(scn), 0)]).score(load_fis(tmp_path / "tuned.json"),
+                                              "align-fuzzy", 1.0)
+    assert rescored == pytest.approx(summary["train"]["tuned"], rel=1e-9)
     doc = json.loads((tmp_path / "tuned.json").read_text())
-    assert doc["expected"]["kind"] == "alignment" and doc["provenance"]["trials"] == 1
+    assert doc["expected"]["kind"] == "alignment" and doc["provenance"]["trials"] == 2
+    assert doc["binding"]["window"] == summary["best_params"]["window"]
     check(tmp_path / "tuned.json")
