@@ -43,7 +43,7 @@ def results(name, seeds):
     if TUNED.exists():
         tuned = monte_carlo_alignment(scn, ["align-fuzzy"], seeds, rules=str(TUNED))
         tuned["filter"] = "align-fuzzy tuned"
-        df = df._append(tuned, ignore_index=True)
+        df = pd.concat([df, tuned], ignore_index=True)
     return scn, df
 
 

@@ -88,6 +88,9 @@ python benchmarks/paper002_results.py                             # this page
   follows the filter's own azimuth belief while it learns, and its slope gives errors of
   20–30 arcmin even on noise-free data. The estimate is used while its sigma (fit residuals
   and ε_E/ω_N) is below the filter's, else the filter's azimuth is kept.
+- **Implementation**: numba for the 100-Hz strapdown (one compiled call per run), numpy for
+  the 1-s filter (400 steps of 10×10 products): a Padé `expm` per step cost 13 ms on the
+  loaded test machine, the 6-term series (exact to 1e-14 here) a few hundredths of that.
 - **Alignment time**: the first time after which |azimuth error| stays within 10 arcmin
   to the end of the run (configurable: `threshold_arcmin`, `--align-threshold`); a run that
   is outside at the end never aligned and counts as the run length.
