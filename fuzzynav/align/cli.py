@@ -10,8 +10,17 @@ from fuzzynav.metrics import mean_ci
 from fuzzynav.report import comparison_rows, render
 
 
+def _refuse(args, *options) -> None:
+    """Options that mean nothing here: one line, not silence."""
+    given = [flag for attr, flag in options if getattr(args, attr, None)]
+    if given:
+        raise FuzzynavError(f"{', '.join(given)}: not available with alignment "
+                            "(compare on an alignment scenario, run --align)")
+
+
 def compare_alignment(args, filters, claims=None, claim_labels=(), rows=()) -> int:
     """Run ``filters`` on ``args.mc`` seeds of an alignment scenario and print the table."""
+    _refuse(args, ("plot", "--plot"), ("t_start", "--t-start"))
     scn = load_alignment_scenario(args.scenario)
     if args.rules and len(args.rules) > 1:
         raise FuzzynavError("--rules: the alignment filters take one rule file (ROR -> t)")
@@ -58,6 +67,7 @@ def run_with_alignment(args) -> int:
     from fuzzynav.sim.log import simulate
     from fuzzynav.sim.scenario import load_scenario
 
+    _refuse(args, ("plot", "--plot"), ("json", "--json"), ("t_start", "--t-start"))
     scn = load_scenario(args.scenario)
     seeds = list(range(args.seed, args.seed + args.mc))
     rules = (args.rules or [None])[0] if args.align.startswith("align-fuzzy") else None

@@ -153,6 +153,8 @@ def _cmd_run(args) -> int:
     if (args.scenario is None) == (args.data is None):
         raise FuzzynavError("give either a SCENARIO or --data KIND:DIR")
     check_common(args)
+    if args.data and args.align:
+        raise FuzzynavError("--align: only with a simulated SCENARIO, not with --data")
     check_rules(args, [args.filter], "--filter")
     if args.data:
         from fuzzynav.realdata import run_recording
@@ -184,6 +186,8 @@ def _cmd_compare(args) -> int:
         from fuzzynav.align.cli import compare_alignment
 
         return compare_alignment(args, filters, claims, labels, rows_for(str(args.scenario)))
+    if args.align_threshold is not None:
+        raise FuzzynavError("--align-threshold: only for alignment scenarios (paper002...)")
     check_rules(args, filters, "--filters")
     return run_scenario_filters(args, filters, baseline=filters[0], claims=claims,
                                 claim_labels=labels, rows=rows_for(str(args.scenario)))

@@ -63,3 +63,16 @@ def test_run_align_chains_alignment_and_navigation(capsys, sim_cache):
     code, _, err = _run(capsys, "run", "paper000-nominal", "--align", "nope", "--cache",
                         str(sim_cache))
     assert code == 2 and "unknown alignment filter 'nope'" in err
+
+
+def test_options_that_mean_nothing_for_alignment_are_refused(capsys, tmp_path):
+    for argv, fragment in [
+        (["compare", "paper002", "--filters", "align-kf,align-fuzzy", "--plot",
+          str(tmp_path)], "--plot: not available with alignment"),
+        (["compare", "paper000", "--filters", "ekf,fakf", "--align-threshold", "5"],
+         "--align-threshold: only for alignment scenarios"),
+        (["run", "paper000", "--align", "align-kf", "--json"], "--json: not available"),
+        (["run", "--data", "rtklib:nowhere", "--align", "align-kf"], "--align: only with"),
+    ]:
+        code, _, err = _run(capsys, *argv)
+        assert code == 2 and fragment in err and err.count("\n") == 1, (argv, err)
