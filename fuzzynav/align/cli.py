@@ -84,3 +84,17 @@ def run_with_alignment(args) -> int:
           + render(["error", label], comparison_rows(df, [args.filter],
                                                      rows=(*ALIGNED_NAV_ROWS, *NAV_ROWS))))
     return 0
+
+
+def describe_alignment() -> str:
+    """The alignment scenarios and filters, for ``fuzzynav scenarios``."""
+    from fuzzynav.align.run import ALIGN_FILTERS
+    from fuzzynav.align.scenario import list_alignment_scenarios
+
+    lines = ["\nalignment scenarios (compare NAME --filters align-kf,align-fuzzy,...):"]
+    for name in list_alignment_scenarios():
+        scn = load_alignment_scenario(name)
+        lines.append(f"  {name:<24} {scn.duration_s:7.0f} s  {scn.description}")
+    lines.append("\nalignment filters (compare --filters, run --align):")
+    lines += [f"  {f.name:<24} {f.description}" for f in ALIGN_FILTERS.values()]
+    return "\n".join(lines)

@@ -85,6 +85,9 @@ def _cmd_scenarios(args) -> int:
     print("\nfilters (--filter NAME):")
     for f in list_filters():
         print(f"  {f.name:<24} {f.description}")
+    from fuzzynav.align.cli import describe_alignment
+
+    print(describe_alignment())
     return 0
 
 

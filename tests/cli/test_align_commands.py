@@ -76,3 +76,10 @@ def test_options_that_mean_nothing_for_alignment_are_refused(capsys, tmp_path):
     ]:
         code, _, err = _run(capsys, *argv)
         assert code == 2 and fragment in err and err.count("\n") == 1, (argv, err)
+
+
+def test_scenarios_lists_the_alignment_family_and_filters(capsys):
+    code, out, _ = _run(capsys, "scenarios")
+    assert code == 0
+    for name in ("paper002-sway", "paper002-mems", "align-fuzzy-fast", "align-kf12"):
+        assert name in out
