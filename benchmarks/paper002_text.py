@@ -135,7 +135,8 @@ Runs never within 10 arcmin to the end: {', '.join(f'{f} {n}' for f, n in nv.ite
   {_m(runs, mm, 'align-fuzzy', 'align_time_s')} s (never aligned: KF
   {never(runs[mm][1])['align-kf']}, fuzzy {never(runs[mm][1])['align-fuzzy']} of
   {_n(runs, mm)}). This is the condition fuzzy R-scaling is for, yet raising R only slows the
-  filter down: it does not shorten the alignment, it keeps the filter consistent. On the
+  filter down: it does not shorten the alignment, it brings the innovations back to their
+  predicted size (ROR near 1: `tests/align/test_fuzzy_fast.py`). On the
   swaying and gusty bases too the fuzzy filter stays within the KF's intervals.
 - **Tuned rules**: `rmismatch` and `sway` are the tuning's training variants (its seeds 0
   and 1 are among the seeds below); on the held-out ones the tuned controller is no better
