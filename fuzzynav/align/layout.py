@@ -43,18 +43,22 @@ class AlignLayout:
 
     @property
     def vel(self) -> slice:
+        """Slice of the ``vel`` block."""
         return self["vel"]
 
     @property
     def att(self) -> slice:
+        """Slice of the ``att`` block."""
         return self["att"]
 
     @property
     def accel_bias(self) -> slice:
+        """Slice of the ``accel_bias`` block."""
         return self["accel_bias"]
 
     @property
     def gyro_bias(self) -> slice:
+        """Slice of the ``gyro_bias`` block."""
         return self["gyro_bias"]
 
 

@@ -49,6 +49,7 @@ class AlignScenario:
 
 
 def builtin_dir():
+    """The directory of the built-in alignment scenarios."""
     return resources.files("fuzzynav.align") / "scenarios"
 
 
