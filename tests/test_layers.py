@@ -26,12 +26,13 @@ ALLOWED = {
     "metrics": {"nav"},
     "report": {"metrics"},
     "experiment": {"filters", "sim", "metrics", "nav"},
+    "align": {"experiment", "filters", "fuzzy", "sim", "metrics", "report", "nav"},
     "realdata": {"filters", "sim", "metrics", "report", "nav", "plots"},
     "tuning": {"experiment", "filters", "fuzzy", "sim", "metrics", "report", "nav", "plots"},
     "claims": {"experiment", "filters", "sim", "metrics", "nav"},
     "plots": {"fuzzy", "nav", "metrics"},
     "cli": {"experiment", "filters", "fuzzy", "sim", "metrics", "report", "nav", "tuning",
-            "realdata", "claims", "plots"},
+            "realdata", "claims", "plots", "align"},
     "__main__": {"cli"},
 }
 #: the engine is a library of its own: only the error classes of the package

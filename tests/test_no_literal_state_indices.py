@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1] / "fuzzynav"
-SCANNED = [ROOT / "filters", ROOT / "nav"]
+SCANNED = [ROOT / "filters", ROOT / "nav", ROOT / "align"]
 LAYOUT_MODULES = {ROOT / "filters" / "layout.py", ROOT / "nav" / "layout.py"}
 ALLOW = "layout: ok"
 

@@ -21,7 +21,9 @@ EXPORTED = "exported-in-a-temp-dir"
 def rule_files_with_expected() -> list:
     out = []
     for path in sorted((ROOT / "rules").glob("*.json")):
-        if "expected" in json.loads(path.read_text(encoding="utf-8")):
+        doc = json.loads(path.read_text(encoding="utf-8"))
+        # alignment rule files are re-run by tests/align/test_tuned_rules.py
+        if "expected" in doc and doc["expected"].get("kind") != "alignment":
             out.append(path)
     return out
 

@@ -22,6 +22,9 @@ def register(sub) -> None:
     p = sub.add_parser("run", help="run one filter on a scenario (or a recording) and print RMS")
     add_source_arguments(p)
     p.add_argument("--filter", default="ekf", help="named filter (see `fuzzynav scenarios`)")
+    p.add_argument("--align", metavar="ALIGN_FILTER",
+                   help="align on the scenario's opening rest with this alignment filter "
+                        "(align-kf, align-fuzzy, ...) and start the navigation from it")
     add_common_arguments(p)
     add_recording_arguments(p)
     p.set_defaults(func=_cmd_run)
@@ -32,6 +35,9 @@ def register(sub) -> None:
                         "its own rule files); the first is the baseline of the improvement "
                         "column (default: %(default)s)")
     add_common_arguments(p)
+    p.add_argument("--align-threshold", type=float, metavar="ARCMIN",
+                   help="alignment scenarios: azimuth threshold of the alignment time "
+                        "(default: the scenario's, 10 arcmin)")
     p.set_defaults(func=_cmd_compare, data=None)
 
 
@@ -79,6 +85,9 @@ def _cmd_scenarios(args) -> int:
     print("\nfilters (--filter NAME):")
     for f in list_filters():
         print(f"  {f.name:<24} {f.description}")
+    from fuzzynav.align.cli import describe_alignment
+
+    print(describe_alignment())
     return 0
 
 
@@ -147,6 +156,8 @@ def _cmd_run(args) -> int:
     if (args.scenario is None) == (args.data is None):
         raise FuzzynavError("give either a SCENARIO or --data KIND:DIR")
     check_common(args)
+    if args.data and args.align:
+        raise FuzzynavError("--align: only with a simulated SCENARIO, not with --data")
     check_rules(args, [args.filter], "--filter")
     if args.data:
         from fuzzynav.realdata import run_recording
@@ -157,6 +168,10 @@ def _cmd_run(args) -> int:
     if unused_recording_options(args):
         raise FuzzynavError(f"{', '.join(unused_recording_options(args))}: only with --data "
                             "(simulated scenarios take their settings from the scenario)")
+    if args.align:
+        from fuzzynav.align.cli import run_with_alignment
+
+        return run_with_alignment(args)
     return run_scenario_filters(args, [args.filter], baseline=None)
 
 
@@ -167,8 +182,16 @@ def _cmd_compare(args) -> int:
     if len(filters) < 2:
         raise FuzzynavError("--filters needs at least two comma-separated filter names")
     check_common(args)
-    check_rules(args, filters, "--filters")
     labels, claims = claims_for(str(args.scenario))
+    from fuzzynav.align.scenario import is_alignment_scenario
+
+    if is_alignment_scenario(str(args.scenario)):  # alignment filters: their own runner
+        from fuzzynav.align.cli import compare_alignment
+
+        return compare_alignment(args, filters, claims, labels, rows_for(str(args.scenario)))
+    if args.align_threshold is not None:
+        raise FuzzynavError("--align-threshold: only for alignment scenarios (paper002...)")
+    check_rules(args, filters, "--filters")
     return run_scenario_filters(args, filters, baseline=filters[0], claims=claims,
                                 claim_labels=labels, rows=rows_for(str(args.scenario)))
 

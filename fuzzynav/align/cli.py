@@ -1,0 +1,100 @@
+"""``fuzzynav compare <alignment scenario>``: the alignment filters' table with the claims."""
+from __future__ import annotations
+
+import json
+
+from fuzzynav.align.experiment import ALIGN_ROWS, monte_carlo_alignment
+from fuzzynav.align.scenario import load_alignment_scenario
+from fuzzynav.errors import FuzzynavError
+from fuzzynav.metrics import mean_ci
+from fuzzynav.report import comparison_rows, render
+
+
+def _refuse(args, *options) -> None:
+    """Options that mean nothing here: one line, not silence."""
+    given = [flag for attr, flag in options if getattr(args, attr, None)]
+    if given:
+        raise FuzzynavError(f"{', '.join(given)}: not available with alignment "
+                            "(compare on an alignment scenario, run --align)")
+
+
+def compare_alignment(args, filters, claims=None, claim_labels=(), rows=()) -> int:
+    """Run ``filters`` on ``args.mc`` seeds of an alignment scenario and print the table."""
+    _refuse(args, ("plot", "--plot"), ("t_start", "--t-start"))
+    scn = load_alignment_scenario(args.scenario)
+    if args.rules and len(args.rules) > 1:
+        raise FuzzynavError("--rules: the alignment filters take one rule file (ROR -> t)")
+    thr = getattr(args, "align_threshold", None)
+    if thr is not None and not thr > 0:
+        raise FuzzynavError(f"--align-threshold must be > 0 arcmin, got {thr}")
+    seeds = list(range(args.seed, args.seed + args.mc))
+    df = monte_carlo_alignment(scn, filters, seeds, rules=(args.rules or [None])[0],
+                               threshold_arcmin=thr, progress=not args.json and args.mc > 1)
+    thr = scn.threshold_arcmin if thr is None else thr
+    if args.json:
+        out = {"scenario": scn.name, "seeds": seeds, "threshold_arcmin": thr, "filters": {}}
+        for f in filters:
+            sub = df[df["filter"] == f]
+            out["filters"][f] = {k: {"mean": mean_ci(sub[k]).mean,
+                                     "ci95": [mean_ci(sub[k]).lo, mean_ci(sub[k]).hi]}
+                                 for _, k in (*(rows or ALIGN_ROWS), ("", "aligned_pct"))}
+        print(json.dumps(out, indent=2))
+        return 0
+    header = ["alignment", *filters, *(f"{f} vs {filters[0]}" for f in filters[1:]),
+              *claim_labels]
+    print(f"scenario {scn.name} ({scn.duration_s:.0f} s), azimuth threshold {thr:g} arcmin, "
+          f"seeds {seeds[0]}..{seeds[-1]}"
+          + (" — mean ± 95 % CI over seeds" if len(seeds) > 1 else "") + "\n"
+          + render(header, comparison_rows(df, filters, filters[0], rows=rows or ALIGN_ROWS,
+                                           claims=claims)))
+    never = df.groupby("filter", sort=False)["aligned_pct"].apply(lambda v: int((v == 0).sum()))
+    print(f"runs never within {thr:g} arcmin to the end (time counted as the run length): "
+          + ", ".join(f"{f} {never[f]}/{len(seeds)}" for f in filters))
+    return 0
+
+
+#: rows of ``run --align``: the aligned attitude, then the navigation
+ALIGNED_NAV_ROWS = (("aligned heading error (deg)", "align_heading_err_deg"),
+                    ("aligned level error (deg)", "align_level_err_deg"))
+
+
+def run_with_alignment(args) -> int:
+    """``fuzzynav run SCENARIO --filter F --align A``: align on the rest, then navigate."""
+    import pandas as pd
+
+    from fuzzynav.align.chain import run_aligned
+    from fuzzynav.report import NAV_ROWS
+    from fuzzynav.sim.log import simulate
+    from fuzzynav.sim.scenario import load_scenario
+
+    _refuse(args, ("plot", "--plot"), ("json", "--json"), ("t_start", "--t-start"))
+    scn = load_scenario(args.scenario)
+    seeds = list(range(args.seed, args.seed + args.mc))
+    rules = (args.rules or [None])[0] if args.align.startswith("align-fuzzy") else None
+    opts = {"rules": list(args.rules)} if args.rules and rules is None else {}
+    rows = []
+    for seed in seeds:
+        out = run_aligned(simulate(scn, seed, args.cache), args.filter, opts, args.align, rules)
+        rows.append({"filter": args.filter, "seed": seed, **out.metrics})
+    df = pd.DataFrame(rows)
+    label = f"{args.align} -> {args.filter}"
+    print(f"scenario {scn.name}: aligned with {args.align} on the opening rest (until "
+          f"{df['align_end_s'].iloc[0]:.0f} s), then {args.filter}; seeds "
+          f"{seeds[0]}..{seeds[-1]}\n"
+          + render(["error", label], comparison_rows(df, [args.filter],
+                                                     rows=(*ALIGNED_NAV_ROWS, *NAV_ROWS))))
+    return 0
+
+
+def describe_alignment() -> str:
+    """The alignment scenarios and filters, for ``fuzzynav scenarios``."""
+    from fuzzynav.align.run import ALIGN_FILTERS
+    from fuzzynav.align.scenario import list_alignment_scenarios
+
+    lines = ["\nalignment scenarios (compare NAME --filters align-kf,align-fuzzy,...):"]
+    for name in list_alignment_scenarios():
+        scn = load_alignment_scenario(name)
+        lines.append(f"  {name:<24} {scn.duration_s:7.0f} s  {scn.description}")
+    lines.append("\nalignment filters (compare --filters, run --align):")
+    lines += [f"  {f.name:<24} {f.description}" for f in ALIGN_FILTERS.values()]
+    return "\n".join(lines)

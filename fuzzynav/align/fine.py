@@ -1,0 +1,131 @@
+"""Fine alignment: a Kalman filter on the velocity of the open-loop solution.
+
+The mechanization (:mod:`.mechanize`) runs from the coarse attitude without feedback; at
+each filter epoch the filter predicts with ``Phi = expm(A T)`` (``A`` at the epoch's
+attitude and mean specific force) and updates with the solution's velocity against zero
+(the base does not move on average).  An optional *policy* rescales ``R`` before each
+update (:mod:`.fuzzy_r`).  ``x`` estimates the misalignment of the open-loop attitude,
+so the attitude after alignment is ``(I + [phi_hat x]) C_calc``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from fuzzynav.align.layout import AlignLayout
+from fuzzynav.align.model import AlignNoise, measurement_matrix, transition
+
+
+@dataclass(frozen=True)
+class Epochs:
+    """The open-loop solution at the filter epochs (see :func:`.mechanize.mechanize`).
+
+    Attributes
+    ----------
+    time_s : ndarray (K+1,)
+    C_bn : ndarray (K+1, 3, 3)
+    vel_n : ndarray (K+1, 3)
+        The measurement: the solution's velocity (plus the reference's noise) [m/s].
+    f_n : ndarray (K+1, 3)
+        Mean specific force over the interval ending at each epoch.
+    lat_rad : float
+    vel_err : ndarray (K+1, 3), optional
+        True velocity error of the solution (simulations only, for consistency checks).
+    """
+
+    time_s: np.ndarray
+    C_bn: np.ndarray
+    vel_n: np.ndarray
+    f_n: np.ndarray
+    lat_rad: float
+    vel_err: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class FineResult:
+    """Estimates and covariances at the epochs (row 0: the prior).
+
+    Attributes
+    ----------
+    time_s : ndarray (K+1,)
+    x : ndarray (K+1, n)
+    P : ndarray (K+1, n, n)
+    r_scale : ndarray (K+1,)
+        ``tr R(k) / tr R0`` used at each update (1 without a policy).
+    ror : ndarray (K+1,)
+        The policy's statistic (NaN without one or before its window is full).
+    layout : AlignLayout
+    """
+
+    time_s: np.ndarray
+    x: np.ndarray
+    P: np.ndarray
+    r_scale: np.ndarray
+    ror: np.ndarray
+    layout: AlignLayout
+
+    def sigma(self, block: str) -> np.ndarray:
+        """1-sigma of a block at every epoch, (K+1, size)."""
+        s = self.layout[block]
+        return np.sqrt(np.diagonal(self.P, axis1=1, axis2=2)[:, s])
+
+    def estimate(self, block: str) -> np.ndarray:
+        """Estimates of a block at every epoch, (K+1, size)."""
+        return self.x[:, self.layout[block]]
+
+
+def _update(x, P, z, H, R):
+    r = z - H @ x
+    S = H @ P @ H.T + R
+    K = np.linalg.solve(S, H @ P).T
+    x = x + K @ r
+    IKH = np.eye(P.shape[0]) - K @ H
+    P = IKH @ P @ IKH.T + K @ R @ K.T       # Joseph form: P stays symmetric PSD
+    return x, 0.5 * (P + P.T)
+
+
+def run_fine(epochs: Epochs, layout: AlignLayout, noise: AlignNoise = AlignNoise(),
+             policy=None, P0=None) -> FineResult:
+    """Run the alignment filter over all epochs.
+
+    Parameters
+    ----------
+    epochs : Epochs
+    layout : AlignLayout
+        ``LAYOUT_10`` (paper 002) or ``LAYOUT_12`` (velocity matching).
+    noise : AlignNoise
+        P0, Q, R0 and the period T (must match the epochs' spacing).
+    policy : object, optional
+        ``policy.reset(R0)`` once, then ``t = policy.factor(r, D)`` per epoch with the
+        innovation ``r`` and its theoretical covariance ``D = H P- H^T + R(k-1)``:
+        ``R(k) = t R(k-1)``; ``policy.last_ror`` is recorded.
+    P0 : ndarray, optional
+        Initial covariance (default ``noise.p0(layout)``), e.g. from coarse alignment.
+    """
+    n, K = layout.n, epochs.time_s.size - 1
+    H = measurement_matrix(layout)
+    R0 = noise.r0(layout)
+    Qd = noise.qd(layout)
+    m = H.shape[0]
+    x = np.zeros(n)
+    P = noise.p0(layout) if P0 is None else np.array(P0, dtype=float)
+    R = R0.copy()
+    x_hist, P_hist = np.zeros((K + 1, n)), np.zeros((K + 1, n, n))
+    scale, ror = np.ones(K + 1), np.full(K + 1, np.nan)
+    x_hist[0], P_hist[0] = x, P
+    if policy is not None:
+        policy.reset(R0)
+    for k in range(1, K + 1):
+        Phi = transition(layout, epochs.C_bn[k - 1], epochs.f_n[k], epochs.lat_rad,
+                         noise.period_s)
+        x = Phi @ x
+        P = Phi @ P @ Phi.T + Qd
+        z = epochs.vel_n[k, :m]
+        if policy is not None:
+            R = policy.factor(z - H @ x, H @ P @ H.T + R) * R
+            ror[k] = policy.last_ror
+        x, P = _update(x, P, z, H, R)
+        x_hist[k], P_hist[k] = x, P
+        scale[k] = np.trace(R) / np.trace(R0)
+    return FineResult(epochs.time_s, x_hist, P_hist, scale, ror, layout)

@@ -1,0 +1,64 @@
+"""Paper 002's fuzzy R-scaling: ``R(k) = t(k) R(k-1)``, ``t = FIS(ROR)``.
+
+``ROR(k) = tr(C_r) / tr(D_r)``: the measured innovation covariance over the last ``M``
+epochs, ``C_r = (1/M) sum r_i r_i^T``, against the theoretical one of this epoch,
+``D_r = H P- H^T + R(k-1)``.  ROR near 1: the filter is consistent, keep R; above 1: the
+innovations are larger than the filter expects, raise R; below 1: lower it.  Until the
+window is full, t = 1.  The paper leaves R free; here its scale relative to R0 is kept in
+``[scale_min, scale_max]`` (default 1e-2 .. 1e3), so a long run of t != 1 cannot drive R to
+zero or overflow.
+"""
+from __future__ import annotations
+
+from collections import deque
+
+import numpy as np
+
+from fuzzynav.filters.catalog import find_rule_file
+from fuzzynav.fuzzy import load_fis
+
+#: the rule file shipped with the paper's three hand rules
+DEFAULT_RULES = "paper002_ror.json"
+
+
+class FuzzyRScaling:
+    """The ROR -> t controller as an alignment-filter policy.
+
+    Parameters
+    ----------
+    fis : FuzzySystem or path
+        One input (ROR) and one output (t); a rule file's ``binding.window`` gives the
+        default window.
+    window : int, optional
+        Epochs M of the measured innovation covariance.
+    scale_min, scale_max : float
+        Bounds of ``tr R / tr R0``.
+    """
+
+    def __init__(self, fis, window=None, scale_min=1e-2, scale_max=1e3):
+        self.fis = fis if hasattr(fis, "evaluate") else load_fis(find_rule_file(fis))
+        binding = self.fis.binding or {}
+        self.window = int(window or binding.get("window", 10))
+        self.scale_min, self.scale_max = scale_min, scale_max
+        self._in = self.fis.inputs[0].name
+        self._out = self.fis.outputs[0].name
+        self.reset(None)
+
+    def reset(self, R0) -> None:
+        """Forget the innovations; the scale of R starts at 1."""
+        self._buf = deque(maxlen=self.window)
+        self._scale = 1.0
+        self.last_ror = np.nan
+
+    def factor(self, r, D) -> float:
+        """The factor t for this epoch from the innovation ``r`` and ``D = H P- H^T + R``."""
+        self._buf.append(np.asarray(r, dtype=float))
+        if len(self._buf) < self.window:
+            self.last_ror = np.nan
+            return 1.0
+        C = np.mean([np.outer(v, v) for v in self._buf], axis=0)
+        self.last_ror = float(np.trace(C) / np.trace(D))
+        t = float(self.fis.evaluate({self._in: self.last_ror})[self._out])
+        t = min(max(t, self.scale_min / self._scale), self.scale_max / self._scale)
+        self._scale *= t
+        return t

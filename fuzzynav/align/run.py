@@ -1,0 +1,154 @@
+"""One alignment run: simulate a scenario, coarse start, fine filter, errors against truth.
+
+The named alignment filters (``compare paper002 --filters align-kf,align-fuzzy,...``):
+
+=================  ==========================================================
+``align-kf``       paper 002's 10-state KF, fixed R0
+``align-kf12``     the 12-state velocity-matching form (vertical channel kept)
+``align-kf-fast``  align-kf with the fast azimuth estimate (an ablation)
+``align-fuzzy``    align-kf with the fuzzy R-scaling (ROR -> t rule file)
+``align-fuzzy-fast`` align-fuzzy with the fast azimuth estimate
+=================  ==========================================================
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from fuzzynav.align.fast import fast_azimuth, level_history
+from fuzzynav.align.fine import Epochs, FineResult, run_fine
+from fuzzynav.align.fuzzy_r import DEFAULT_RULES, FuzzyRScaling
+from fuzzynav.align.layout import LAYOUT_10, LAYOUT_12, NORTH, UP
+from fuzzynav.align.mechanize import mechanize
+from fuzzynav.align.scenario import AlignScenario
+from fuzzynav.align.simulate import AlignLog, simulate_alignment
+from fuzzynav.errors import UnknownNameError
+from fuzzynav.nav import attitude, earth
+from fuzzynav.sim.log import component_rng
+
+
+@dataclass(frozen=True)
+class AlignFilter:
+    """A named alignment filter: layout, whether it adapts R, whether it uses the fast
+    azimuth estimate."""
+
+    name: str
+    description: str
+    layout: object
+    fuzzy: bool = False
+    fast: bool = False
+
+
+ALIGN_FILTERS = {f.name: f for f in (
+    AlignFilter("align-kf", "paper 002's 10-state alignment KF, fixed R0", LAYOUT_10),
+    AlignFilter("align-kf12", "12-state velocity-matching alignment KF", LAYOUT_12),
+    AlignFilter("align-kf-fast", "align-kf + fast azimuth estimate", LAYOUT_10, fast=True),
+    AlignFilter("align-fuzzy", "align-kf + fuzzy R-scaling (ROR -> t)", LAYOUT_10, fuzzy=True),
+    AlignFilter("align-fuzzy-fast", "align-fuzzy + fast azimuth estimate", LAYOUT_10,
+                fuzzy=True, fast=True),
+)}
+
+
+def get_align_filter(name: str) -> AlignFilter:
+    """A named alignment filter."""
+    if name not in ALIGN_FILTERS:
+        raise UnknownNameError("alignment filter", name[:100], ALIGN_FILTERS)
+    return ALIGN_FILTERS[name]
+
+
+@dataclass(frozen=True)
+class AlignRun:
+    """A filter's run on one simulated log.
+
+    Attributes
+    ----------
+    result : FineResult
+    phi_hat : ndarray (K+1, 3)
+        Misalignment estimates (ENU) [rad]; the azimuth is the fast estimate when used.
+    phi_true : ndarray (K+1, 3)
+        True misalignment of the open-loop solution [rad].
+    C_bn : ndarray (3, 3)
+        The aligned attitude at the end, ``(I + [phi_hat x]) C_calc``.
+    """
+
+    result: FineResult
+    phi_hat: np.ndarray
+    phi_true: np.ndarray
+    C_bn: np.ndarray
+
+    @property
+    def error(self) -> np.ndarray:
+        """Alignment error ``phi_true - phi_hat`` (ENU) [rad], (K+1, 3)."""
+        return self.phi_true - self.phi_hat
+
+
+def simulate(scn: AlignScenario, seed: int) -> AlignLog:
+    """The IMU log of a scenario and seed."""
+    return simulate_alignment(scn.imu, np.radians(scn.lat_deg), scn.h_m,
+                              np.radians(scn.att_deg), scn.duration_s,
+                              component_rng(seed, "align-imu"), scn.sway)
+
+
+def _reference_noise(scn: AlignScenario, time_s, seed):
+    """White noise of the zero-velocity reference, scaled inside ``noise_windows``."""
+    sigma = np.full(time_s.size, scn.meas_sigma_mps)
+    for start, end, scale in scn.noise_windows:
+        sigma[(time_s >= start) & (time_s < end)] *= scale
+    return sigma[:, None] * component_rng(seed, "align-ref").standard_normal((time_s.size, 3))
+
+
+def epochs(scn: AlignScenario, log: AlignLog, seed: int, C_bn0=None) -> Epochs:
+    """The open-loop solution at the filter epochs, plus the reference's noise.
+
+    ``C_bn0`` is the starting attitude; by default the truth turned by the scenario's
+    ``misalign_deg`` (``C_calc = exp(-[phi x]) C_true``).
+    """
+    if C_bn0 is None:
+        C_bn0 = attitude.rotvec_to_dcm(-np.radians(scn.misalign_deg)) @ log.C_bn[0]
+    step = int(round(scn.noise.period_s * scn.imu.rate_hz))
+    C, v, f = mechanize(log.imu, C_bn0, log.lat_rad, log.h_m, step)
+    t = log.imu.time_s[::step][:C.shape[0]]
+    return Epochs(t, C, v + _reference_noise(scn, t, seed), f, log.lat_rad,
+                  vel_err=v - log.vel_n[::step][:C.shape[0]])
+
+
+def true_misalignment(log: AlignLog, ep: Epochs) -> np.ndarray:
+    """``phi`` of the open-loop attitude at the epochs (exact vee)."""
+    step = (log.imu.time_s.size - 1) // (ep.time_s.size - 1) if ep.time_s.size > 1 else 1
+    return attitude.attitude_error(ep.C_bn, log.C_bn[::step][:ep.time_s.size])
+
+
+def run_align_filter(name: str, scn: AlignScenario, log: AlignLog, ep: Epochs,
+                     rules=None, fast_kw=None) -> AlignRun:
+    """Run a named alignment filter on prepared epochs and score it against the truth."""
+    spec = get_align_filter(name)
+    policy = FuzzyRScaling(DEFAULT_RULES if rules is None else rules) if spec.fuzzy else None
+    res = run_fine(ep, spec.layout, scn.noise, policy=policy)
+    phi_hat = np.array(res.estimate("att"))
+    if spec.fast:
+        floor = scn.noise.gyro_bias_sigma_rps / earth.omega_ie_n(ep.lat_rad)[NORTH]
+        kw = {"sigma_floor_rad": floor, **(fast_kw or {})}
+        phi_hat[:, UP], _ = fast_azimuth(res.time_s, phi_hat, level_history(ep, scn.noise),
+                                         res.sigma("att")[:, UP], ep.lat_rad, **kw)
+    C_end = attitude.rotvec_to_dcm(phi_hat[-1]) @ ep.C_bn[-1]
+    return AlignRun(res, phi_hat, true_misalignment(log, ep), C_end)
+
+
+def true_state(layout, log: AlignLog, ep: Epochs) -> np.ndarray:
+    """The true error state ``(K+1, n)`` of the open-loop solution (simulations only)."""
+    step = (log.imu.time_s.size - 1) // (ep.time_s.size - 1)
+    n_ep = ep.time_s.size
+    truth = {"vel": ep.vel_err, "att": true_misalignment(log, ep),
+             "accel_bias": log.imu.accel_bias_mps2[::step][:n_ep],
+             "gyro_bias": log.imu.gyro_bias_rps[::step][:n_ep]}
+    out = np.zeros((n_ep, layout.n))
+    for name, size in layout.blocks:
+        out[:, layout[name]] = truth[name][:, :size]
+    return out
+
+
+def nees(run: AlignRun, truth: np.ndarray) -> np.ndarray:
+    """Normalised estimation error squared at every epoch, (K+1,)."""
+    e = truth - run.result.x
+    return np.einsum("ki,ki->k", e, np.linalg.solve(run.result.P, e[..., None])[..., 0])

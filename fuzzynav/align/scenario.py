@@ -1,0 +1,157 @@
+"""Alignment scenarios (``kind = "alignment"`` TOML): a base at a fixed place, an IMU,
+sway, the true noise of the zero-velocity reference and the filter's assumptions.
+
+Built-ins live in ``fuzzynav/align/scenarios`` (``paper002`` and its variants); a file may
+start from a built-in with ``base = "paper002"`` (tables merge key by key).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields
+from importlib import resources
+from pathlib import Path
+
+from fuzzynav import units
+from fuzzynav.align.model import AlignNoise
+from fuzzynav.align.simulate import Sway
+from fuzzynav.errors import InputFileError, UnknownNameError
+from fuzzynav.sim.imu import ImuSpec
+from fuzzynav.sim.tomltable import Table, parse_toml, read_toml, with_path
+
+#: [filter] keys in datasheet units -> (AlignNoise field, SI factor)
+_FILTER_KEYS = {
+    "vel_sigma_mps": ("vel_sigma_mps", 1.0),
+    "att_sigma_deg": ("att_sigma_rad", units.DEG),
+    "accel_bias_sigma_ug": ("accel_bias_sigma_mps2", units.UG),
+    "gyro_bias_sigma_dph": ("gyro_bias_sigma_rps", units.DPH),
+    "accel_noise_ug": ("accel_noise_mps2_psqrts", units.UG),
+    "gyro_noise_dph": ("gyro_noise_rps_psqrts", units.DPH),
+    "r0_sigma_mps": ("meas_sigma_mps", 1.0),
+}
+
+
+@dataclass(frozen=True)
+class AlignScenario:
+    """One alignment scenario (see the built-in TOML files for the meaning of each key)."""
+
+    name: str
+    description: str
+    lat_deg: float
+    h_m: float
+    att_deg: tuple
+    duration_s: float
+    misalign_deg: tuple
+    meas_sigma_mps: float
+    noise_windows: tuple
+    threshold_arcmin: float
+    imu: ImuSpec
+    sway: Sway
+    noise: AlignNoise = field(default_factory=AlignNoise)
+
+
+def builtin_dir():
+    """The directory of the built-in alignment scenarios."""
+    return resources.files("fuzzynav.align") / "scenarios"
+
+
+def list_alignment_scenarios() -> list[str]:
+    """Names of the built-in alignment scenarios."""
+    return sorted(p.name[:-5] for p in builtin_dir().iterdir() if p.name.endswith(".toml"))
+
+
+def _read(name_or_path):
+    s = str(name_or_path)
+    if s.endswith(".toml") or "/" in s:
+        return read_toml(Path(s), "alignment scenario"), Path(s).stem, s
+    if s not in list_alignment_scenarios():
+        raise UnknownNameError("alignment scenario", s[:100], list_alignment_scenarios())
+    label = f"<built-in {s}.toml>"
+    with with_path(label):
+        return parse_toml((builtin_dir() / f"{s}.toml").read_bytes()), s, label
+
+
+def is_alignment_scenario(name_or_path) -> bool:
+    """Whether a name or file is an alignment scenario (built-in, or ``kind = "alignment"``)."""
+    s = str(name_or_path)
+    if s in list_alignment_scenarios():
+        return True
+    if s.endswith(".toml") and Path(s).is_file():
+        try:
+            return read_toml(Path(s), "scenario file").get("kind") == "alignment"
+        except InputFileError:
+            return False
+    return False
+
+
+def _merge(base: dict, over: dict) -> dict:
+    out = dict(base)
+    for k, v in over.items():
+        both = isinstance(v, dict) and isinstance(base.get(k), dict)
+        out[k] = _merge(base[k], v) if both else v
+    return out
+
+
+def _document(name_or_path, depth=0):
+    doc, stem, label = _read(name_or_path)
+    if "base" in doc:
+        base = doc.pop("base")
+        if not isinstance(base, str) or base not in list_alignment_scenarios() or depth > 8:
+            raise InputFileError(label, "base", f"must name a built-in alignment scenario "
+                                                f"({', '.join(list_alignment_scenarios())})")
+        doc = _merge(_document(base, depth + 1)[0], doc)
+    return doc, stem, label
+
+
+def _sway(t: Table | None) -> Sway:
+    if t is None:
+        return Sway()
+    d = Sway()
+    kw = {f.name: (t.vector(f.name, 3, getattr(d, f.name), lo=0.0 if "amp" in f.name else None)
+                   if isinstance(getattr(d, f.name), tuple)
+                   else t.number(f.name, getattr(d, f.name), lo=0.0))
+          for f in fields(Sway)}
+    t.finish()
+    return Sway(**kw)
+
+
+def _noise(t: Table | None) -> AlignNoise:
+    if t is None:
+        return AlignNoise()
+    kw = {}
+    for key, (attr, factor) in _FILTER_KEYS.items():
+        value = t.number(key, None, lo=0.0, lo_open=True)
+        if value is not None:
+            kw[attr] = value * factor
+    t.finish()
+    return AlignNoise(**kw)
+
+
+def _parse(doc: dict, stem: str) -> AlignScenario:
+    t = Table(doc)
+    t.string("kind", choices=("alignment",))
+    scn = AlignScenario(
+        name=t.string("name", stem), description=t.string("description", ""),
+        lat_deg=t.number("lat_deg", lo=-89.0, hi=89.0), h_m=t.number("h_m", 0.0),
+        att_deg=t.vector("att_deg", 3, (0.0, 0.0, 0.0)),
+        duration_s=t.number("duration_s", lo=10.0, hi=86400.0),
+        misalign_deg=t.vector("misalign_deg", 3, (1.0, 1.0, 1.0), lo=-30.0, hi=30.0),
+        meas_sigma_mps=t.number("meas_sigma_mps", 0.05, lo=0.0),
+        noise_windows=t.windows("noise_windows", 3),
+        threshold_arcmin=t.number("threshold_arcmin", 10.0, lo=0.0, lo_open=True),
+        imu=ImuSpec.from_dict(doc.get("imu", {}), "imu"), sway=_sway(t.table("sway", False)),
+        noise=_noise(t.table("filter", False)))
+    t.table("imu", False)
+    t.finish()
+    return scn
+
+
+def load_alignment_scenario(name_or_path) -> AlignScenario:
+    """A built-in alignment scenario by name, or a TOML file by path.
+
+    Raises
+    ------
+    UnknownNameError, DataMissingError, InputFileError
+        Unknown name, missing file, or a bad key (naming the file and the key).
+    """
+    doc, stem, label = _document(name_or_path)
+    with with_path(label):
+        return _parse(doc, stem)
