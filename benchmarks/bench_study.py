@@ -20,7 +20,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _report import machine, write_section  # noqa: E402
 
 from fuzzynav.tuning.config import load_study_config  # noqa: E402
-from fuzzynav.tuning.run import _prepare_cache, run_study  # noqa: E402
+from fuzzynav.tuning.run import prepare_cache, run_study  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -52,7 +52,7 @@ def main(argv=None):
     cache = tmp / "cache"
     try:
         warm = load_study_config(_config_copy(tmp, "warm"))
-        _prepare_cache(warm, cache)
+        prepare_cache(warm, cache)
         run_study(warm, 3, 1, None, cache, progress=False)   # compile once
         rows = [(w,) + measure(args.trials, w, cache, tmp) for w in (1, 2)]
     finally:

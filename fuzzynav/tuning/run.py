@@ -17,6 +17,7 @@ import time
 from tqdm.auto import tqdm
 
 from fuzzynav.errors import FuzzynavError
+from fuzzynav.tuning.samplers import get_optimiser
 from fuzzynav.tuning.study import n_finished, open_study, reap_stale, run_worker
 from fuzzynav.tuning.warmup import warm_up
 
@@ -134,17 +135,13 @@ def run_study(cfg, trials=None, workers: int = 1, storage=None, cache_dir=None,
     -------
     optuna.Study
     """
-    total = int(trials or cfg.trials)
+    total = get_optimiser(cfg.sampler).budget(cfg, int(trials or cfg.trials))
     if workers < 1:
         raise FuzzynavError(f"--workers must be >= 1, got {workers}")
     if workers > 1 and cfg.path is None:
         raise FuzzynavError("several workers need the study config as a file")
     study = open_study(cfg, storage, create=True)
     warm_up(cfg, cache_dir, progress)  # a cold cache compiles: say so, once, here
-    if cfg.sampler == "pso":
-        from fuzzynav.tuning.pso import run_pso
-
-        return run_pso(cfg, study, total, workers, storage, cache_dir, progress)
     start = n_finished(study)
     bar = tqdm(total=total, initial=min(start, total), disable=not progress, unit="trial",
                desc=cfg.name)
@@ -152,7 +149,7 @@ def run_study(cfg, trials=None, workers: int = 1, storage=None, cache_dir=None,
         run_worker(cfg, total, storage, 0, cache_dir,
                    progress=lambda n: (bar.update(min(n, total) - bar.n)))
     else:
-        _prepare_cache(cfg, cache_dir)
+        prepare_cache(cfg, cache_dir)
         supervise(cfg, study, total, workers, storage, cache_dir,
                   on_poll=lambda: bar.update(min(n_finished(study), total) - bar.n))
     bar.update(min(n_finished(study), total) - bar.n)
@@ -160,7 +157,7 @@ def run_study(cfg, trials=None, workers: int = 1, storage=None, cache_dir=None,
     return study
 
 
-def _prepare_cache(cfg, cache_dir):
+def prepare_cache(cfg, cache_dir):
     """Simulate every training run once so that workers do not race to create the cache."""
     from fuzzynav.sim.log import simulate
     from fuzzynav.sim.scenario import load_scenario

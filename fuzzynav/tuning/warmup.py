@@ -45,11 +45,8 @@ def compile_by_running(cfg, cache_dir=None) -> None:
     from fuzzynav.fuzzy import load_fis
     from fuzzynav.tuning.objective import Evaluator
 
-    ev = Evaluator(cfg, cache_dir)
-    scenario, seed = cfg.train[0]
     systems = {c.name: load_fis(c.template) for c in cfg.controllers}
-    _, metrics = ev.run_systems(systems, scenario, seed)
-    ev.ratios(metrics, scenario, seed)
+    Evaluator(cfg, cache_dir).score_systems(systems, *cfg.train[0])
 
 
 @contextmanager
