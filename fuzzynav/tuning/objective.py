@@ -30,6 +30,8 @@ from fuzzynav.tuning.space import ControllerSpace, build_all
 FAILED_RATIO = 10.0
 #: the filter name a candidate's runs are recorded under
 CANDIDATE = "tuned"
+#: a running trial records a heartbeat at most this often [s] (and at its start)
+HEARTBEAT_S = 10.0
 
 
 @dataclass(frozen=True)
@@ -119,6 +121,12 @@ class Evaluator:
                                              t_start_s=self.config.t_start_s).metrics
         return self._baseline[key]
 
+    def prepare(self, runs) -> "Evaluator":
+        """Load the logs of ``runs`` and run the baseline on each now; returns self."""
+        for scenario, seed in runs:
+            self.baseline(scenario, seed)
+        return self
+
     # -- candidates -------------------------------------------------------------------------
     def run_systems(self, systems: dict, scenario: str, seed: int):
         """Run the candidate (controller name -> FuzzySystem) on one run: a
@@ -145,16 +153,23 @@ class Objective:
     Multi-objective: the three mean group ratios.
     """
 
-    def __init__(self, cfg, cache_dir=None, worker: int = 0):
+    def __init__(self, cfg, cache_dir=None, worker: int = 0, evaluator=None):
         self.cfg = cfg
         self.spaces = [ControllerSpace.from_config(c) for c in cfg.controllers]
-        self.evaluator = Evaluator(cfg, cache_dir)
+        self.evaluator = evaluator if evaluator is not None else Evaluator(cfg, cache_dir)
         self.worker = worker
         self.current = None       # number of the trial being run (or last run) here
         self.last_error = None    # the exception that failed the last trial here
+        self._last_beat = -math.inf
+        # a heartbeat is one journal record: often enough for a reaper on another host
+        # (stale_after_s), not after every run
+        self._beat_every_s = min(HEARTBEAT_S, cfg.stale_after_s / 10.0)
 
-    def _beat(self, trial):
-        trial.set_user_attr("heartbeat", time.time())
+    def _beat(self, trial, force: bool = False):
+        now = time.time()
+        if force or now - self._last_beat >= self._beat_every_s:
+            trial.set_user_attr("heartbeat", now)
+            self._last_beat = now
 
     def __call__(self, trial):
         self.current, self.last_error = trial.number, None
@@ -168,7 +183,7 @@ class Objective:
         trial.set_user_attr("host", socket.gethostname())
         trial.set_user_attr("pid", os.getpid())
         trial.set_user_attr("worker", self.worker)
-        self._beat(trial)
+        self._beat(trial, force=True)
         systems = build_all(self.spaces, trial)
         runs = list(enumerate(self.cfg.train))
         np.random.default_rng(trial.number).shuffle(runs)

@@ -244,12 +244,13 @@ def _state(study, number: int) -> TrialState:
 
 
 def run_worker(cfg, n_total: int, storage_url=None, worker: int = 0, cache_dir=None,
-               progress=None) -> int:
+               progress=None, evaluator=None) -> int:
     """Run trials until the study has ``n_total`` finished ones; returns trials run here.
 
     Trials running in other workers count towards the total, so parallel workers do not
     overshoot it (:func:`fuzzynav.tuning.run.run_study` rounds the total to what the
-    optimiser runs: whole swarms for PSO).
+    optimiser runs: whole swarms for PSO).  ``evaluator``: a warm
+    :class:`~fuzzynav.tuning.objective.Evaluator` to use (logs, baselines loaded).
 
     Raises
     ------
@@ -258,7 +259,7 @@ def run_worker(cfg, n_total: int, storage_url=None, worker: int = 0, cache_dir=N
     """
     url = storage_url or cfg.storage_url
     study = open_study(cfg, url, worker)
-    objective = Objective(cfg, cache_dir, worker)
+    objective = Objective(cfg, cache_dir, worker, evaluator)
     slots = TrialSlots(with_driver(url), cfg.name)
     try:
         return _trials_until(study, cfg, n_total, objective, slots, progress)
