@@ -161,6 +161,15 @@ def next_slot(by_slot: dict, n: int):
     return (it, free), ready
 
 
+def swarm_ready(study, cfg) -> bool:
+    """Whether a worker may start a trial: a retry is queued, or the next particle's
+    iteration may start."""
+    trials = study.get_trials(deepcopy=False)
+    if any(t.state == TrialState.WAITING for t in trials):
+        return True  # (the trial started next is that one)
+    return next_slot(slots(trials), cfg.pso.particles)[1]
+
+
 class PsoSampler(optuna.samplers.BaseSampler):
     """Gives each trial the parameters of the next particle of the swarm (see the module).
 
@@ -205,7 +214,9 @@ class PsoSampler(optuna.samplers.BaseSampler):
 
     def _place(self, study, trial):
         """The trial's ``(iteration, particle)``: its own (a retry) or the next free one,
-        recorded in its user attributes once the previous iteration has every value."""
+        recorded in its user attributes once the previous iteration has every value (the
+        workers wait for that in :func:`swarm_ready`, holding no lock; this wait only
+        covers storages without the trial-slot lock)."""
         if ITERATION in trial.user_attrs:
             return trial.user_attrs[ITERATION], trial.user_attrs[PARTICLE]
         start = time.monotonic()
@@ -239,4 +250,5 @@ class PsoSampler(optuna.samplers.BaseSampler):
 register_optimiser(Optimiser(
     "pso", lambda cfg, seed: PsoSampler(cfg, seed),
     "particle swarm with a constant or linearly decreasing inertia weight (paper 004)",
-    pruning=False, multi_objective=False, shared_seed=True, budget=swarm_budget))
+    pruning=False, multi_objective=False, shared_seed=True, budget=swarm_budget,
+    ready=swarm_ready))

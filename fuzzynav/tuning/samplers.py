@@ -20,6 +20,10 @@ def _all_trials(cfg, total: int) -> int:
     return total
 
 
+def _always(study, cfg) -> bool:
+    return True
+
+
 @dataclass(frozen=True)
 class Optimiser:
     """One ``sampler = "<name>"`` choice of a study file.
@@ -42,6 +46,10 @@ class Optimiser:
         A package it imports, checked when the config is loaded.
     budget : callable
         ``budget(cfg, total) -> trials`` it runs when asked for ``total`` (PSO: whole swarms).
+    ready : callable
+        ``ready(study, cfg) -> bool``: whether the sampler can place a new trial now; a
+        worker holding the trial-slot lock asks before starting one and otherwise lets the
+        lock go and waits (PSO: a swarm waits for the values of the previous one).
     """
 
     name: str
@@ -52,6 +60,7 @@ class Optimiser:
     shared_seed: bool = False
     needs: str | None = None
     budget: Callable = _all_trials
+    ready: Callable = _always
 
     def check(self, multi_objective: bool) -> str | None:
         """Why this optimiser cannot run a study (None: it can)."""

@@ -41,6 +41,8 @@ FINISHED = (TrialState.COMPLETE, TrialState.PRUNED)
 MAX_RETRIES = 2
 #: a worker gives up after this many failed trials in a row (a broken setup, not bad luck)
 MAX_FAILS_IN_ROW = 10
+#: how often a worker whose sampler is not ready for a new trial looks again [s]
+READY_POLL_S = 0.05
 #: user attributes of a trial's run (its worker, results, retry count): a retry does not
 #: inherit them; it keeps every other one (a sampler's, e.g. which swarm particle it is)
 RUN_ATTRS = ("host", "pid", "worker", "heartbeat", "n_runs", "ratios", "retry_of", "retries")
@@ -268,6 +270,7 @@ def run_worker(cfg, n_total: int, storage_url=None, worker: int = 0, cache_dir=N
 
 
 def _trials_until(study, cfg, n_total, objective, slots, progress) -> int:
+    ready = get_optimiser(cfg.sampler).ready
     done = fails = 0
     while True:
         slots.acquire()
@@ -275,6 +278,10 @@ def _trials_until(study, cfg, n_total, objective, slots, progress) -> int:
             reap_stale(study, cfg.stale_after_s)
             if not _room(study, cfg, n_total):
                 return done
+            if not ready(study, cfg):  # let the other workers finish what it waits for
+                slots.release()
+                time.sleep(READY_POLL_S)
+                continue
             state = _run_one(study, objective, slots)
         finally:
             slots.release()
