@@ -134,6 +134,10 @@ def report(args, rounds: list, load: tuple, secs: float) -> str:
     lines += ["", "| ratio | median | per round |", "|---|---|---|"]
     for what, (m, vals) in ratios(rounds).items():
         lines.append(f"| {what} | {m:.2f} | " + ", ".join(f"{v:.2f}" for v in vals) + " |")
+    if max(load) > (os.cpu_count() or 1):
+        lines += ["", f"**The machine was loaded** (load average above its {os.cpu_count()} "
+                  "cores): a second worker finds no free core, so the ratios of 2 to 1 workers "
+                  "say nothing about scaling; rerun on an idle machine."]
     lines += ["", "Pruned trials stop early, so trials/min exceeds filter runs/s x 60 / 9, and "
               "the pruning pattern differs between one and two workers (trials finish in "
               "another order). Two workers include their start-up: forked from the warm "
