@@ -5,7 +5,7 @@ Layout (every key in ``docs/studies.md``)::
     name = "paper000_tune"
     description = "..."
     [study]          sampler, seed, trials, pruner, objective (single|multi), storage, ...
-    [study.pso]      particles, iterations, inertia = [start, end], c1, c2  (sampler = "pso")
+    [study.pso]      particles, iterations, inertia = w | [start, end], c1, c2  (sampler "pso")
     [objective]      weights = {pos, vel, att}, baseline = "ekf", t_start_s
     [train]          scenarios = [...], seeds = [...]  (built-in names, or TOML files
                      relative to this file, like templates)
@@ -19,7 +19,6 @@ Every problem is one :class:`fuzzynav.errors.InputFileError` naming the file and
 """
 from __future__ import annotations
 
-import importlib.util
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -28,8 +27,8 @@ from fuzzynav.errors import FuzzynavError, InputFileError
 from fuzzynav.filters.adaptation.binding import WINDOW_RANGE
 from fuzzynav.fuzzy.io import brief
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
+from fuzzynav.tuning.samplers import get_optimiser, optimiser_names
 
-SAMPLERS = ("tpe", "random", "qmc", "cmaes", "nsga2", "pso")
 PRUNERS = ("none", "median", "wilcoxon")
 TUNE_MODES = ("both", "rules", "breakpoints")
 #: objective groups and the metric each is measured by
@@ -59,7 +58,11 @@ class ControllerConfig:
 
 @dataclass(frozen=True)
 class PsoConfig:
-    """Particle swarm with a linearly decreasing inertia weight (paper 004)."""
+    """Particle swarm with a constant or linearly decreasing inertia weight (paper 004).
+
+    ``inertia`` is ``(start, end)``: the weight goes linearly from start (first iteration)
+    to end (last configured iteration); start == end is a constant weight.
+    """
 
     particles: int = 16
     iterations: int = 20
@@ -256,6 +259,19 @@ def _check_held_out(tt: Table, train: tuple, test: tuple) -> None:
                                     "test runs must be held out (other seeds or scenarios)")
 
 
+def _inertia(t: Table) -> tuple:
+    """``inertia``: one weight (constant) or ``[start, end]`` (linear from start to end)."""
+    value = t.data.get("inertia")
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        w = t.number("inertia", lo=0.0, hi=1.0)
+        return (w, w)
+    w = t.vector("inertia", 2, (0.9, 0.4), lo=0.0, hi=1.0)
+    if not w[0] >= w[1]:
+        raise t.error("inertia", "the start weight must be >= the end weight (a decreasing "
+                                 f"schedule), got {list(w)}")
+    return w
+
+
 def load_study_config(path) -> StudyConfig:
     """Read and check a study file (errors name the file and the key)."""
     path = Path(path)
@@ -279,13 +295,10 @@ def study_config_from_dict(doc: dict, path: Path | None = None) -> StudyConfig:
     if pso_t is not None:
         pso = PsoConfig(particles=pso_t.integer("particles", 16, lo=2, hi=1000),
                         iterations=pso_t.integer("iterations", 20, lo=1, hi=100_000),
-                        inertia=pso_t.vector("inertia", 2, (0.9, 0.4), lo=0.0, hi=1.0,
-                                             broadcast=False),
+                        inertia=_inertia(pso_t),
                         c1=pso_t.number("c1", 1.5, lo=0.0), c2=pso_t.number("c2", 1.5, lo=0.0))
         pso_t.finish()
-        if not pso.inertia[0] >= pso.inertia[1]:
-            raise pso_t.error("inertia", "the start weight must be >= the end weight")
-    study = dict(sampler=st.string("sampler", "tpe", choices=SAMPLERS),
+    study = dict(sampler=st.string("sampler", "tpe", choices=optimiser_names()),
                  seed=st.integer("seed", 0, lo=0), trials=st.integer("trials", 100, lo=1),
                  pruner=st.string("pruner", "wilcoxon", choices=PRUNERS),
                  multi_objective=st.string("objective", "single", choices=("single", "multi"))
@@ -322,11 +335,9 @@ def study_config_from_dict(doc: dict, path: Path | None = None) -> StudyConfig:
     if len({c.name for c in ctrls}) != len(ctrls):
         raise top.error("controllers", "controller names must be unique")
     top.finish()
-    if study["sampler"] == "pso" and study["multi_objective"]:
-        raise InputFileError(None, "study.sampler", "pso is single-objective here")
-    if study["sampler"] == "cmaes" and importlib.util.find_spec("cmaes") is None:
-        raise InputFileError(None, "study.sampler", "'cmaes' needs the cmaes package, which "
-                                                    "is not installed (pip install cmaes)")
+    why_not = get_optimiser(study["sampler"]).check(study["multi_objective"])
+    if why_not:
+        raise InputFileError(None, "study.sampler", why_not)
     return StudyConfig(name=name, description=desc, path=path, pso=pso, weights=weights,
                        baseline=baseline, t_start_s=t_start, train=train, test=test,
                        compare=compare, controllers=ctrls, **study)

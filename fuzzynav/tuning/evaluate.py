@@ -12,15 +12,16 @@ import pandas as pd
 from fuzzynav.experiment import run_on_log
 from fuzzynav.metrics import check_finite_metrics, mean_ci
 from fuzzynav.tuning.config import GROUP_METRICS
-
-TUNED = "tuned"
+from fuzzynav.tuning.objective import CANDIDATE
 
 
 def run_table(evaluator, systems: dict, runs, compare=()) -> pd.DataFrame:
     """One row per (run, filter): metrics and ratios to the baseline.
 
-    ``systems`` (controller -> FuzzySystem) is run as filter ``"tuned"``; ``compare`` are named
-    filters run beside it (a filter that cannot run is recorded with an ``error``).
+    ``systems`` (controller -> FuzzySystem) is run as filter ``"tuned"``
+    (:data:`~fuzzynav.tuning.objective.CANDIDATE`); ``compare`` are named filters run beside
+    it (a filter that cannot run is recorded with an ``error``).  Every row is scored by
+    :func:`~fuzzynav.tuning.objective.score_metrics`, like the study's trials.
 
     Raises
     ------
@@ -37,25 +38,25 @@ def run_table(evaluator, systems: dict, runs, compare=()) -> pd.DataFrame:
                           "filter": evaluator.config.baseline, **base})
         outcomes = {}
         if systems:
-            _, m = evaluator.run_systems(systems, scenario, seed)
-            outcomes[TUNED] = m
+            outcomes[CANDIDATE] = evaluator.run_systems(systems, scenario, seed).metrics
         for name in compare:
             try:
                 outcomes[name] = run_on_log(log, name, t_start_s=evaluator.config.t_start_s).metrics
             except Exception as exc:  # a baseline that cannot run here is reported, not fatal
                 outcomes[name] = {"error": str(exc)}
-        for name, m in outcomes.items():
-            row = {"scenario": scenario, "seed": seed, "filter": name}
-            if "error" in m:
-                row["error"] = m["error"]
-            else:
-                row.update({k: v for k, v in m.items()})
-                r = evaluator.ratios(m, scenario, seed)
-                row.update({f"{g}_ratio": r[g] for g in GROUP_METRICS})
-                row["score"] = evaluator.score(r)
-            rows.append(row)
+        rows += [_row(evaluator, scenario, seed, name, m) for name, m in outcomes.items()]
     check_finite_metrics(pd.DataFrame(baselines + rows))  # names filter, scenario and seed
     return pd.DataFrame(rows)
+
+
+def _row(evaluator, scenario, seed, name, metrics) -> dict:
+    """A table row: the filter's metrics, its ratios to the baseline and its score."""
+    row = {"scenario": scenario, "seed": seed, "filter": name}
+    if "error" in metrics:
+        return {**row, "error": metrics["error"]}
+    scored = evaluator.judge(metrics, scenario, seed)
+    return {**row, **metrics, **{f"{g}_ratio": scored.ratios[g] for g in GROUP_METRICS},
+            "score": scored.score}
 
 
 def summary(df: pd.DataFrame, by=("filter",)) -> pd.DataFrame:

@@ -4,32 +4,86 @@ For each (scenario, seed) of a run set the candidate's RMS position, velocity an
 errors are divided by the baseline filter's (the EKF by default) on the same data and the
 same initial error; a run's score is the weighted mean of these ratios (1 = as good as the
 baseline, lower is better).  A run that loses its covariance scores :data:`FAILED_RATIO`.
+:func:`score_metrics` is the one place this is computed -- for the study's trials
+(:class:`Objective`) and for the train/test tables (:mod:`fuzzynav.tuning.evaluate`) alike.
 Sensor logs and baseline metrics are computed once per process and kept in memory.
 """
 from __future__ import annotations
 
 import math
+import os
+import socket
+import time
+from dataclasses import dataclass
 
 import numpy as np
 
-from fuzzynav.experiment import perturbed_initial_state, run_on_log, setup_for
+from fuzzynav.experiment import run_on_log, setup_for
 from fuzzynav.filters.catalog import bind_systems
 from fuzzynav.filters.named import FilterSetup
-from fuzzynav.filters.runner import run_filter
-from fuzzynav.metrics import errors_vs_trajectory, rms_metrics
 from fuzzynav.sim.log import simulate
 from fuzzynav.sim.scenario import load_scenario
 from fuzzynav.tuning.config import GROUP_METRICS
+from fuzzynav.tuning.space import ControllerSpace, build_all
+
+#: ratio given to a metric when the candidate's run failed or is not finite
+FAILED_RATIO = 10.0
+#: the filter name a candidate's runs are recorded under
+CANDIDATE = "tuned"
+#: a running trial records a heartbeat at most this often [s] (and at its start)
+HEARTBEAT_S = 10.0
+
+
+@dataclass(frozen=True)
+class RunScore:
+    """One run of a filter scored against the baseline on the same run.
+
+    Attributes
+    ----------
+    metrics : dict
+        The run's RMS metrics (``rms_pos_m``, ...) and ``completed`` (1.0 or 0.0).
+    ratios : dict
+        Group (``pos``, ``vel``, ``att``) -> ratio to the baseline, :data:`FAILED_RATIO`
+        where the run failed or the ratio is not finite.
+    score : float
+        The weighted mean of ``ratios``.
+    """
+
+    metrics: dict
+    ratios: dict
+    score: float
+
+
+def weighted_score(ratios: dict, weights: dict) -> float:
+    """The weighted mean of group ratios (weights: group -> non-negative weight)."""
+    return sum(weights[g] * ratios[g] for g in GROUP_METRICS) / sum(weights.values())
+
+
+def score_metrics(metrics: dict, baseline: dict, weights: dict) -> RunScore:
+    """Score a run's metrics against the baseline's metrics on the same run.
+
+    Parameters
+    ----------
+    metrics, baseline : dict
+        RMS metrics of the candidate and of the baseline (keys of :data:`GROUP_METRICS`;
+        ``metrics["completed"]`` < 1 marks a run that failed).
+    weights : dict
+        Group -> weight of its ratio in the score.
+    """
+    ok = metrics.get("completed", 1.0) >= 1.0
+    ratios = {}
+    for g, key in GROUP_METRICS.items():
+        r = metrics[key] / baseline[key] if baseline[key] > 0 else math.nan
+        ratios[g] = r if (ok and math.isfinite(r)) else FAILED_RATIO
+    return RunScore(metrics, ratios, weighted_score(ratios, weights))
+
 
 def setup_with_systems(log, systems: dict) -> FilterSetup:
     """The EKF configuration of a log with the given fuzzy systems bound to its sensors."""
     base = setup_for(log, "ekf")
     items = [(fis, f"<candidate {name}>") for name, fis in systems.items()]
-    return FilterSetup(base.config, bind_systems(items, log.sensors, required=True))
-
-
-#: ratio given to a metric when the candidate's run failed or is not finite
-FAILED_RATIO = 10.0
+    return FilterSetup(base.config, bind_systems(items, log.sensors, required=True),
+                       base.sensor_options, base.sigma_override)
 
 
 class Evaluator:
@@ -67,39 +121,83 @@ class Evaluator:
                                              t_start_s=self.config.t_start_s).metrics
         return self._baseline[key]
 
+    def prepare(self, runs) -> "Evaluator":
+        """Load the logs of ``runs`` and run the baseline on each now; returns self."""
+        for scenario, seed in runs:
+            self.baseline(scenario, seed)
+        return self
+
     # -- candidates -------------------------------------------------------------------------
     def run_systems(self, systems: dict, scenario: str, seed: int):
-        """Run the candidate (controller name -> FuzzySystem) on one run; its outcome."""
+        """Run the candidate (controller name -> FuzzySystem) on one run: a
+        :class:`~fuzzynav.experiment.RunOutcome` named :data:`CANDIDATE`."""
         log = self.log(scenario, seed)
-        setup = setup_with_systems(log, systems)
-        res = run_filter(log.imu, log.sensors, perturbed_initial_state(log, setup),
-                         setup.config, setup.adapters)
-        metrics = rms_metrics(errors_vs_trajectory(res, log.truth), self.config.t_start_s)
-        metrics["completed"] = float(res.ok)
-        return res, metrics
+        return run_on_log(log, CANDIDATE, t_start_s=self.config.t_start_s,
+                          setup=setup_with_systems(log, systems))
 
-    def ratios(self, metrics: dict, scenario: str, seed: int) -> dict:
-        """Per-group ratio candidate / baseline (pos, vel, att)."""
-        base = self.baseline(scenario, seed)
-        out = {}
-        for g, key in GROUP_METRICS.items():
-            r = metrics[key] / base[key] if base[key] > 0 else math.nan
-            out[g] = r if (math.isfinite(r) and metrics.get("completed", 1.0) >= 1.0) \
-                else FAILED_RATIO
-        return out
+    def judge(self, metrics: dict, scenario: str, seed: int) -> RunScore:
+        """Score a filter's metrics on a run against the baseline on that run."""
+        return score_metrics(metrics, self.baseline(scenario, seed), self.config.weights)
 
-    def score(self, ratios: dict) -> float:
-        """Weighted mean of the group ratios."""
-        w = self.config.weights
-        return sum(w[g] * ratios[g] for g in GROUP_METRICS) / sum(w.values())
+    def score_systems(self, systems: dict, scenario: str, seed: int) -> RunScore:
+        """Run the candidate on one run and score it."""
+        return self.judge(self.run_systems(systems, scenario, seed).metrics, scenario, seed)
 
-    def evaluate(self, systems: dict, runs) -> dict:
-        """Ratios and score on every run, with their means (no pruning)."""
-        per_run = []
-        for scenario, seed in runs:
-            _, m = self.run_systems(systems, scenario, seed)
-            r = self.ratios(m, scenario, seed)
-            per_run.append({"scenario": scenario, "seed": seed, **r, "score": self.score(r),
-                            **{k: v for k, v in m.items()}})
-        means = {g: float(np.mean([p[g] for p in per_run])) for g in (*GROUP_METRICS, "score")}
-        return {"runs": per_run, "mean": means}
+
+class Objective:
+    """Callable Optuna objective of a study config (one per worker process).
+
+    Single objective: the mean score over the training runs, each run's score reported with
+    a stable step id in a per-trial shuffled order so that a pruner may stop the trial; a
+    pruned trial returns the mean of the runs done so far and records ``n_runs``.
+    Multi-objective: the three mean group ratios.
+    """
+
+    def __init__(self, cfg, cache_dir=None, worker: int = 0, evaluator=None):
+        self.cfg = cfg
+        self.spaces = [ControllerSpace.from_config(c) for c in cfg.controllers]
+        self.evaluator = evaluator if evaluator is not None else Evaluator(cfg, cache_dir)
+        self.worker = worker
+        self.current = None       # number of the trial being run (or last run) here
+        self.last_error = None    # the exception that failed the last trial here
+        self._last_beat = -math.inf
+        # a heartbeat is one journal record: often enough for a reaper on another host
+        # (stale_after_s), not after every run
+        self._beat_every_s = min(HEARTBEAT_S, cfg.stale_after_s / 10.0)
+
+    def _beat(self, trial, force: bool = False):
+        now = time.time()
+        if force or now - self._last_beat >= self._beat_every_s:
+            trial.set_user_attr("heartbeat", now)
+            self._last_beat = now
+
+    def __call__(self, trial):
+        self.current, self.last_error = trial.number, None
+        try:
+            return self._run(trial)
+        except Exception as exc:
+            self.last_error = exc
+            raise
+
+    def _run(self, trial):
+        trial.set_user_attr("host", socket.gethostname())
+        trial.set_user_attr("pid", os.getpid())
+        trial.set_user_attr("worker", self.worker)
+        self._beat(trial, force=True)
+        systems = build_all(self.spaces, trial)
+        runs = list(enumerate(self.cfg.train))
+        np.random.default_rng(trial.number).shuffle(runs)
+        scored = []
+        for step, (scenario, seed) in runs:
+            scored.append(self.evaluator.score_systems(systems, scenario, seed))
+            self._beat(trial)
+            if not self.cfg.multi_objective:
+                trial.report(scored[-1].score, step=step)
+                if trial.should_prune():
+                    break
+        means = {g: float(np.mean([s.ratios[g] for s in scored])) for g in GROUP_METRICS}
+        trial.set_user_attr("n_runs", len(scored))
+        trial.set_user_attr("ratios", means)
+        if self.cfg.multi_objective:
+            return tuple(means[g] for g in GROUP_METRICS)
+        return float(np.mean([s.score for s in scored]))

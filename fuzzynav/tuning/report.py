@@ -25,7 +25,8 @@ from fuzzynav.errors import FuzzynavError
 from fuzzynav.fileio import staged, write_atomic
 from fuzzynav.tuning.evaluate import format_summary, run_table
 from fuzzynav.tuning.export import choose_trial, systems_of
-from fuzzynav.tuning.objective import Evaluator
+from fuzzynav.tuning.config import GROUP_METRICS
+from fuzzynav.tuning.objective import Evaluator, weighted_score
 
 plt = plots.plt
 
@@ -56,8 +57,7 @@ def _score(cfg, t) -> float:
     """A finished trial's single score (multi-objective: the weighted mean of its ratios)."""
     if not cfg.multi_objective:
         return t.value
-    w = [cfg.weights[g] for g in ("pos", "vel", "att")]
-    return float(np.dot(w, t.values) / sum(w))
+    return weighted_score(dict(zip(GROUP_METRICS, t.values)), cfg.weights)
 
 
 def _history(study, cfg, path):

@@ -1,5 +1,9 @@
 """Run a study: create it once, then one or more worker processes on the same storage.
 
+The parent first loads everything a trial needs -- the kernels (compiling them if the cache
+is cold), the training logs and the baseline's metrics on them -- and then, on Linux, forks
+its workers: they start warm, without importing the package, loading kernels or running the
+baseline again (on other platforms they start as new interpreters, :data:`WORKER_BOOT`).
 The parent supervises its workers: it polls every one of them (so a worker that dies is
 reaped at once and never lingers as a zombie), fails and re-enqueues the trial a dead worker
 left ``RUNNING`` (:func:`fuzzynav.tuning.study.reap_stale`), and starts a replacement while
@@ -8,17 +12,20 @@ repeated failed trials) is not restarted: the run ends with that error.
 """
 from __future__ import annotations
 
+import multiprocessing
 import os
 import signal
 import subprocess
 import sys
 import time
+import warnings
 
 from tqdm.auto import tqdm
 
 from fuzzynav.errors import FuzzynavError
+from fuzzynav.tuning.samplers import get_optimiser
 from fuzzynav.tuning.study import n_finished, open_study, reap_stale, run_worker
-from fuzzynav.tuning.warmup import warm_up
+from fuzzynav.tuning.warmup import compile_by_running, warm_up
 
 #: a worker is started with this program instead of ``python -m``, which would put the
 #: current directory first on its import path (a stray ``inspect.py`` there broke workers)
@@ -27,6 +34,9 @@ WORKER_BOOT = ("import sys\n"
                "    del sys.path[0]\n"
                "from fuzzynav.tuning.worker import main\n"
                "sys.exit(main())\n")
+#: workers are forked from the warm parent (Linux; macOS forks unsafely with some system
+#: libraries, Windows cannot)
+FORK = sys.platform.startswith("linux")
 #: replacements the parent starts for workers that died, per worker slot
 MAX_RESTARTS = 3
 #: the exit code of a worker that stopped on a user error (not restarted)
@@ -42,7 +52,40 @@ def worker_command(cfg, total, storage, index, cache_dir) -> list:
     return cmd
 
 
-def _spawn(cfg, total, storage, index, cache_dir):
+class ForkedWorker:
+    """A worker forked from this process, with the ``poll``/``kill``/``wait`` of a Popen."""
+
+    def __init__(self, cfg, total, storage, index, cache_dir, evaluator):
+        self._proc = multiprocessing.get_context("fork").Process(
+            target=_forked_main, args=(cfg, total, storage, index, cache_dir, evaluator),
+            daemon=True)  # (daemon: never outlives the parent)
+        self._proc.start()
+        self.pid = self._proc.pid
+
+    def poll(self):
+        """The exit code (negative: killed by that signal), None while it runs."""
+        return self._proc.exitcode
+
+    def kill(self):
+        self._proc.kill()
+
+    def wait(self):
+        self._proc.join()
+
+
+def _forked_main(cfg, total, storage, index, cache_dir, evaluator):
+    """A forked worker: :func:`run_worker` with the parent's warm evaluator."""
+    warnings.simplefilter("ignore")
+    try:
+        run_worker(cfg, total, storage, index, cache_dir, evaluator=evaluator)
+    except FuzzynavError as exc:
+        print(f"fuzzynav worker {index}: error: {exc}", file=sys.stderr)
+        sys.exit(USER_ERROR)
+
+
+def _spawn(cfg, total, storage, index, cache_dir, evaluator=None):
+    if FORK and evaluator is not None:
+        return ForkedWorker(cfg, total, storage, index, cache_dir, evaluator)
     return subprocess.Popen(worker_command(cfg, total, storage, index, cache_dir),
                             env=dict(os.environ, PYTHONWARNINGS="ignore"))
 
@@ -56,7 +99,8 @@ def _exit_text(code: int) -> str:
     return f"exit code {code}"
 
 
-def supervise(cfg, study, total, workers, storage=None, cache_dir=None, on_poll=None):
+def supervise(cfg, study, total, workers, storage=None, cache_dir=None, on_poll=None,
+              evaluator=None):
     """Run ``workers`` worker processes until they stop; restart the ones that die.
 
     Parameters
@@ -71,6 +115,8 @@ def supervise(cfg, study, total, workers, storage=None, cache_dir=None, on_poll=
         Passed to the workers.
     on_poll : callable, optional
         Called about twice a second (progress display).
+    evaluator : Evaluator, optional
+        The warm evaluator forked workers inherit (None: start new interpreters).
 
     Raises
     ------
@@ -78,7 +124,7 @@ def supervise(cfg, study, total, workers, storage=None, cache_dir=None, on_poll=
         A worker stopped on a user error, or workers kept dying, and the study is short of
         ``total``.
     """
-    procs = {i: _spawn(cfg, total, storage, i, cache_dir) for i in range(workers)}
+    procs = {i: _spawn(cfg, total, storage, i, cache_dir, evaluator) for i in range(workers)}
     restarts = dict.fromkeys(procs, 0)
     errors = []
     try:
@@ -97,7 +143,7 @@ def supervise(cfg, study, total, workers, storage=None, cache_dir=None, on_poll=
                     restarts[i] += 1
                     tqdm.write(f"fuzzynav: worker {i} {_exit_text(code)}; its trial will be "
                                "retried, worker restarted", file=sys.stderr)
-                    procs[i] = _spawn(cfg, total, storage, i, cache_dir)
+                    procs[i] = _spawn(cfg, total, storage, i, cache_dir, evaluator)
                 else:
                     errors.append((i, code))
             if on_poll is not None:
@@ -127,45 +173,38 @@ def run_study(cfg, trials=None, workers: int = 1, storage=None, cache_dir=None,
     storage : str, optional
         Optuna storage URL overriding the config's (``journal:PATH`` or an RDB URL).
     cache_dir : path, optional
-        Simulation cache shared by the workers (simulate the data before starting
-        several workers, or let the first trials do it).
+        Simulation cache shared by the workers (the training runs are simulated into it
+        here, before the workers start).
 
     Returns
     -------
     optuna.Study
     """
-    total = int(trials or cfg.trials)
+    total = get_optimiser(cfg.sampler).budget(cfg, int(trials or cfg.trials))
     if workers < 1:
         raise FuzzynavError(f"--workers must be >= 1, got {workers}")
     if workers > 1 and cfg.path is None:
         raise FuzzynavError("several workers need the study config as a file")
     study = open_study(cfg, storage, create=True)
     warm_up(cfg, cache_dir, progress)  # a cold cache compiles: say so, once, here
-    if cfg.sampler == "pso":
-        from fuzzynav.tuning.pso import run_pso
-
-        return run_pso(cfg, study, total, workers, storage, cache_dir, progress)
+    evaluator = warm_evaluator(cfg, cache_dir)  # what the (forked) workers start with
     start = n_finished(study)
     bar = tqdm(total=total, initial=min(start, total), disable=not progress, unit="trial",
                desc=cfg.name)
     if workers == 1:
         run_worker(cfg, total, storage, 0, cache_dir,
-                   progress=lambda n: (bar.update(min(n, total) - bar.n)))
+                   progress=lambda n: (bar.update(min(n, total) - bar.n)), evaluator=evaluator)
     else:
-        _prepare_cache(cfg, cache_dir)
         supervise(cfg, study, total, workers, storage, cache_dir,
-                  on_poll=lambda: bar.update(min(n_finished(study), total) - bar.n))
+                  on_poll=lambda: bar.update(min(n_finished(study), total) - bar.n),
+                  evaluator=evaluator)
     bar.update(min(n_finished(study), total) - bar.n)
     bar.close()
     return study
 
 
-def _prepare_cache(cfg, cache_dir):
-    """Simulate every training run once so that workers do not race to create the cache."""
-    from fuzzynav.sim.log import simulate
-    from fuzzynav.sim.scenario import load_scenario
-
-    scenarios = {}
-    for name, seed in cfg.train:
-        scenarios.setdefault(name, load_scenario(name))
-        simulate(scenarios[name], seed, cache_dir)
+def warm_evaluator(cfg, cache_dir=None):
+    """An :class:`~fuzzynav.tuning.objective.Evaluator` with every training log loaded
+    (simulated into the cache if missing, so workers never race to create it), the
+    baseline's metrics on each, and the kernels of a candidate's run loaded."""
+    return compile_by_running(cfg, cache_dir).prepare(cfg.train)

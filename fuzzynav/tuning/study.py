@@ -32,17 +32,20 @@ from optuna.trial import TrialState
 
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.tuning.config import GROUP_METRICS
-from fuzzynav.tuning.objective import Evaluator
+from fuzzynav.tuning.objective import Objective
+from fuzzynav.tuning.samplers import get_optimiser
 from fuzzynav.tuning.slots import TrialSlots
-from fuzzynav.tuning.space import ControllerSpace, build_all
 
 optuna.logging.set_verbosity(optuna.logging.WARNING)
 FINISHED = (TrialState.COMPLETE, TrialState.PRUNED)
 MAX_RETRIES = 2
 #: a worker gives up after this many failed trials in a row (a broken setup, not bad luck)
 MAX_FAILS_IN_ROW = 10
-#: user attributes a retried trial keeps (which swarm particle it is)
-_KEEP_ON_RETRY = ("pso_iteration", "particle")
+#: how often a worker whose sampler is not ready for a new trial looks again [s]
+READY_POLL_S = 0.05
+#: user attributes of a trial's run (its worker, results, retry count): a retry does not
+#: inherit them; it keeps every other one (a sampler's, e.g. which swarm particle it is)
+RUN_ATTRS = ("host", "pid", "worker", "heartbeat", "n_runs", "ratios", "retry_of", "retries")
 
 
 # -- storage, sampler, pruner ------------------------------------------------------------------
@@ -100,24 +103,16 @@ def sampler_seed(cfg, worker: int = 0, start: int = 0) -> int:
 
 
 def make_sampler(cfg, worker: int = 0, start: int = 0):
-    """The configured sampler, seeded by :func:`sampler_seed` (QMC: by the config's seed,
-    so that every worker and every resumed run continues one shared sequence)."""
-    seed = cfg.seed if cfg.sampler == "qmc" else sampler_seed(cfg, worker, start)
-    s = cfg.sampler
-    if s == "tpe" or s == "pso":  # pso drives the study itself; tpe is never asked then
-        return optuna.samplers.TPESampler(seed=seed, multivariate=True, group=True,
-                                          constant_liar=True, n_startup_trials=10)
-    if s == "random":
-        return optuna.samplers.RandomSampler(seed=seed)
-    if s == "qmc":
-        return optuna.samplers.QMCSampler(seed=seed, warn_independent_sampling=False)
-    if s == "cmaes":
-        return optuna.samplers.CmaEsSampler(seed=seed, warn_independent_sampling=False)
-    return optuna.samplers.NSGAIISampler(seed=seed)
+    """The configured optimiser's sampler, seeded by :func:`sampler_seed` (or by the
+    config's seed when the optimiser shares one sequence among workers and runs, QMC)."""
+    opt = get_optimiser(cfg.sampler)
+    return opt.make(cfg, cfg.seed if opt.shared_seed else sampler_seed(cfg, worker, start))
 
 
 def make_pruner(cfg):
-    if cfg.multi_objective or cfg.pruner == "none" or cfg.sampler == "pso":
+    """The configured pruner (none for multi-objective studies and for optimisers that
+    need every training run of a trial)."""
+    if cfg.multi_objective or cfg.pruner == "none" or not get_optimiser(cfg.sampler).pruning:
         return optuna.pruners.NopPruner()
     if cfg.pruner == "median":
         return optuna.pruners.MedianPruner(n_startup_trials=5, n_warmup_steps=2)
@@ -216,70 +211,16 @@ def reap_stale(study, stale_after_s: float) -> int:
         n += 1
         retries = int(t.user_attrs.get("retries", 0))
         if retries < MAX_RETRIES and t.params:
-            keep = {k: t.user_attrs[k] for k in _KEEP_ON_RETRY if k in t.user_attrs}
+            keep = {k: v for k, v in t.user_attrs.items() if k not in RUN_ATTRS}
             study.enqueue_trial(t.params, user_attrs={**keep, "retry_of": t.number,
                                                       "retries": retries + 1})
     return n
 
 
-# -- the objective -------------------------------------------------------------------------------
-class Objective:
-    """Callable Optuna objective of a study config (one per worker process)."""
-
-    def __init__(self, cfg, cache_dir=None, worker: int = 0):
-        self.cfg = cfg
-        self.spaces = [ControllerSpace.from_config(c) for c in cfg.controllers]
-        self.evaluator = Evaluator(cfg, cache_dir)
-        self.worker = worker
-        self.current = None       # number of the trial being run (or last run) here
-        self.last_error = None    # the exception that failed the last trial here
-
-    def _beat(self, trial):
-        trial.set_user_attr("heartbeat", time.time())
-
-    def __call__(self, trial):
-        self.current, self.last_error = trial.number, None
-        try:
-            return self._run(trial)
-        except Exception as exc:
-            self.last_error = exc
-            raise
-
-    def _run(self, trial):
-        trial.set_user_attr("host", socket.gethostname())
-        trial.set_user_attr("pid", os.getpid())
-        trial.set_user_attr("worker", self.worker)
-        self._beat(trial)
-        systems = build_all(self.spaces, trial)
-        runs = list(enumerate(self.cfg.train))
-        np.random.default_rng(trial.number).shuffle(runs)
-        scores, groups = [], {g: [] for g in GROUP_METRICS}
-        for step, (scenario, seed) in runs:
-            _, m = self.evaluator.run_systems(systems, scenario, seed)
-            r = self.evaluator.ratios(m, scenario, seed)
-            for g in GROUP_METRICS:
-                groups[g].append(r[g])
-            scores.append(self.evaluator.score(r))
-            self._beat(trial)
-            if not self.cfg.multi_objective:
-                trial.report(scores[-1], step=step)
-                if trial.should_prune():
-                    break
-        means = {g: float(np.mean(v)) for g, v in groups.items()}
-        trial.set_user_attr("n_runs", len(scores))
-        trial.set_user_attr("ratios", means)
-        if self.cfg.multi_objective:
-            return tuple(means[g] for g in GROUP_METRICS)
-        return float(np.mean(scores))
-
-
 def _room(study, cfg, n_total: int) -> bool:
-    """Whether another trial may start (finished + running < total; PSO: one is queued)."""
+    """Whether another trial may start (finished + running < total)."""
     busy = len(study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)))
-    if n_finished(study) + busy >= n_total:
-        return False
-    return cfg.sampler != "pso" or bool(study.get_trials(deepcopy=False,
-                                                         states=(TrialState.WAITING,)))
+    return n_finished(study) + busy < n_total
 
 
 def _run_one(study, objective, slots) -> TrialState:
@@ -305,11 +246,13 @@ def _state(study, number: int) -> TrialState:
 
 
 def run_worker(cfg, n_total: int, storage_url=None, worker: int = 0, cache_dir=None,
-               progress=None) -> int:
+               progress=None, evaluator=None) -> int:
     """Run trials until the study has ``n_total`` finished ones; returns trials run here.
 
     Trials running in other workers count towards the total, so parallel workers do not
-    overshoot it; a PSO study only runs the trials the swarm enqueued.
+    overshoot it (:func:`fuzzynav.tuning.run.run_study` rounds the total to what the
+    optimiser runs: whole swarms for PSO).  ``evaluator``: a warm
+    :class:`~fuzzynav.tuning.objective.Evaluator` to use (logs, baselines loaded).
 
     Raises
     ------
@@ -318,7 +261,7 @@ def run_worker(cfg, n_total: int, storage_url=None, worker: int = 0, cache_dir=N
     """
     url = storage_url or cfg.storage_url
     study = open_study(cfg, url, worker)
-    objective = Objective(cfg, cache_dir, worker)
+    objective = Objective(cfg, cache_dir, worker, evaluator)
     slots = TrialSlots(with_driver(url), cfg.name)
     try:
         return _trials_until(study, cfg, n_total, objective, slots, progress)
@@ -327,6 +270,7 @@ def run_worker(cfg, n_total: int, storage_url=None, worker: int = 0, cache_dir=N
 
 
 def _trials_until(study, cfg, n_total, objective, slots, progress) -> int:
+    ready = get_optimiser(cfg.sampler).ready
     done = fails = 0
     while True:
         slots.acquire()
@@ -334,6 +278,10 @@ def _trials_until(study, cfg, n_total, objective, slots, progress) -> int:
             reap_stale(study, cfg.stale_after_s)
             if not _room(study, cfg, n_total):
                 return done
+            if not ready(study, cfg):  # let the other workers finish what it waits for
+                slots.release()
+                time.sleep(READY_POLL_S)
+                continue
             state = _run_one(study, objective, slots)
         finally:
             slots.release()

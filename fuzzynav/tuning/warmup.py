@@ -39,17 +39,18 @@ def is_cold(cache=None) -> bool:
     return cache is not None and compiled_count(cache) == 0
 
 
-def compile_by_running(cfg, cache_dir=None) -> None:
+def compile_by_running(cfg, cache_dir=None):
     """Run one candidate (the templates' own rules) and the baseline on the first training
-    run: the code path of every trial, so every kernel a trial needs gets compiled."""
+    run: the code path of every trial, so every kernel a trial needs gets compiled (or
+    loaded from the cache).  Returns the :class:`~fuzzynav.tuning.objective.Evaluator`
+    used, its log and baseline of that run kept."""
     from fuzzynav.fuzzy import load_fis
     from fuzzynav.tuning.objective import Evaluator
 
-    ev = Evaluator(cfg, cache_dir)
-    scenario, seed = cfg.train[0]
     systems = {c.name: load_fis(c.template) for c in cfg.controllers}
-    _, metrics = ev.run_systems(systems, scenario, seed)
-    ev.ratios(metrics, scenario, seed)
+    ev = Evaluator(cfg, cache_dir)
+    ev.score_systems(systems, *cfg.train[0])
+    return ev
 
 
 @contextmanager

@@ -6,6 +6,7 @@ print as a plain, confident number.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from types import SimpleNamespace
 
 import pytest
@@ -40,10 +41,9 @@ class FakeEvaluator:
         return self._metrics("ekf", seed)
 
     def run_systems(self, systems, scenario, seed):
-        return None, self._metrics("tuned", seed)
+        return SimpleNamespace(metrics=self._metrics("tuned", seed))
 
-    ratios = Evaluator.ratios
-    score = Evaluator.score
+    judge = Evaluator.judge
 
 
 @pytest.fixture
@@ -79,8 +79,9 @@ def test_a_diverged_run_is_refused_naming_filter_scenario_and_seed(compared, bad
 
 def _nan_candidate(run_systems):
     def run(self, systems, scenario, seed):
-        res, m = run_systems(self, systems, scenario, seed)
-        return res, {**m, "rms_pos_m": math.nan} if seed == 100 else m
+        out = run_systems(self, systems, scenario, seed)
+        return replace(out, metrics={**out.metrics, "rms_pos_m": math.nan}) if seed == 100 \
+            else out
     return run
 
 

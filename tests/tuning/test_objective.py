@@ -11,9 +11,8 @@ import pytest
 from fuzzynav.experiment import run_on_log
 from fuzzynav.fuzzy import load_fis
 from fuzzynav.tuning.config import load_study_config
-from fuzzynav.tuning.objective import FAILED_RATIO, Evaluator
+from fuzzynav.tuning.objective import FAILED_RATIO, Evaluator, Objective, score_metrics
 from fuzzynav.tuning.space import ControllerSpace, build_all
-from fuzzynav.tuning.study import Objective
 from tests.tuning.studies import ATT, ATT_CONTROLLER, BASE, GPS, TINY, write_study
 
 optuna.logging.set_verbosity(optuna.logging.ERROR)
@@ -51,8 +50,7 @@ def test_ratios_are_the_named_filters_metrics_divided(cfg, sim_cache):
     ev = Evaluator(cfg, sim_cache)
     systems = {"gps": load_fis(GPS), "att": load_fis(ATT)}
     for scenario, seed in cfg.train[:2]:
-        _, m = ev.run_systems(systems, scenario, seed)
-        r = ev.ratios(m, scenario, seed)
+        r = ev.score_systems(systems, scenario, seed).ratios
         log = ev.log(scenario, seed)
         fakf = run_on_log(log, "fakf", {"rules": [str(GPS), str(ATT)]}).metrics
         ekf = run_on_log(log, "ekf").metrics
@@ -75,11 +73,11 @@ def test_a_run_that_loses_its_covariance_scores_the_failed_ratio(cfg, sim_cache)
     cfg_wide = dataclasses.replace(cfg, controllers=(gps, cfg.controllers[1]))
     obj = Objective(cfg_wide, sim_cache)
     systems = build_all(obj.spaces, optuna.trial.FixedTrial(params))
-    res, m = obj.evaluator.run_systems(systems, str(TINY), 0)
-    assert not res.ok and "covariance" in res.status
-    r = obj.evaluator.ratios(m, str(TINY), 0)
-    assert r == {"pos": FAILED_RATIO, "vel": FAILED_RATIO, "att": FAILED_RATIO}
-    assert obj.evaluator.score(r) == FAILED_RATIO
+    out = obj.evaluator.run_systems(systems, str(TINY), 0)
+    assert not out.result.ok and "covariance" in out.result.status
+    scored = obj.evaluator.judge(out.metrics, str(TINY), 0)
+    assert scored.ratios == {"pos": FAILED_RATIO, "vel": FAILED_RATIO, "att": FAILED_RATIO}
+    assert scored.score == FAILED_RATIO
 
 
 def test_ratio_guards(cfg, sim_cache):
@@ -87,19 +85,25 @@ def test_ratio_guards(cfg, sim_cache):
     scenario, seed = cfg.train[0]
     base = ev.baseline(scenario, seed)
     ok = {k: 2.0 * base[k] for k in ("rms_pos_m", "rms_vel_mps", "rms_att_deg")}
-    assert ev.ratios(dict(ok, completed=1.0), scenario, seed) == \
+    def ratios(metrics):
+        return ev.judge(metrics, scenario, seed).ratios
+
+    assert ratios(dict(ok, completed=1.0)) == \
         {"pos": pytest.approx(2.0), "vel": pytest.approx(2.0), "att": pytest.approx(2.0)}
-    assert set(ev.ratios(dict(ok, completed=0.0), scenario, seed).values()) == {FAILED_RATIO}
+    assert set(ratios(dict(ok, completed=0.0)).values()) == {FAILED_RATIO}
     nan = dict(ok, rms_vel_mps=math.nan)
-    assert ev.ratios(nan, scenario, seed)["vel"] == FAILED_RATIO
-    assert ev.ratios(nan, scenario, seed)["pos"] == pytest.approx(2.0)
+    assert ratios(nan)["vel"] == FAILED_RATIO
+    assert ratios(nan)["pos"] == pytest.approx(2.0)
 
 
 def test_the_score_is_the_weighted_mean_of_the_ratios(tmp_path, sim_cache):
     cfg = load_study_config(write_study(tmp_path, objective={
         "weights": {"pos": 2.0, "vel": 0.0, "att": 1.0}}))
-    ev = Evaluator(cfg, sim_cache)
-    assert ev.score({"pos": 0.5, "vel": 100.0, "att": 2.0}) == pytest.approx((2 * 0.5 + 2.0) / 3)
+    scenario, seed = cfg.train[0]
+    base = Evaluator(cfg, sim_cache).baseline(scenario, seed)
+    metrics = {"rms_pos_m": 0.5 * base["rms_pos_m"], "rms_vel_mps": 100 * base["rms_vel_mps"],
+               "rms_att_deg": 2.0 * base["rms_att_deg"]}
+    assert score_metrics(metrics, base, cfg.weights).score == pytest.approx((2 * 0.5 + 2.0) / 3)
 
 
 class PruneAfter(optuna.pruners.BasePruner):
@@ -127,8 +131,7 @@ def test_a_pruned_trial_returns_the_mean_of_its_runs_and_records_how_many(cfg, s
         scores = []
         for step, value in t.intermediate_values.items():
             scenario, seed = cfg.train[step]  # the step id names the training run
-            _, m = ev.run_systems(systems, scenario, seed)
-            scores.append(ev.score(ev.ratios(m, scenario, seed)))
+            scores.append(ev.score_systems(systems, scenario, seed).score)
             assert value == pytest.approx(scores[-1], rel=1e-12)
         assert t.value == pytest.approx(np.mean(scores), rel=1e-12)
         seen_orders.add(tuple(t.intermediate_values))

@@ -5,7 +5,9 @@ from __future__ import annotations
 import socket
 import subprocess
 import sys
+import threading
 import time
+from types import SimpleNamespace
 
 import numpy as np
 import optuna
@@ -64,11 +66,20 @@ def test_the_inertia_schedule_is_linear_from_start_to_end(tmp_path):
                                np.linspace(0.9, 0.4, 6), rtol=0, atol=1e-15)
 
 
-def test_without_attraction_each_step_is_the_last_one_times_the_inertia(tmp_path, bowl):
+def test_one_inertia_number_is_a_constant_weight(tmp_path):
+    cfg = pso_config(tmp_path, iterations=6, inertia=0.7)
+    assert cfg.pso.inertia == (0.7, 0.7)
+    assert [pso.inertia(cfg, k) for k in range(6)] == [0.7] * 6
+
+
+@pytest.mark.parametrize("inertia, w", [([0.95, 0.55], np.linspace(0.95, 0.55, 6)),
+                                        (0.7, np.full(6, 0.7))])
+def test_without_attraction_each_step_is_the_last_one_times_the_inertia(tmp_path, bowl,
+                                                                        inertia, w):
     """c1 = c2 = 0: v_k+1 = w_k v_k, so the displacements of every coordinate that was not
     clipped at 0 or 1 shrink by exactly the scheduled weights -- the configured schedule
-    over 6 iterations, also when --trials stops the run after 5."""
-    cfg = pso_config(tmp_path, particles=5, iterations=6, inertia=[0.95, 0.55], c1=0.0, c2=0.0)
+    over 6 iterations, also when --trials stops the run after 5; or the constant weight."""
+    cfg = pso_config(tmp_path, particles=5, iterations=6, inertia=inertia, c1=0.0, c2=0.0)
     study = run_study(cfg, trials=25, progress=False)
     its = by_iteration(study)
     floats = [k for k, d in its[0][0].distributions.items()
@@ -81,7 +92,6 @@ def test_without_attraction_each_step_is_the_last_one_times_the_inertia(tmp_path
                 d = np.diff(u)
                 for k in range(1, 4):
                     ratios[k].append(d[k] / d[k - 1])
-    w = np.linspace(0.95, 0.55, 6)
     for k in range(1, 4):
         assert len(ratios[k]) > 10
         np.testing.assert_allclose(ratios[k], w[k], rtol=1e-6)
@@ -139,31 +149,64 @@ def test_resuming_reproduces_the_swarm(tmp_path, bowl):
     assert [t.value for t in resumed.trials] == [t.value for t in whole.trials]
 
 
-def test_resuming_an_interrupted_swarm_finishes_it_without_repeating(tmp_path, bowl,
-                                                                     monkeypatch):
+def test_resuming_an_interrupted_swarm_finishes_it_without_repeating(tmp_path, bowl):
     whole = run_study(pso_config(tmp_path, name="whole"), progress=False)
     cfg = pso_config(tmp_path, name="cut")
-    real = study_mod.run_worker
-    calls = []
-
-    def stop_during_the_second_swarm(cfg_, total, *args, **kw):
-        calls.append(total)
-        if len(calls) == 2:  # evaluate one particle of the second swarm, then "crash"
-            real(cfg_, total - 3, *args, **kw)
-            raise KeyboardInterrupt
-        return real(cfg_, total, *args, **kw)
-
-    monkeypatch.setattr(study_mod, "run_worker", stop_during_the_second_swarm)
-    with pytest.raises(KeyboardInterrupt):
-        run_study(cfg, progress=False)
-    st = open_study(cfg)
-    assert sorted(t.state.name for t in st.trials) == ["COMPLETE"] * 5 + ["WAITING"] * 3
-    monkeypatch.setattr(study_mod, "run_worker", real)
+    open_study(cfg, create=True)
+    study_mod.run_worker(cfg, 5)  # the first swarm and one particle of the second, then stop
+    assert [t.state for t in open_study(cfg).trials] == [TrialState.COMPLETE] * 5
     resumed = run_study(cfg, progress=False)
     assert [t.state for t in resumed.trials] == [TrialState.COMPLETE] * 12
-    key = lambda t: (t.user_attrs["pso_iteration"], t.user_attrs["particle"])  # noqa: E731
-    assert sorted((key(t), t.params) for t in resumed.trials) == \
-        sorted((key(t), t.params) for t in whole.trials)
+    assert sorted((key(t), t.params, t.value) for t in resumed.trials) == \
+        sorted((key(t), t.params, t.value) for t in whole.trials)
+
+
+def key(t):
+    """A trial's place in the swarm."""
+    return t.user_attrs[pso.ITERATION], t.user_attrs[pso.PARTICLE]
+
+
+def test_two_workers_evaluate_the_same_swarm_as_one(tmp_path, bowl, monkeypatch):
+    """Two workers (threads here, each with its own storage handle and slot lock) share the
+    swarm: every iteration waits for the previous one, so the particles, their parameters and
+    values are those of one worker, though the trials interleave."""
+    real = Objective._run
+
+    def slow(self, trial):  # uneven durations, so the workers overtake each other
+        time.sleep(0.01 * (trial.number % 3))
+        return real(self, trial)
+
+    monkeypatch.setattr(Objective, "_run", slow)
+    one = run_study(pso_config(tmp_path, name="one"), progress=False)
+    cfg = pso_config(tmp_path, name="two")
+    open_study(cfg, create=True)
+    ran = {}
+    threads = [threading.Thread(target=lambda w: ran.update({w: study_mod.run_worker(
+        cfg, 12, None, w)}), args=(w,)) for w in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    two = open_study(cfg).trials
+    assert sum(ran.values()) == 12 and min(ran.values()) > 0  # both workers took particles
+    assert [t.state for t in two] == [TrialState.COMPLETE] * 12
+    assert sorted((key(t), t.params, t.value) for t in two) == \
+        sorted((key(t), t.params, t.value) for t in one.trials)
+
+
+def test_an_iteration_starts_only_when_the_one_before_has_every_value():
+    def trial(it, i, state=TrialState.COMPLETE):
+        return SimpleNamespace(user_attrs={pso.ITERATION: it, pso.PARTICLE: i}, state=state)
+
+    done = [trial(0, i) for i in range(3)]
+    assert pso.next_slot(pso.slots(done), 3) == ((1, 0), True)
+    assert pso.next_slot(pso.slots(done[:2]), 3) == ((0, 2), True)
+    running = done[:2] + [trial(0, 2, TrialState.RUNNING)]
+    assert pso.next_slot(pso.slots(running), 3) == ((1, 0), False)
+    failed = done[:2] + [trial(0, 2, TrialState.FAIL)]  # failed for good: counts as inf
+    assert pso.next_slot(pso.slots(failed), 3) == ((1, 0), True)
+    retried = failed + [trial(0, 2, TrialState.WAITING)]
+    assert pso.next_slot(pso.slots(retried), 3) == ((1, 0), False)
 
 
 def test_resuming_with_another_swarm_config_is_refused(tmp_path, bowl):
