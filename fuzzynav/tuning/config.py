@@ -150,12 +150,12 @@ def _runs(t: Table, here: Path) -> tuple:
 
 
 def _filter_name(t: Table, key: str, name) -> str:
-    from fuzzynav.filters.named import get_filter
+    from fuzzynav.filters.named import get_filter, parse_filter_spec
 
     if not isinstance(name, str):
         raise t.error(key, f"must be a filter name, got {brief(name)}")
     try:
-        get_filter(name)
+        get_filter(parse_filter_spec(name)[0])  # NAME@FILE: a tuned baseline's parameters
     except FuzzynavError as exc:
         raise t.error(key, str(exc)) from None
     return name
