@@ -264,8 +264,10 @@ def load_study_config(path) -> StudyConfig:
         return study_config_from_dict(doc, path)
 
 
-def study_config_from_dict(doc: dict, path: Path | None = None) -> StudyConfig:
-    """Build a :class:`StudyConfig` from a parsed TOML document."""
+def study_config_from_dict(doc: dict, path: Path | None = None,
+                           need_controllers: bool = True) -> StudyConfig:
+    """Build a :class:`StudyConfig` from a parsed TOML document (a baseline study,
+    :mod:`fuzzynav.tuning.baselines`, has no controllers: ``need_controllers=False``)."""
     top = Table(doc)
     here = path.parent if path is not None else Path.cwd()
     name = top.string("name", path.stem if path is not None else "study")
@@ -316,8 +318,8 @@ def study_config_from_dict(doc: dict, path: Path | None = None) -> StudyConfig:
         raise ob.error("t_start_s", f"{t_start:g} s is at or after the end of the shortest "
                                     f"run ({min(shortest, shortest_test):g} s): nothing "
                                     "would be scored")
-    ctrls = tuple(_controller(c, here) for c in top.tables("controllers"))
-    if not ctrls:
+    ctrls = tuple(_controller(c, here) for c in top.tables("controllers", need_controllers))
+    if not ctrls and need_controllers:
         raise top.error("controllers", "a study needs at least one [[controllers]] table")
     if len({c.name for c in ctrls}) != len(ctrls):
         raise top.error("controllers", "controller names must be unique")
