@@ -15,8 +15,9 @@ file :data:`DEFAULT_PARAMS` is looked up like a rule file (``rules/``).
   ARW, ``q_vel`` on the VRW, ``q_gyro_bias`` / ``q_accel_bias`` on the bias random walks;
   variance factors) and of R per measurement channel (``r_<channel>``);
 * ``sage-husa-tuned`` (``b``, ``floor``, ``cap``), ``vb-tuned`` (``rho``, ``iterations``),
-  ``huber-tuned`` (``gamma``), ``strong-tracking-tuned`` (``rho``, ``beta``);
-* ``strong-tracking`` -- Zhou's filter with its textbook constants (rho 0.95, beta 1);
+  ``huber-tuned`` (``gamma``), ``strong-tracking-tuned`` (``rho``, ``beta``, ``lam_max``);
+* ``strong-tracking`` -- Zhou's filter with its textbook constants (rho 0.95, beta 1, no
+  cap; it diverges on the paper-000 runs, see ``docs/science.md``);
 * ``als`` -- the EKF with the constant Q and R multipliers the autocovariance
   least-squares estimate gave on the training runs (same keys as ``ekf-tuned``).
 """
@@ -115,9 +116,9 @@ def hqh_per_channel(cfg, data) -> dict:
     return out
 
 
-def _strong_tracking(ctx, rho: float, beta: float) -> FilterSetup:
+def _strong_tracking(ctx, rho: float, beta: float, lam_max: float = math.inf) -> FilterSetup:
     cfg = _base(ctx)
-    return FilterSetup(cfg, {nm: StrongTracking(rho, beta, hqh=hqh_per_channel(cfg, d))
+    return FilterSetup(cfg, {nm: StrongTracking(rho, beta, lam_max, hqh=hqh_per_channel(cfg, d))
                              for nm, d in ctx.sensors.items()})
 
 
@@ -140,7 +141,8 @@ TUNED = {
     "strong-tracking-tuned": ("Zhou's strong tracking with rho and beta tuned by a "
                               "baseline study",
                               lambda ctx, p: _strong_tracking(ctx, p.get("rho", 0.95),
-                                                              p.get("beta", 1.0))),
+                                                              p.get("beta", 1.0),
+                                                              p.get("lam_max", math.inf))),
     "als": ("EKF with constant Q and R from autocovariance least squares on training runs",
             scaled_noise_setup),
 }
