@@ -9,7 +9,8 @@ training runs as a fuzzy study and writes the best parameters to a JSON file::
                  "sage-husa-tuned": {"b": 0.97, "floor": 0.2, "cap": 40.0}, ...}}
 
 The filters here read it: ``ekf-tuned@FILE`` (or the option ``params``); without one, the
-file :data:`DEFAULT_PARAMS` is looked up like a rule file (``rules/``).
+file :data:`DEFAULT_PARAMS` is looked up in ``./studies`` and then the checkout's
+``studies/`` (see :func:`find_params_file`).
 
 * ``ekf-tuned`` -- constant multipliers of the process-noise densities (``q_att`` on the
   ARW, ``q_vel`` on the VRW, ``q_gyro_bias`` / ``q_accel_bias`` on the bias random walks;
@@ -30,12 +31,11 @@ from pathlib import Path
 import numpy as np
 
 from fuzzynav import units
-from fuzzynav.errors import InputFileError
+from fuzzynav.errors import DataMissingError, InputFileError
 from fuzzynav.filters import measurements
 from fuzzynav.filters.adaptation.classical import (ConstantScale, Huber, SageHusa,
                                                    VariationalBayes)
 from fuzzynav.filters.adaptation.strong_tracking import StrongTracking
-from fuzzynav.filters.catalog import find_rule_file
 from fuzzynav.filters.named import FilterSetup, config_from_imu, config_overrides, \
     register_filter
 
@@ -51,9 +51,24 @@ def _base(ctx):
     return config_from_imu(ctx.imu_noise, **config_overrides(ctx.options))
 
 
+def find_params_file(name) -> Path:
+    """A tuned-parameter file by path, or by file name in ``./studies`` or the checkout's
+    ``studies/`` (where the baseline studies write them)."""
+    p = Path(name)
+    if p.is_file():
+        return p
+    if p.parent == Path("."):
+        for d in (Path.cwd() / "studies", Path(__file__).resolve().parents[2] / "studies"):
+            if (d / p.name).is_file():
+                return d / p.name
+    raise DataMissingError(f"{name}: tuned-parameter file not found (run the baseline study "
+                           "that writes it, e.g. fuzzynav study run "
+                           "studies/paper000_baselines.toml)")
+
+
 def read_params(path) -> dict:
     """The ``filters`` table of a tuned-parameter file (checked: positive finite numbers)."""
-    path = find_rule_file(path)
+    path = find_params_file(path)
     try:
         doc = json.loads(Path(path).read_text())
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:

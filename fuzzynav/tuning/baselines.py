@@ -6,7 +6,7 @@ tables of a fuzzy study (``docs/studies.md``) and, instead of ``[[controllers]]`
     [baselines]
     tune = ["ekf-tuned", "sage-husa-tuned", "vb-tuned", "huber-tuned",
             "strong-tracking-tuned", "als"]
-    out = "../rules/paper000_baselines.json"     # relative to the study file
+    out = "paper000_baselines.json"     # relative to the study file
 
 Each tuned filter (:data:`fuzzynav.filters.baselines.TUNED`) gets its own Optuna study
 ``<name>.<filter>`` in the same storage, with the configured sampler, pruner and number of
