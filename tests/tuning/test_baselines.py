@@ -80,3 +80,35 @@ def test_als_recovers_the_unreported_gnss_noise_of_a_training_run(tmp_path):
     got = run_scales(log)
     assert got["pos"] == pytest.approx(truth, rel=0.15)
     assert got["vel"] == pytest.approx(truth, rel=0.15)
+
+
+def _cli(capsys, *argv):
+    from fuzzynav.cli import main
+
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_study_run_and_report_accept_a_baseline_study(tmp_path, capsys):
+    p = tmp_path / "b.toml"
+    p.write_text(TINY.format(tune='["huber-tuned"]'))
+    cache = tmp_path / "cache"
+    code, out, _ = _cli(capsys, "study", "run", p, "--trials", 1, "--no-summary",
+                        "--cache", cache)
+    assert code == 0 and (tmp_path / "tuned.json").is_file()
+    code, out, _ = _cli(capsys, "study", "report", p, "--cache", cache,
+                        "--out", tmp_path / "rep")
+    text = (tmp_path / "rep" / "report.md").read_text()
+    assert code == 0 and "huber-tuned" in text and "held-out" in text
+    # the named filter reads the file written: NAME@FILE on the command line
+    code, out, err = _cli(capsys, "run", "paper000", "--filter",
+                          f"huber-tuned@{tmp_path / 'tuned.json'}", "--cache", cache)
+    assert code == 0, err
+
+
+def test_a_bad_baseline_study_is_one_line(tmp_path, capsys):
+    p = tmp_path / "b.toml"
+    p.write_text(TINY.format(tune='["nope"]'))
+    code, _, err = _cli(capsys, "study", "run", p)
+    assert code == 2 and err.count("\n") == 1 and "baselines.tune" in err
