@@ -14,33 +14,22 @@ from __future__ import annotations
 import numba as nb
 
 from fuzzynav.filters.adaptation import ADAPT_SIG, register
-from fuzzynav.filters.adaptation.fuzzy_common import evaluate, scalars
+from fuzzynav.filters.adaptation.fuzzy_common import scalars
 from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
-from fuzzynav.filters.adaptation.r_scaling import S_MAX, S_MIN
+from fuzzynav.filters.adaptation.r_scaling import r_step
 
 #: bounds of the process-noise level
 Q_MIN, Q_MAX = 1e-2, 1e2
 #: the free ``ip`` header slot holding the q output's index (-1: none)
 IP_QOUT = 6
-IP_ROUT = 4
 
 
 @nb.njit(ADAPT_SIG, cache=True)
 def rq_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
+    status, x, y, s, t = r_step(fp, ip, st, r, HPH, R, chan, m)
     sc = scalars(st)
-    if sc[0] == 0.0:
-        sc[0], sc[1] = 1.0, 1.0
-    s = sc[0]
-    for i in range(m):  # the statistics see the running adapted R
-        R[i] *= s
-    status, x, y = evaluate(fp, ip, st, r, HPH, R, chan, m)
-    for i in range(m):
-        R[i] /= s
-    t = y[ip[IP_ROUT]]
-    if not t > 0.0:
-        t = 1.0
-    s = min(max(s * t, S_MIN), S_MAX)
-    sc[0] = s
+    if sc[1] == 0.0:  # the process-noise level starts nominal
+        sc[1] = 1.0
     q = sc[1]
     if ip[IP_QOUT] >= 0:
         qn = y[ip[IP_QOUT]]
