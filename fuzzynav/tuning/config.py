@@ -217,8 +217,9 @@ def _controller(t: Table, here: Path) -> ControllerConfig:
             if isinstance(counts, int) and not isinstance(counts, bool):
                 counts = [counts]
             if not isinstance(counts, list) or not counts or not all(
-                    isinstance(c, int) and not isinstance(c, bool) and 2 <= c <= 9 for c in counts):
-                raise pt.error(var, "must be a term count in 2..9 or an array of them")
+                    isinstance(c, int) and not isinstance(c, bool) and 1 <= c <= 9 for c in counts):
+                raise pt.error(var, "must be a term count in 2..9 (or 1 on an input, "
+                                    "which switches it off) or an array of them")
             parts[var] = tuple(sorted(set(counts)))
     c = ControllerConfig(name=name, template=tmpl,
                          tune=t.string("tune", "both", choices=TUNE_MODES),
