@@ -14,7 +14,7 @@ from __future__ import annotations
 import numba as nb
 
 from fuzzynav.filters.adaptation import ADAPT_SIG, register
-from fuzzynav.filters.adaptation.fuzzy_common import scalars
+from fuzzynav.filters.adaptation.fuzzy_common import log_inputs, scalars
 from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
 from fuzzynav.filters.adaptation.r_scaling import r_step
 
@@ -40,8 +40,7 @@ def rq_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
     for i in range(m):
         out[2 + i] = s
     diag[0], diag[1], diag[2] = s, t, q
-    if x.size > 0:
-        diag[3] = x[0]
+    log_inputs(diag, 3, x)
     return status
 
 
