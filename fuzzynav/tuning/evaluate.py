@@ -43,8 +43,9 @@ def run_table(evaluator, systems: dict, runs, compare=()) -> pd.DataFrame:
         for name in compare:
             try:
                 base_name, own = parse_filter_spec(name)  # NAME@FILE: tuned parameters
-                outcomes[name] = run_on_log(log, base_name, own,
-                                            t_start_s=evaluator.config.t_start_s).metrics
+                kw = {"options": own} if own else {}
+                outcomes[name] = run_on_log(log, base_name, t_start_s=evaluator.config.t_start_s,
+                                            **kw).metrics
             except Exception as exc:  # a baseline that cannot run here is reported, not fatal
                 outcomes[name] = {"error": str(exc)}
         for name, m in outcomes.items():
