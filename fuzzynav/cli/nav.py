@@ -140,7 +140,7 @@ def check_rules(args, filters, option: str) -> None:
     takers = ", ".join(f.name for f in list_filters() if f.takes_rules)
     specs = [parse_filter_spec(f) for f in filters]
     for spec, (name, own) in zip(filters, specs):
-        if own and not get_filter(name).takes_rules:
+        if own.get("rules") and not get_filter(name).takes_rules:
             raise FuzzynavError(f"{option} {spec}: filter {name!r} takes no rule files "
                                 f"(filters that do: {takers})")
     if args.rules and not any(get_filter(name).takes_rules for name, _ in specs):

@@ -56,9 +56,22 @@ def _open(cfg, args):
     return open_study(cfg, args.storage)  # a missing study: FuzzynavError, no file created
 
 
+def _baseline_study(args):
+    """The ``run`` / ``report`` module of a baseline study file, or None (a fuzzy study)."""
+    from fuzzynav.tuning.baselines import is_baseline_config
+
+    if not is_baseline_config(args.config):
+        return None
+    from fuzzynav.tuning import baseline_report
+
+    return baseline_report
+
+
 def _cmd_run(args) -> int:
     from fuzzynav.tuning.warmup import compile_by_running, compiling
 
+    if _baseline_study(args) is not None:
+        return _baseline_study(args).cmd_run(args)
     check_count("--trials", args.trials)
     check_count("--workers", args.workers, hi=MAX_WORKERS)
     with compiling() as cold:  # a cold kernel cache: loading the config already compiles
@@ -111,6 +124,8 @@ def _cmd_export(args) -> int:
 def _cmd_report(args) -> int:
     from fuzzynav.tuning.report import write_report
 
+    if _baseline_study(args) is not None:
+        return _baseline_study(args).cmd_report(args)
     cfg = _load(args)
     out = args.out or (Path(args.config).parent / f"{cfg.name}_report")
     path = write_report(cfg, _open(cfg, args), out, args.cache, evaluate=not args.no_eval)

@@ -83,12 +83,15 @@ class NamedFilter:
     description: str
     make: Callable
     takes_rules: bool = False  # reads rule files (``rules`` option): others refuse them
+    takes_params: bool = False  # ``NAME@FILE`` names a tuned-parameter file (``params``)
 
 
-FILTERS = Registry("filter", "fuzzynav.filters", ("catalog", "subsets", "bank_named"))
+FILTERS = Registry("filter", "fuzzynav.filters", ("catalog", "subsets", "bank_named",
+                                                   "baselines"))
 
 
-def register_filter(name: str, description: str, takes_rules: bool = False):
+def register_filter(name: str, description: str, takes_rules: bool = False,
+                    takes_params: bool = False):
     """Decorator registering ``make(context) -> FilterSetup`` under ``name``.
 
     Every named filter takes the option ``sensors`` (sensor names or kinds): it then sees
@@ -96,7 +99,8 @@ def register_filter(name: str, description: str, takes_rules: bool = False):
     """
 
     def deco(fn):
-        FILTERS.add(name, NamedFilter(name, description, _with_sensor_subset(fn), takes_rules))
+        FILTERS.add(name, NamedFilter(name, description, _with_sensor_subset(fn), takes_rules,
+                                      takes_params))
         return fn
 
     return deco
@@ -126,8 +130,12 @@ def parse_filter_spec(spec: str):
 
     The second form runs a named filter with its own rule files, so that one comparison can
     hold, say, ``fakf`` (the paper's rules) and ``fakf@rules/paper000_rscale_tuned.json``.
+    For a filter with tuned parameters (``ekf-tuned@FILE``) the file is its ``params``.
     """
     name, _, rules = spec.partition("@")
+    target = FILTERS.load().get(name) if rules else None
+    if target is not None and target.takes_params:
+        return name, {"params": rules}
     return name, ({"rules": [r for r in rules.split("+") if r]} if rules else {})
 
 

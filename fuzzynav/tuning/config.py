@@ -153,12 +153,12 @@ def _runs(t: Table, here: Path) -> tuple:
 
 
 def _filter_name(t: Table, key: str, name) -> str:
-    from fuzzynav.filters.named import get_filter
+    from fuzzynav.filters.named import get_filter, parse_filter_spec
 
     if not isinstance(name, str):
         raise t.error(key, f"must be a filter name, got {brief(name)}")
     try:
-        get_filter(name)
+        get_filter(parse_filter_spec(name)[0])  # NAME@FILE: a tuned baseline's parameters
     except FuzzynavError as exc:
         raise t.error(key, str(exc)) from None
     return name
@@ -220,8 +220,9 @@ def _controller(t: Table, here: Path) -> ControllerConfig:
             if isinstance(counts, int) and not isinstance(counts, bool):
                 counts = [counts]
             if not isinstance(counts, list) or not counts or not all(
-                    isinstance(c, int) and not isinstance(c, bool) and 2 <= c <= 9 for c in counts):
-                raise pt.error(var, "must be a term count in 2..9 or an array of them")
+                    isinstance(c, int) and not isinstance(c, bool) and 1 <= c <= 9 for c in counts):
+                raise pt.error(var, "must be a term count in 2..9 (or 1 on an input, "
+                                    "which switches it off) or an array of them")
             parts[var] = tuple(sorted(set(counts)))
     c = ControllerConfig(name=name, template=tmpl,
                          tune=t.string("tune", "both", choices=TUNE_MODES),
@@ -280,8 +281,10 @@ def load_study_config(path) -> StudyConfig:
         return study_config_from_dict(doc, path)
 
 
-def study_config_from_dict(doc: dict, path: Path | None = None) -> StudyConfig:
-    """Build a :class:`StudyConfig` from a parsed TOML document."""
+def study_config_from_dict(doc: dict, path: Path | None = None,
+                           need_controllers: bool = True) -> StudyConfig:
+    """Build a :class:`StudyConfig` from a parsed TOML document (a baseline study,
+    :mod:`fuzzynav.tuning.baselines`, has no controllers: ``need_controllers=False``)."""
     top = Table(doc)
     here = path.parent if path is not None else Path.cwd()
     name = top.string("name", path.stem if path is not None else "study")
@@ -329,8 +332,8 @@ def study_config_from_dict(doc: dict, path: Path | None = None) -> StudyConfig:
         raise ob.error("t_start_s", f"{t_start:g} s is at or after the end of the shortest "
                                     f"run ({min(shortest, shortest_test):g} s): nothing "
                                     "would be scored")
-    ctrls = tuple(_controller(c, here) for c in top.tables("controllers"))
-    if not ctrls:
+    ctrls = tuple(_controller(c, here) for c in top.tables("controllers", need_controllers))
+    if not ctrls and need_controllers:
         raise top.error("controllers", "a study needs at least one [[controllers]] table")
     if len({c.name for c in ctrls}) != len(ctrls):
         raise top.error("controllers", "controller names must be unique")

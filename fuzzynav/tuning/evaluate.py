@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 
 from fuzzynav.experiment import run_on_log
+from fuzzynav.filters.named import parse_filter_spec
 from fuzzynav.metrics import check_finite_metrics, mean_ci
 from fuzzynav.tuning.config import GROUP_METRICS
 from fuzzynav.tuning.objective import CANDIDATE
@@ -41,7 +42,10 @@ def run_table(evaluator, systems: dict, runs, compare=()) -> pd.DataFrame:
             outcomes[CANDIDATE] = evaluator.run_systems(systems, scenario, seed).metrics
         for name in compare:
             try:
-                outcomes[name] = run_on_log(log, name, t_start_s=evaluator.config.t_start_s).metrics
+                base_name, own = parse_filter_spec(name)  # NAME@FILE: tuned parameters
+                kw = {"options": own} if own else {}
+                outcomes[name] = run_on_log(log, base_name, t_start_s=evaluator.config.t_start_s,
+                                            **kw).metrics
             except Exception as exc:  # a baseline that cannot run here is reported, not fatal
                 outcomes[name] = {"error": str(exc)}
         rows += [_row(evaluator, scenario, seed, name, m) for name, m in outcomes.items()]

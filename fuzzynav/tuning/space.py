@@ -10,6 +10,8 @@ For each controller (a template rule file):
 * one categorical consequent per antecedent cell (``{ctrl}.rule.{n1}x{n2}>{no}.{i}.{j}``:
   each structure has its own parameters, so a multivariate sampler models them jointly),
   optional weights (``{ctrl}.weight.{struct}.{i}.{j}``);
+* a partition count of 1 on an input switches it off (one term true on its whole range, so
+  the rule table does not depend on it): a study can select inputs;
 * the DoM window (``{ctrl}.window``) and the ends of the output range
   (``{ctrl}.out_lo``, ``{ctrl}.out_hi``) where configured.
 
@@ -29,7 +31,7 @@ import numpy as np
 
 from fuzzynav.errors import InputFileError
 from fuzzynav.filters.adaptation.binding import Binding
-from fuzzynav.fuzzy import (Antecedent, FuzzySystem, Rule, Variable, load_fis,
+from fuzzynav.fuzzy import (Antecedent, FuzzySystem, Rule, Term, Variable, load_fis,
                             standard_labels, triangular_partition)
 
 _GAP = (0.05, 1.0)
@@ -59,6 +61,9 @@ def check_against_template(cc) -> FuzzySystem:
                 raise InputFileError(None, f"partitions.{v.name}", "tune = 'breakpoints' "
                                      "keeps the template's rule table, so the term count "
                                      f"stays the template's ({len(v.terms)})")
+    if 1 in cc.partitions.get(tmpl.output_names[0], ()):
+        raise InputFileError(None, f"partitions.{tmpl.output_names[0]}", "an output needs at "
+                             "least 2 terms (a count of 1 switches an input off)")
     lo, hi = tmpl.outputs[0].range
     if cc.output_low is not None and cc.output_range is None and not cc.output_low[1] < hi:
         raise InputFileError(None, "output_low", f"must lie below the template's upper end "
@@ -123,6 +128,10 @@ class ControllerSpace:
     def _variable(self, trial, var, is_output):
         n = self._count(trial, var)
         lo, hi = var.range
+        if n == 1 and not is_output:  # input selection: one term true on the whole range
+            w = hi - lo
+            return Variable(var.name, (float(lo), float(hi)),
+                            (Term("any", "trap", (lo - w, lo, hi, hi + w)),), None)
         if is_output and self.config.output_range is not None:
             hi = trial.suggest_float(self._p("out_hi"), *self.config.output_range)
         if is_output and self.config.output_low is not None:

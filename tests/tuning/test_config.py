@@ -17,7 +17,8 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-EXAMPLES = sorted(STUDIES.glob("*.toml"))
+# baseline studies ([baselines], no controllers) are checked in tests/tuning/test_baselines.py
+EXAMPLES = sorted(p for p in STUDIES.glob("*.toml") if "[baselines]" not in p.read_text())
 
 
 def _ctrl(**kw):

@@ -86,7 +86,8 @@ class NoAdaptation(Adapter):
 
 
 ADAPTERS = Registry("adaptation policy", __name__,
-                    ("exponential_weighting", "r_scaling", "classical"))
+                    ("exponential_weighting", "r_scaling", "classical", "strong_tracking",
+                     "rq_scaling"))
 
 
 def register(cls):

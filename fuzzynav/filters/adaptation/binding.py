@@ -116,7 +116,8 @@ class Binding:
                                      f"is bound to {brief(doc.get('adapter'))}")
         adapter = _adapter(w, doc.get("adapter"))
         return cls(adapter=adapter.name, inputs=_inputs(w, doc.get("inputs"), fis),
-                   outputs=_outputs(w, doc.get("outputs"), fis, adapter.role),
+                   outputs=_outputs(w, doc.get("outputs"), fis, adapter.role,
+                                    getattr(adapter, "extra_roles", ())),
                    window=_window(w, doc.get("window", DEFAULT_WINDOW)),
                    sensor=None if doc.get("sensor") is None else
                    w.name(doc["sensor"], "sensor", "a sensor or sensor kind"),
@@ -203,19 +204,25 @@ def _inputs(w: _Where, doc, fis) -> tuple:
     return tuple(_input(w, name, doc[name]) for name in fis.input_names)
 
 
-def _outputs(w: _Where, doc, fis, role: str) -> tuple:
+def _outputs(w: _Where, doc, fis, role: str, extra=()) -> tuple:
+    """One output bound to the adapter's ``role``; at most one to each of its ``extra``
+    roles (e.g. ``q_scale``, the process-noise factor of ``rq-scaling``)."""
     doc = w.mapping(doc if doc is not None else {}, "outputs")
     out = []
     for name, target in doc.items():
         if name not in fis.output_names:
             raise w.error(f"outputs.{name}", f"names no output of the fuzzy system "
                                              f"(outputs: {', '.join(fis.output_names)})")
-        if target != role:
+        if target != role and target not in extra:
+            drives = " or ".join(repr(t) for t in (role, *extra))
             raise w.error(f"outputs.{name}", f"unknown target {brief(target)}; this adapter's "
-                                             f"output drives {role!r}")
+                                             f"output drives {drives}")
         out.append(OutputBinding(name, target))
-    if len(out) != 1:
-        raise w.error("outputs", f"bind exactly one output to {role!r} (bound: {len(out)})")
+    n_role = sum(b.target == role for b in out)
+    if n_role != 1 or (extra and len(out) > 1 + len(extra)):
+        raise w.error("outputs", f"bind exactly one output to {role!r} (bound: {n_role})")
+    if len({b.target for b in out}) != len(out):
+        raise w.error("outputs", "bind at most one output to each target")
     return tuple(out)
 
 

@@ -6,7 +6,7 @@ measurement (stable for a given sensor configuration).
 
 * :class:`ConstantScale` — a fixed R multiplier per channel: the tuned constant-noise EKF.
 * :class:`SageHusa` — ``R_i <- (1-d) R_i + d (r_i^2 - (H P- H^T)_ii)`` with
-  ``d_k = (1-b)/(1-b^(k+1))``, floored at a fraction of the nominal variance.
+  ``d_k = (1-b)/(1-b^(k+1))``, kept between a floor and a cap times the nominal variance.
 * :class:`Huber` — M-estimation: ``w_i = min(1, gamma / |r_i / sqrt(S_ii)|)``, R divided by w.
 * :class:`FadingMemory` — strong tracking: ``V = (rho V + r r^T) / (1 + rho)``,
   ``lambda = min(max(1, (tr V - beta tr R) / tr(H P- H^T)), lam_max)`` inflates the
@@ -63,7 +63,7 @@ class ConstantScale(Adapter):
 
 @nb.njit(ADAPT_SIG, cache=True)
 def sage_husa_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
-    b, floor = fp[0], fp[1]
+    b, floor, cap = fp[0], fp[1], fp[2]
     k = st[0]
     d = (1.0 - b) / (1.0 - b ** (k + 1.0))
     st[0] = k + 1.0
@@ -72,7 +72,7 @@ def sage_husa_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
     for i in range(m):
         rh = st[1 + i] if st[1 + i] > 0.0 else R[i]
         rh = (1.0 - d) * rh + d * (r[i] * r[i] - HPH[i, i])
-        rh = max(rh, floor * R[i])
+        rh = min(max(rh, floor * R[i]), cap * R[i])
         st[1 + i] = rh
         out[2 + i] = rh / R[i]
     diag[0] = out[2] if m > 0 else 1.0
@@ -81,17 +81,22 @@ def sage_husa_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
 
 @register
 class SageHusa(Adapter):
-    """Sage-Husa measurement-noise estimation (forgetting factor ``b``)."""
+    """Sage-Husa measurement-noise estimation (forgetting factor ``b``).
+
+    The estimate is kept within ``[floor, cap]`` times the nominal variance (the R bounds a
+    baseline study tunes; ``cap = inf``: no upper bound).
+    """
 
     name = "sage-husa"
     kernel = sage_husa_kernel
     diag_names = ("r_scale_row0",)
 
-    def __init__(self, b: float = 0.98, floor: float = 0.1):
-        self.b, self.floor = float(b), float(floor)
+    def __init__(self, b: float = 0.98, floor: float = 0.1, cap: float = math.inf):
+        self.b, self.floor, self.cap = float(b), float(floor), float(cap)
 
     def arrays(self, model):
-        return np.array([self.b, self.floor]), np.zeros(1, np.int64), np.zeros(1 + _MAXROWS)
+        return (np.array([self.b, self.floor, self.cap]), np.zeros(1, np.int64),
+                np.zeros(1 + _MAXROWS))
 
 
 @nb.njit(ADAPT_SIG, cache=True)

@@ -57,8 +57,8 @@ def evaluate(fp, ip, st, r, HPH, R, chan, m):
     y = st[w + n_in:w + n_in + n_out]
     work = st[w + n_in + n_out:st.size - N_SCALARS]
     for j in range(n_in):
-        x[j] = window.statistic(ip[IP_HEADER + 2 * j], st, 0, n_win, n_ch, HPH, R, chan, m,
-                                ip[IP_HEADER + 2 * j + 1])
+        x[j] = window.statistic_of(ip[IP_HEADER + 2 * j], st, 0, n_win, n_ch, HPH, R, chan,
+                                   m, ip[IP_HEADER + 2 * j + 1], r)
     status = eval_compiled(fp[1 + int(fp[0]):], ip[ip[IP_FIS]:], x, y, work)
     return status, x, y
 

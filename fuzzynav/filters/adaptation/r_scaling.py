@@ -17,8 +17,13 @@ from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
 S_MIN, S_MAX = 1e-3, 1e3
 
 
-@nb.njit(ADAPT_SIG, cache=True)
-def rscale_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
+@nb.njit(cache=True)
+def r_step(fp, ip, st, r, HPH, R, chan, m):
+    """Evaluate the system on statistics that see ``R(k-1)`` and step the running factor.
+
+    Returns ``(status, x, y, s, t)``: the fuzzy inputs and outputs, the new factor ``s``
+    (stored in the first policy scalar) and the step ``t``.
+    """
     sc = scalars(st)
     if sc[0] == 0.0:
         sc[0] = 1.0
@@ -33,6 +38,12 @@ def rscale_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
         t = 1.0
     s = min(max(s * t, S_MIN), S_MAX)
     sc[0] = s
+    return status, x, y, s, t
+
+
+@nb.njit(ADAPT_SIG, cache=True)
+def rscale_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
+    status, x, y, s, t = r_step(fp, ip, st, r, HPH, R, chan, m)
     out[0] = 1.0
     out[1] = 1.0
     for i in range(m):

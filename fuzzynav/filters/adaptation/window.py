@@ -15,7 +15,9 @@ Statistics of a channel ``c`` (``c = -1`` for all rows) at the current epoch:
 * ``trace_theory`` — the channel's trace of ``P_z = H P- H^T + R`` now;
 * ``dom`` (relative trace) — ``(tr P_z - tr C_r) / tr P_z``: 0 when the filter is
   consistent, negative when innovations are larger than the model says, at most 1;
-* ``ror`` — ``tr C_r / tr P_z`` (paper 002's ratio of residuals).
+* ``ror`` — ``tr C_r / tr P_z`` (paper 002's ratio of residuals);
+* ``nis`` — this epoch's mean ``r_i^2 / (P_z)_ii`` over the channel's rows;
+* ``trend`` — (newer half - older half of the window's squared-residual sums) / ``tr P_z``.
 """
 from __future__ import annotations
 
@@ -68,6 +70,53 @@ def trace_theory(HPH, R, chan, m, c):
 
 
 @nb.njit(cache=True)
+def nis_now(r, HPH, R, chan, m, c):
+    """This epoch's mean normalised innovation square ``r_i^2 / (H P- H^T + R)_ii`` over
+    the channel's rows (``c = -1``: all rows); 1 on average when the filter is consistent."""
+    s, k = 0.0, 0
+    for i in range(m):
+        if c < 0 or chan[i] == c:
+            s += r[i] * r[i] / (HPH[i, i] + R[i])
+            k += 1
+    return s / k if k > 0 else float("nan")
+
+
+@nb.njit(cache=True)
+def trend(st, off, n, n_channels, c, th):
+    """Innovation-magnitude trend: (mean squared-residual sum of the newer half of the
+    window - that of the older half) / ``th``; > 0 when innovations grow."""
+    w = n_channels + 1
+    col = n_channels if c < 0 else c
+    k = int(st[off])
+    if k < 2:
+        return 0.0
+    nxt = int(st[off + 1])
+    half = k // 2
+    old, new = 0.0, 0.0
+    for j in range(k):  # j = 0 is the oldest stored epoch
+        slot = (nxt - k + j) % n
+        v = st[off + 2 + slot * w + col]
+        if j < half:
+            old += v
+        elif j >= k - half:
+            new += v
+    return (new - old) / half / th
+
+
+@nb.njit(cache=True)
+def statistic_of(kind, st, off, n, n_channels, HPH, R, chan, m, c, r):
+    """Any statistic ``kind`` (0 dom, 1 ror, 2 nis, 3 trend) of channel ``c``, given this
+    epoch's residuals ``r``; NaN if the channel is absent."""
+    if kind == 2:
+        th = trace_theory(HPH, R, chan, m, c)
+        return nis_now(r, HPH, R, chan, m, c) if th > 0.0 else float("nan")
+    if kind == 3:
+        th = trace_theory(HPH, R, chan, m, c)
+        return trend(st, off, n, n_channels, c, th) if th > 0.0 else float("nan")
+    return statistic(kind, st, off, n, n_channels, HPH, R, chan, m, c)
+
+
+@nb.njit(cache=True)
 def statistic(kind, st, off, n, n_channels, HPH, R, chan, m, c):
     """Statistic ``kind`` (0 = dom, 1 = ror) of channel ``c``; NaN if the channel is absent."""
     th = trace_theory(HPH, R, chan, m, c)
@@ -79,8 +128,10 @@ def statistic(kind, st, off, n, n_channels, HPH, R, chan, m, c):
     return act / th
 
 
-#: statistic names as written in rule-file bindings -> kernel code of :func:`statistic`
-STATISTICS = {"dom": 0, "ror": 1}
+#: statistic names as written in rule-file bindings -> kernel code of :func:`statistic`:
+#: ``nis`` is this epoch's mean NIS of the channel's rows (per channel, or ``all`` for the
+#: total), ``trend`` the growth of the windowed squared innovations relative to ``tr P_z``
+STATISTICS = {"dom": 0, "ror": 1, "nis": 2, "trend": 3}
 #: how ``dom`` is normalised (``binding.normalisation``) -> kernel code: only the relative
 #: trace per channel, ``(tr P_z - tr C_r) / tr P_z``, is implemented
 DOM_NORMALISATIONS = {"relative-trace": 0}

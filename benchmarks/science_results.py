@@ -1,0 +1,298 @@
+"""Regenerate ``docs/science.md``: the fuzzy controller against equally tuned baselines.
+
+Run from the repository root (``[studies]`` extras installed)::
+
+    python benchmarks/science_results.py --trials 40 --workers 2
+
+1. tunes the classical baselines of ``studies/paper000_baselines.toml`` (each its own
+   Optuna study, ``--trials`` trials; ALS estimated) and writes their parameters to
+   ``studies/paper000_baselines.json`` (the file ``ekf-tuned`` & co. read by default);
+2. tunes the fuzzy controller of ``studies/paper000_fair.toml`` with the same number of
+   trials on the same training runs;
+3. runs every filter on every held-out run of ``paper000_fair.toml`` and writes, per
+   scenario (never pooled): the weighted RMS ratio to the tuned constant-noise EKF
+   (``ekf-tuned``) and to the oracle (``ekf-true``), and the paired difference of the tuned
+   fuzzy controller against the best classical baseline of that scenario, with 95 % CIs.
+
+Journals go to ``--work`` (default: a temporary directory), simulations to ``--cache``.
+"""
+from __future__ import annotations
+
+import argparse
+import datetime as _dt
+import sys
+import tempfile
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from fuzzynav.cli.nav import default_cache_dir
+from fuzzynav.fileio import write_atomic
+from fuzzynav.filters.baselines import TUNED
+from fuzzynav.metrics import mean_ci
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from _report import machine  # noqa: E402
+
+FAIR = ROOT / "studies" / "paper000_fair.toml"
+BASELINES = ROOT / "studies" / "paper000_baselines.toml"
+DOC = ROOT / "docs" / "science.md"
+RUNS = ROOT / "docs" / "science_runs.csv"
+FUZZY = "fuzzy-tuned"
+REF, ORACLE = "ekf-tuned", "ekf-true"
+#: filters that are neither fuzzy nor told the truth: the "best classical baseline" pool
+NOT_CLASSICAL = (FUZZY, "fakf", "fuzzy", ORACLE)
+METRICS = ("rms_pos_m", "rms_vel_mps", "rms_att_deg")
+
+
+# -- tuning ------------------------------------------------------------------------------------
+def tune_baselines(trials: int, work: Path, cache: str):
+    from fuzzynav.tuning.baselines import load_baseline_config, run_baselines
+
+    bcfg = load_baseline_config(BASELINES)
+    study = replace(bcfg.study, trials=trials, storage=f"journal:{work / 'baselines.journal'}")
+    bcfg = replace(bcfg, study=study)
+    run_baselines(bcfg, cache_dir=cache,
+                  progress=lambda n, d, t: print(f"\r{n}: {d}/{t}", end="", file=sys.stderr))
+    print(file=sys.stderr)
+    return bcfg
+
+
+def tune_fuzzy(trials: int, workers: int, work: Path, cache: str):
+    from fuzzynav.tuning.config import load_study_config
+    from fuzzynav.tuning.export import choose_trial, systems_of
+    from fuzzynav.tuning.run import run_study
+
+    cfg = load_study_config(FAIR)
+    storage = f"journal:{work / 'fair.journal'}"
+    study = run_study(cfg, trials, workers, storage, cache)
+    trial = choose_trial(study, cfg)
+    return cfg, systems_of(cfg, trial), trial
+
+
+# -- evaluation --------------------------------------------------------------------------------
+def held_out_table(cfg, systems, params: Path, cache: str) -> pd.DataFrame:
+    """Metrics of every filter on every held-out run (one row per run and filter)."""
+    from fuzzynav.tuning.evaluate import run_table
+    from fuzzynav.tuning.objective import Evaluator
+
+    specs = {f"{n}@{params}" if n in TUNED else n: n for n in cfg.compare}
+    df = run_table(Evaluator(cfg, cache), systems, cfg.test, tuple(specs))
+    return df.replace({"filter": {**specs, "tuned": FUZZY}})
+
+
+def scores_to(df: pd.DataFrame, ref: str) -> pd.DataFrame:
+    """Per run and filter: mean over pos/vel/att of the RMS ratio to filter ``ref``."""
+    key = ["scenario", "seed"]
+    base = df[df["filter"] == ref][[*key, *METRICS]]
+    out = df[[*key, "filter", *METRICS]].merge(base, on=key, suffixes=("", "_ref"))
+    ratios = [out[m] / out[m + "_ref"] for m in METRICS]
+    out["score"] = sum(ratios) / len(ratios)
+    return out[["scenario", "seed", "filter", "score"]]
+
+
+def cell(values) -> str:
+    est = mean_ci(values)
+    return f"{est.mean:.2f} ± {est.half_width:.2f}" if est.n >= 2 else f"{est.mean:.2f}"
+
+
+def ratio_table(scores: pd.DataFrame, order, scenarios) -> list:
+    """Markdown rows: filter x scenario, mean score (95 % CI over seeds)."""
+    lines = ["| filter | " + " | ".join(f"`{s}`" for s in scenarios) + " |",
+             "|---|" + "---|" * len(scenarios)]
+    for f in order:
+        sub = scores[scores["filter"] == f]
+        cells = [cell(sub[sub["scenario"] == s]["score"]) for s in scenarios]
+        lines.append(f"| {f} | " + " | ".join(cells) + " |")
+    return lines
+
+
+def best_classical(scores: pd.DataFrame, scenario: str) -> str:
+    """The classical filter with the lowest mean score on ``scenario``."""
+    sub = scores[(scores["scenario"] == scenario) & ~scores["filter"].isin(NOT_CLASSICAL)]
+    return sub.groupby("filter")["score"].mean().idxmin()
+
+
+def paired(scores: pd.DataFrame, scenario: str, a: str, b: str):
+    """Mean and 95 % CI of ``score(a) - score(b)`` over the scenario's seeds."""
+    sub = scores[scores["scenario"] == scenario].pivot(index="seed", columns="filter",
+                                                       values="score")
+    return mean_ci((sub[a] - sub[b]).to_numpy())
+
+
+def verdict(est) -> str:
+    if est.hi < 0:
+        return "wins against"
+    if est.lo > 0:
+        return "loses to"
+    return "draws with"
+
+
+def sentence(scenario: str, a: str, b: str, est) -> str:
+    return (f"On `{scenario}`, {a} **{verdict(est)}** {b}: score difference "
+            f"{est.mean:+.3f} (95 % CI {est.lo:+.3f} to {est.hi:+.3f}, {est.n} seeds).")
+
+
+def comparison_lines(scores: pd.DataFrame, scenarios) -> tuple:
+    """Table rows and one sentence per scenario: the fuzzy controller vs the best classical
+    baseline and vs the tuned constant-noise EKF."""
+    rows = ["| scenario | best classical | fuzzy − best (95 % CI) | verdict | "
+            "fuzzy − ekf-tuned (95 % CI) | verdict |", "|---|---|---|---|---|---|"]
+    text, tally = [], {"wins against": 0, "draws with": 0, "loses to": 0}
+    for s in scenarios:
+        best = best_classical(scores, s)
+        vs_best, vs_ref = paired(scores, s, FUZZY, best), paired(scores, s, FUZZY, REF)
+        tally[verdict(vs_best)] += 1
+        rows.append(f"| `{s}` | {best} | {vs_best.mean:+.3f} [{vs_best.lo:+.3f}, "
+                    f"{vs_best.hi:+.3f}] | {verdict(vs_best)} | {vs_ref.mean:+.3f} "
+                    f"[{vs_ref.lo:+.3f}, {vs_ref.hi:+.3f}] | {verdict(vs_ref)} |")
+        text.append("- " + sentence(s, "the tuned fuzzy controller", f"`{best}`", vs_best))
+    return rows, text, tally
+
+
+# -- the page ----------------------------------------------------------------------------------
+def params_lines(params: Path) -> list:
+    import json
+
+    doc = json.loads(params.read_text())
+    lines = ["| filter | training score (ratio to ekf) | parameters |", "|---|---|---|"]
+    for name, p in doc["filters"].items():
+        vals = ", ".join(f"{k} = {v:.3g}" for k, v in p.items())
+        lines.append(f"| {name} | {doc['train_score'][name]:.3f} | {vals} |")
+    return lines
+
+
+def summary_text(tally: dict, n: int) -> str:
+    wins = tally["wins against"]
+    if wins == n:
+        head = "The goal of issue 14 is reached on every held-out set"
+    elif wins:
+        head = f"The goal of issue 14 is reached on {wins} of {n} held-out sets only"
+    else:
+        head = "The goal of issue 14 is **not** reached"
+    return (f"{head}: against the best classical baseline of each held-out set, the tuned "
+            f"fuzzy controller wins {wins}, draws {tally['draws with']} and loses "
+            f"{tally['loses to']} of {n} (95 % CI of the paired difference excluding zero "
+            "or not).")
+
+
+def write_page(ctx: dict, scores_ref, scores_oracle, scenarios) -> None:
+    order = [FUZZY, *[f for f in ctx["filters"] if f != FUZZY]]
+    rows, text, tally = comparison_lines(scores_ref, scenarios)
+    lines = [
+        "# Science: the fuzzy controller against equally tuned baselines", "",
+        f"Generated by `benchmarks/science_results.py` on {ctx['date']} ({ctx['machine']}); "
+        f"{ctx['minutes']:.1f} min wall time, {ctx['cpu']:.1f} min CPU (the machine was "
+        "shared)" + ("; the studies were resumed from finished journals, so this covers "
+                     "the ALS estimate and the evaluation only, not the tuning"
+                     if ctx["resumed"] else "") +
+        ". Rerun it to refresh every number on this page.",
+        "", "## What was run", "",
+        f"- **Budget:** {ctx['trials']} TPE trials for the fuzzy controller "
+        f"(`studies/paper000_fair.toml`, {ctx['workers']} workers) and {ctx['trials']} for "
+        "*each* tuned baseline (`studies/paper000_baselines.toml`, one Optuna study each, "
+        "same sampler, pruner and objective); ALS is estimated, not searched. The study "
+        "files ask for 300; this page uses a modest budget that fits a loaded 2-core machine.",
+        f"- **Training runs:** {ctx['train']}.",
+        f"- **Held-out runs:** {len(scenarios)} scenarios × {ctx['n_seeds']} seeds "
+        "(seeds 100+, never trained on); three are on the training trajectory with other "
+        "mismatch, four on routes never trained on (`-alt`, `-route-north`, `-route-urban`, "
+        "`-route-spiral`, each with its own mismatch pattern: see `paper000_fair.toml`).",
+        "- **Score:** per run, the mean over position, velocity and attitude of the RMS "
+        "error ratio to a reference filter on the same data and initial error (1 = as good, "
+        "lower is better); mean ± 95 % CI (Student t) over the seeds of one scenario. "
+        "Scenarios are never pooled.",
+        "- **Best classical baseline:** per scenario, the non-fuzzy, non-oracle filter with "
+        "the lowest mean score there (chosen on the held-out data itself, which favours the "
+        "baseline: the fuzzy controller must beat the best one in hindsight).",
+        "", "## Tuned parameters", "", *params_lines(ctx["params"]), "",
+        "## Ratio to the tuned constant-noise EKF (`ekf-tuned`)", "",
+        *ratio_table(scores_ref, order, scenarios), "",
+        "## Ratio to the oracle (`ekf-true`, told the true noise of every epoch)", "",
+        *ratio_table(scores_oracle, order, scenarios), "",
+        "## The tuned fuzzy controller against the best classical baseline", "",
+        "Paired per seed (same data, same initial error); negative favours the fuzzy "
+        "controller. Differences are in the score relative to `ekf-tuned`.", "",
+        *rows, "", *text, "", "## In short", "", summary_text(tally, len(scenarios)), "",
+        *closing_lines(scores_ref, scenarios, ctx["params"]), "",
+        "Every run's metrics: [science_runs.csv](science_runs.csv).",
+    ]
+    page = "\n".join(lines) + "\n"
+    write_atomic(DOC, lambda tmp: Path(tmp).write_text(page), what="page")
+
+
+def closing_lines(scores: pd.DataFrame, scenarios, params: Path) -> list:
+    """What the numbers do and do not say (facts read from the results and parameters)."""
+    import json
+
+    wins_ref = [s for s in scenarios if verdict(paired(scores, s, FUZZY, REF)) == "wins against"]
+    wins_best = [s for s in scenarios
+                 if verdict(paired(scores, s, FUZZY, best_classical(scores, s))) == "wins against"]
+    st = json.loads(params.read_text())["filters"].get("strong-tracking-tuned", {})
+    lines = [
+        "What the numbers do and do not say:", "",
+        "- The tuned fuzzy controller adapts only the GNSS R (its rule file is bound to the "
+        "receiver); Sage–Husa, VB, Huber and strong tracking adapt every sensor, the "
+        "polarization compass included — which matters on `paper000-heavy` (heavy-tailed "
+        "compass errors).",
+        "- The budget is small: the fuzzy rule table has up to 49 cells plus breakpoints, the "
+        "baselines 1–9 parameters, so the fuzzy controller gains most from the 300 trials "
+        "the study files ask for.",
+    ]
+    if st and st.get("lam_max", 2.0) < 1.05:
+        lines.append(f"- The tuned strong tracking filter learned to switch itself off (cap "
+                     f"λ ≤ {st['lam_max']:.3g}): on these runs inflating P does not pay.")
+    lines.append(
+        "- What the fuzzy controller is still good for: it beats the tuned constant-noise EKF "
+        f"on {len(wins_ref)} of {len(scenarios)} held-out sets "
+        f"({', '.join(f'`{s}`' for s in wins_ref) or 'none'}) and the best classical "
+        f"baseline on {', '.join(f'`{s}`' for s in wins_best) or 'none'}; its rule table "
+        "and surface can be read and its output stays within the tuned range.")
+    return lines
+
+
+def cpu_minutes() -> float:
+    """CPU time of this process and its finished children (study workers) [min]."""
+    import resource
+
+    use = [resource.getrusage(w) for w in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN)]
+    return sum(u.ru_utime + u.ru_stime for u in use) / 60.0
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--trials", type=int, default=40, help="trials per study (default 40)")
+    p.add_argument("--workers", type=int, default=2, help="fuzzy study workers")
+    p.add_argument("--work", help="directory for the study journals (default: temporary)")
+    p.add_argument("--seeds", type=int, help="held-out seeds per scenario (default: all)")
+    p.add_argument("--cache", default=str(default_cache_dir()), help="simulation cache")
+    args = p.parse_args(argv)
+    t0 = time.time()
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(args.work or tmp)
+        work.mkdir(parents=True, exist_ok=True)
+        resumed = (work / "fair.journal").is_file()
+        bcfg = tune_baselines(args.trials, work, args.cache)
+        cfg, systems, _ = tune_fuzzy(args.trials, args.workers, work, args.cache)
+        if args.seeds:
+            keep = sorted({d for _, d in cfg.test})[:args.seeds]
+            cfg = replace(cfg, test=tuple(r for r in cfg.test if r[1] in keep))
+        df = held_out_table(cfg, systems, bcfg.out, args.cache)
+    scenarios = list(dict.fromkeys(s for s, _ in cfg.test))
+    ctx = dict(date=_dt.date.today().isoformat(), machine=machine(), trials=args.trials,
+               workers=args.workers, minutes=(time.time() - t0) / 60.0, params=bcfg.out,
+               train=", ".join(f"`{s}` seed {d}" for s, d in cfg.train),
+               n_seeds=len({d for _, d in cfg.test}),
+               filters=list(dict.fromkeys(df["filter"])), cpu=cpu_minutes(), resumed=resumed)
+    write_atomic(RUNS, lambda tmp: df.to_csv(tmp, index=False), suffix=".csv")
+    write_page(ctx, scores_to(df, REF), scores_to(df, ORACLE), scenarios)
+    print(f"wrote {DOC}, {RUNS} and {bcfg.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
