@@ -52,10 +52,10 @@ def test_jacobian_matches_finite_differences():
         zp = _call(_perturbed(nav, dx), row, XS, par)[1][0]
         zm = _call(_perturbed(nav, -dx), row, XS, par)[1][0]
         num[j] = (zp - zm) / (2 * steps[j])
-    for j in range(15, N):  # log states: perturb the estimates
-        e = np.zeros_like(XS)
+    for j in range(15, N):  # log states: their error is true minus estimate (added on
+        e = np.zeros_like(XS)  # feedback), so z moves by -H when the estimate moves up
         e[j - N_CORE] = 1e-4
-        num[j] = (_call(nav, row, XS + e, par)[1][0] - _call(nav, row, XS - e, par)[1][0]) / 2e-4
+        num[j] = -(_call(nav, row, XS + e, par)[1][0] - _call(nav, row, XS - e, par)[1][0]) / 2e-4
     np.testing.assert_allclose(H[0], num, atol=1e-6)
     assert np.all(H[0, 9:15] == 0.0)
 

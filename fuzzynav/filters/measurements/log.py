@@ -9,9 +9,12 @@ filter's own log-error states (each optional, present when the layout has the bl
 ``w_n`` the horizontal water current (``water_current``, east and north).  Residual
 ``z = v_hat - v_log``; with ``C_calc^T = C_true^T (I + [phi x])`` its Jacobian is::
 
-    H_att = (1 + k) (v - w) x c,   H_vel = (1 + k) c,   H_k = c . (v - w),   H_b = 1,
-    H_w = -(1 + k) c_{e,n}
+    H_att = (1 + k) (v - w) x c,   H_vel = (1 + k) c,   H_k = -c . (v - w),   H_b = -1,
+    H_w = (1 + k) c_{e,n}
 
+The navigation errors are *computed minus true* (subtracted on feedback), but a sensor state
+is corrected by *adding* the update (``xs += x``, as the IMU bias blocks), so its error is
+*true minus estimate* and its columns carry the opposite sign of d(z)/d(estimate)
 (checked against finite differences in ``tests/filters/test_log_model.py``).  Without a
 current state the current is an error of the reading, and it is unobservable without a
 position fix anyway: a ``water_current`` block only bounds it by its prior.  Channel:
@@ -63,11 +66,11 @@ def log_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
     H[0, X_ATT + 2] = g * (ve * cy - vn * cx)
     H[0, X_VEL], H[0, X_VEL + 1], H[0, X_VEL + 2] = g * cx, g * cy, g * cz
     if par[0] >= 0.0:
-        H[0, int(par[0])] = s
+        H[0, int(par[0])] = -s
     if par[1] >= 0.0:
-        H[0, int(par[1])] = 1.0
+        H[0, int(par[1])] = -1.0
     if par[2] >= 0.0:
-        H[0, int(par[2])], H[0, int(par[2]) + 1] = -g * cx, -g * cy
+        H[0, int(par[2])], H[0, int(par[2]) + 1] = g * cx, g * cy
     R[0] = sig * sig
     chan[0] = 0
     return 1
