@@ -72,7 +72,9 @@ def test_without_states_the_model_ignores_them():
 
 def test_with_sensor_states_adds_the_blocks_and_their_starts():
     data = SensorData("log", np.zeros(1), np.zeros((1, 1)), np.full((1, 1), 0.5))
-    base = FilterSetup(FilterConfig())
+    every = {"log_states": ["log_scale", "log_bias", "water_current"]}
+    base = FilterSetup(FilterConfig(), sensor_options={"log": every, "two": every})
+    assert with_sensor_states(FilterSetup(FilterConfig()), {"log": data}).config.model.extra == ()
     out = with_sensor_states(base, {"log": data, "two": data})
     lay = out.config.model.layout
     assert lay.n == 15 + 2 * 4
@@ -85,4 +87,3 @@ def test_with_sensor_states_adds_the_blocks_and_their_starts():
     assert P0[lay.start("log_bias")] == pytest.approx(1.0)
     assert q[lay.start("water_current")] == pytest.approx(2 * 0.5**2 / 1800.0)
     assert q[lay.start("log_scale")] == 0.0
-    assert with_sensor_states(base, {}) is base

@@ -84,7 +84,7 @@ class MeasurementModel:
                                    self.channels + ("all",)) from None
 
 
-MODELS = Registry("measurement model", __name__, ("gnss", "polarization", "nhc", "log"))
+MODELS = Registry("measurement model", __name__, ("gnss", "polarization", "nhc", "log", "neutral_point"))
 
 
 def register(model: MeasurementModel) -> MeasurementModel:

@@ -19,7 +19,7 @@ import numpy as np
 from fuzzynav.registry import Registry
 
 #: kind name -> Spec class
-SENSOR_KINDS = Registry("sensor kind", __name__, ("gnss", "polarization", "log", "nhc"))
+SENSOR_KINDS = Registry("sensor kind", __name__, ("gnss", "polarization", "log", "nhc", "neutral_point"))
 
 
 def register(kind: str):
