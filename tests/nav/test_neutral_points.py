@@ -60,7 +60,7 @@ def test_failures_high_sun_clouds_and_the_short_pair():
     tr = generate(START, [Segment("cruise", 30)], 50.0, 5.0, 0.3)
     noon = dt.datetime(2015, 6, 21, 4, 15, tzinfo=dt.timezone.utc)  # sun ~85 deg high
     assert Spec().simulate(tr, np.random.default_rng(0), noon).z.shape[0] == 0
-    cloudy = Spec(cloud_windows=((0.0, 10.0, 0.0), (10.0, 20.0, 5.0)))
+    cloudy = Spec(clouds=((0.0, 10.0, 0.0), (10.0, 20.0, 5.0)))
     d = cloudy.simulate(tr, np.random.default_rng(0), UTC)
     assert d.time_s.min() >= 10.0
     assert d.meta["true_sigma"][d.time_s < 20, 0].mean() > 4 * d.meta["true_sigma"][

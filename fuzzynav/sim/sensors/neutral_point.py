@@ -10,7 +10,7 @@ Errors: each detected point's image position carries white noise of 1-sigma
 ``point_sigma = angle_noise_rad * L0 / sqrt(2)``, with ``L0 = pi - 2 delta`` the nominal
 Arago-Babinet baseline, so that ``beta`` has the paper's accuracy (0.005 rad) on that pair
 and a proportionally worse one on a shorter baseline (the Babinet-Brewster pair of a high
-sun).  ``cloud_windows`` rows ``[start_s, end_s, scale]`` multiply the point noise by
+sun).  ``clouds`` rows ``[start_s, end_s, scale]`` multiply the point noise by
 ``scale`` under cloud (0 = no detection at all).  No output above ``max_sun_elevation_deg``
 (the points crowd around the zenith and the detector loses them) or below
 ``min_sun_elevation_deg``.
@@ -52,7 +52,7 @@ class Spec:
         Half field of view of the fisheye [deg] (points beyond are not seen).
     max_sun_elevation_deg, min_sun_elevation_deg : float
         No output with the sun higher / lower [deg].
-    cloud_windows : tuple of (start_s, end_s, scale)
+    clouds : tuple of (start_s, end_s, scale)
         Cloud: point noise times ``scale`` (0: no output).
     """
 
@@ -63,13 +63,13 @@ class Spec:
     fov_deg: float = 90.0
     max_sun_elevation_deg: float = 75.0
     min_sun_elevation_deg: float = 0.0
-    cloud_windows: tuple = ()
+    clouds: tuple = ()
 
     kind = "neutral_point"
 
     def __post_init__(self):
-        object.__setattr__(self, "cloud_windows",
-                           tuple(tuple(map(float, w)) for w in self.cloud_windows))
+        object.__setattr__(self, "clouds",
+                           tuple(tuple(map(float, w)) for w in self.clouds))
 
     def columns(self) -> int:
         """Measurement columns per epoch (memory budget)."""
@@ -81,7 +81,7 @@ class Spec:
 
     def _cloud_scale(self, t) -> np.ndarray:
         scale = np.ones_like(t)
-        for t0, t1, s in self.cloud_windows:
+        for t0, t1, s in self.clouds:
             scale = np.where((t >= t0) & (t < t1), s, scale)
         return scale
 
@@ -135,10 +135,10 @@ class Spec:
               "max_sun_elevation_deg": t.number("max_sun_elevation_deg", 75.0, lo=0.0, hi=90.0),
               "min_sun_elevation_deg": t.number("min_sun_elevation_deg", 0.0, lo=-10.0,
                                                 hi=90.0),
-              "cloud_windows": t.windows("cloud_windows", 3)}
-        for i, w in enumerate(kw["cloud_windows"]):
+              "clouds": t.windows("clouds", 3)}
+        for i, w in enumerate(kw["clouds"]):
             if not 0.0 <= w[2] <= 1e3:
-                raise t.error(f"cloud_windows[{i}]", f"scale must lie in [0, 1000], got {w[2]!r}")
+                raise t.error(f"clouds[{i}]", f"scale must lie in [0, 1000], got {w[2]!r}")
         if kw["claimed_sigma_rad"] is None and kw["angle_noise_rad"] == 0.0:
             raise t.error("claimed_sigma_rad", "must be given (> 0) when angle_noise_rad is 0")
         t.finish()
@@ -149,5 +149,5 @@ class Spec:
         out = {"kind": self.kind}
         for k, v in asdict(self).items():
             if v is not None:
-                out[k] = [list(w) for w in v] if k == "cloud_windows" else v
+                out[k] = [list(w) for w in v] if k == "clouds" else v
         return out
