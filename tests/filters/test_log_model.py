@@ -87,3 +87,31 @@ def test_with_sensor_states_adds_the_blocks_and_their_starts():
     assert P0[lay.start("log_bias")] == pytest.approx(1.0)
     assert q[lay.start("water_current")] == pytest.approx(2 * 0.5**2 / 1800.0)
     assert q[lay.start("log_scale")] == 0.0
+
+
+def test_log_scale_and_bias_converge_with_a_position_fix():
+    """Observable once positions are fixed: the states find the simulated 2 % and 0.5 m/s."""
+    from dataclasses import replace
+
+    from fuzzynav.experiment import run_on_log, setup_for
+    from fuzzynav.sim.log import simulate
+    from fuzzynav.sim.scenario import load_scenario, scenario_from_dict
+
+    d = load_scenario("paper003").to_dict()
+    d["segments"] = d["segments"][:5]  # 900 s with a turn, an acceleration and s-turns
+    d["sea"]["current_mps"] = [0.0, 0.0]
+    d["sensors"]["log"]["scale"] = 0.02
+    d["sensors"]["gps"] = {"kind": "gnss", "rate_hz": 1.0, "pos_sigma_m": [2.5, 2.5, 5.0]}
+    log = simulate(scenario_from_dict(d), 0)
+    setup = setup_for(log, "ekf")
+    setup = replace(setup, sensor_options={"log": {"log_states": ["log_scale", "log_bias"]},
+                                           "gps": {"use_velocity": False}})
+    setup = with_sensor_states(setup, log.sensors)
+    res = run_on_log(log, "ekf", setup=setup).result
+    assert res.ok
+    late = res.time_s > 600.0
+    k = res.sensor_states[late, res.layout.sensor_slice("log_scale")]
+    b = res.sensor_states[late, res.layout.sensor_slice("log_bias")]
+    sk, sb = res.state_sigma("log_scale")[-1, 0], res.state_sigma("log_bias")[-1, 0]
+    assert abs(k.mean() - 0.02) < max(3 * sk, 0.005) and sk < 0.005
+    assert abs(b.mean() - 0.5) < max(3 * sb, 0.05) and sb < 0.05
