@@ -16,11 +16,11 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _docsection import replace_results  # noqa: E402
 from _report import machine  # noqa: E402
 
 from fuzzynav.claims.paper000 import PAPER000_TABLE2  # noqa: E402
 from fuzzynav.experiment import monte_carlo  # noqa: E402
-from fuzzynav.fileio import publish  # noqa: E402
 from fuzzynav.metrics import improvement_ci, mean_ci  # noqa: E402
 from fuzzynav.report import NAV_ROWS, render  # noqa: E402
 
@@ -104,13 +104,7 @@ def main(argv=None):
         "(< 1 beats the EKF)", "",
         "Ratios per seed of the 3-D position, velocity and attitude RMS to the EKF's on the "
         "same data and initial error, averaged over seeds.", "", ratio_table(dfs)])
-    doc = ROOT / "docs" / "paper000.md"
-    body = doc.read_text()
-    a, b = "<!-- results:begin -->", "<!-- results:end -->"
-    body = body.split(a)[0] + a + "\n" + text + "\n" + b + body.split(b)[1]
-    tmp = doc.with_suffix(".md.tmp")
-    tmp.write_text(body)
-    publish(tmp, doc)
+    replace_results(ROOT / "docs" / "paper000.md", text)
     print(text)
 
 

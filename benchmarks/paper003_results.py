@@ -15,12 +15,12 @@ import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _docsection import replace_results  # noqa: E402
 from _report import machine  # noqa: E402
 
 from fuzzynav import plots  # noqa: E402
 from fuzzynav.claims.paper003 import PAPER003  # noqa: E402
 from fuzzynav.experiment import monte_carlo, run_on_log  # noqa: E402
-from fuzzynav.fileio import publish  # noqa: E402
 from fuzzynav.filters.named import parse_filter_spec  # noqa: E402
 from fuzzynav.metrics import errors_vs_trajectory, mean_ci  # noqa: E402
 from fuzzynav.report import render  # noqa: E402
@@ -118,13 +118,7 @@ def main(argv=None):
               "(< 1 beats the EKF)", "", ratio_table(dfs, filters), ""]
     parts += [f"![{f.stem}]({f.as_posix()})" for f in figs]
     text = "\n".join(parts)
-    doc = ROOT / "docs" / "paper003.md"
-    body = doc.read_text()
-    a, b = "<!-- results:begin -->", "<!-- results:end -->"
-    body = body.split(a)[0] + a + "\n" + text + "\n" + b + body.split(b)[1]
-    tmp = doc.with_suffix(".md.tmp")
-    tmp.write_text(body)
-    publish(tmp, doc)
+    replace_results(ROOT / "docs" / "paper003.md", text)
     print(text)
 
 
