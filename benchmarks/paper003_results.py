@@ -28,7 +28,7 @@ from fuzzynav.sim.log import simulate  # noqa: E402
 from fuzzynav.sim.scenario import load_scenario  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-TUNED = ("rules/paper003_pol_rscale_tuned.json", "rules/paper003_log_rscale_tuned.json")
+TUNED = ("rules/paper003_rscale_tuned_pol.json", "rules/paper003_rscale_tuned_log.json")
 FILTERS = {  # short label -> filter spec
     "EKF": "ekf",
     "fuzzy R-scaling (paper 002 rules)": "fuzzy-ship",
