@@ -72,7 +72,8 @@ def rms_metrics(err: NavErrors, t_start_s: float = 0.0) -> dict:
     """RMS of every axis after ``t_start_s`` (skips the initial convergence).
 
     Returns a dict with ``rms_pos_{e,n,u}_m``, ``rms_pos_h_m`` (horizontal),
-    ``rms_pos_m`` (3-D), ``rms_vel_{e,n,u}_mps``, ``rms_vel_mps``,
+    ``rms_pos_m`` (3-D), ``rms_vel_{e,n,u}_mps``, ``rms_vel_mps``, ``rms_vel_h_mps``
+    (horizontal), ``final_pos_h_m`` (horizontal error at the end),
     ``rms_{pitch,roll,heading}_deg``, ``rms_att_deg`` (RMS over the three angles) and
     ``max_pos_h_m``.
     """
@@ -88,6 +89,8 @@ def rms_metrics(err: NavErrors, t_start_s: float = 0.0) -> dict:
     out["max_pos_h_m"] = float(np.max(np.hypot(p[:, 0], p[:, 1]))) if p.size else float("nan")
     out.update({f"rms_vel_{ax}_mps": rms(v[:, i]) for i, ax in enumerate(AXES)})
     out["rms_vel_mps"] = rms(np.linalg.norm(v, axis=1))
+    out["rms_vel_h_mps"] = rms(np.hypot(v[:, 0], v[:, 1]))
+    out["final_pos_h_m"] = float(np.hypot(*p[-1, :2])) if p.size else float("nan")
     out.update({f"rms_{nm}_deg": rms(a[:, i]) for i, nm in enumerate(ATT_NAMES)})
     out["rms_att_deg"] = rms(np.linalg.norm(a, axis=1))
     return out

@@ -36,7 +36,8 @@ class PaperClaims:
 
 
 #: prefix -> PaperClaims; one built-in module per paper
-CLAIMS = Registry("paper claims", "fuzzynav.claims", ("paper000", "paper001", "paper002"))
+CLAIMS = Registry("paper claims", "fuzzynav.claims", ("paper000", "paper001", "paper002",
+                                                    "paper003"))
 
 
 def register(claims: PaperClaims) -> PaperClaims:

@@ -228,7 +228,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
     wv = np.zeros(max(n, M))
     out_a = np.zeros(2 + M)
     diag = np.zeros(ev_diag.shape[1])
-    aux = np.zeros(6)
+    aux = np.zeros(6 + xs.size)  # IMU rates/force, then the sensor states (models read them)
     bg = np.zeros(3)
     ba = np.zeros(3)
     dth_c = np.zeros(3)
@@ -272,6 +272,8 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
             a = s_adapt[s]
             P, x, qd, Qacc = P3[s_local[s]], X[s_local[s]], QD[s_local[s]], Qacc3[s_local[s]]
             H[:, :] = 0.0
+            for i in range(xs.size):
+                aux[6 + i] = xs[i]
             m = meas_fns[s_meas[s]](nav, C, aux, ev_data[e], s_mpar[s], t - ev_t[e], z, H, R,
                                     chan)
             if m == 0:

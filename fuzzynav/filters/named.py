@@ -87,7 +87,7 @@ class NamedFilter:
 
 
 FILTERS = Registry("filter", "fuzzynav.filters", ("catalog", "subsets", "bank_named",
-                                                   "baselines"))
+                                                   "baselines", "catalog_paper003"))
 
 
 def register_filter(name: str, description: str, takes_rules: bool = False,
@@ -167,6 +167,8 @@ def config_from_imu(noise, **overrides) -> FilterConfig:
     def walk(t):
         return math.sqrt(t.rrw**2 + (2.0 * t.gm_sigma**2 / t.gm_tau_s if t.gm_sigma else 0.0))
 
+    if getattr(noise, "filter_states", "constant") == "markov":
+        return FilterConfig(**{**markov_config(noise), **overrides})
     cfg = dict(gyro_sigma_dph=(max(prior(g) / units.DPH, 1e-3),),
                accel_sigma_ug=(max(prior(a) / units.UG, 1e-1),),
                gyro_rw_dph_psh=(walk(g) / units.DPH_PSH,),
@@ -175,6 +177,26 @@ def config_from_imu(noise, **overrides) -> FilterConfig:
                vrw_ug_psqrthz=max(a.white / units.UG, 1e-2))
     cfg.update(overrides)
     return FilterConfig(**cfg)
+
+
+def markov_config(noise) -> dict:
+    """Paper 003's 18 states: gyro constant + gyro Gauss-Markov + accelerometer Gauss-Markov.
+
+    The constant gyro block covers the fixed and turn-on bias, the Markov blocks the bias
+    instability with its correlation time (steady sigma ``gm_sigma``; the accelerometer's
+    fixed and turn-on bias are folded into its Markov block's initial sigma).
+    """
+    from fuzzynav.filters.error_model import ErrorModel
+
+    g, a = noise.gyro, noise.accel
+    const_g = math.sqrt(float(np.mean(np.square(g.bias))) + g.bias_sigma**2)
+    accel = math.sqrt(float(np.mean(np.square(a.bias))) + a.bias_sigma**2 + a.gm_sigma**2)
+    return dict(model=ErrorModel(gyro_tau_s=(math.inf, g.gm_tau_s), accel_tau_s=(a.gm_tau_s,)),
+                gyro_sigma_dph=(max(const_g / units.DPH, 1e-3), max(g.gm_sigma / units.DPH, 1e-3)),
+                accel_sigma_ug=(max(accel / units.UG, 1e-1),),
+                gyro_rw_dph_psh=(g.rrw / units.DPH_PSH, 0.0), accel_rw_ug_psqrts=(0.0,),
+                arw_dpsh=max(g.white / units.DPSH, 1e-4),
+                vrw_ug_psqrthz=max(a.white / units.UG, 1e-2))
 
 
 def config_overrides(options) -> dict:

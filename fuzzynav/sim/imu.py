@@ -28,6 +28,8 @@ from fuzzynav.sim.tomltable import Table
 
 _ZERO3 = (0.0, 0.0, 0.0)
 _ZERO33 = (_ZERO3, _ZERO3, _ZERO3)
+#: how filters model the biases (ImuSpec.filter_states)
+FILTER_STATES = ("constant", "markov")
 #: per root-hour: sqrt(3600 s) = 60 [sqrt(s)]
 _ROOT_HOUR = 60.0
 
@@ -122,10 +124,14 @@ class ImuNoise:
     Attributes
     ----------
     gyro, accel : TriadNoise
+    filter_states : {"constant", "markov"}
+        How a filter configured from these figures models the biases
+        (:func:`fuzzynav.filters.named.config_from_imu`).
     """
 
     gyro: TriadNoise
     accel: TriadNoise
+    filter_states: str = "constant"
 
     @property
     def arw_rad_psqrts(self) -> float:
@@ -246,6 +252,11 @@ class ImuSpec:
         Acceleration random walk [micro-g/sqrt(h)].
     accel_sf_ppm, accel_misalign_deg
         As for the gyro.
+    filter_states : {"constant", "markov"}
+        The filters' bias states: random constants with a random walk (default), or as
+        paper 003 a gyro constant, a gyro Gauss-Markov and an accelerometer Gauss-Markov
+        block with the ``*_bi_tau_s`` correlation times (18 states).  Not an IMU property,
+        but the datasheet is where the filter's IMU model is chosen.
     """
 
     rate_hz: float = 100.0
@@ -265,6 +276,7 @@ class ImuSpec:
     accel_rrw_ug_psh: float = 0.0
     accel_sf_ppm: tuple = _ZERO3
     accel_misalign_deg: tuple = _ZERO33
+    filter_states: str = "constant"
 
     def __post_init__(self):
         # tuples of floats, so that specs built from lists compare and hash alike
@@ -277,6 +289,9 @@ class ImuSpec:
         if not (np.isfinite(self.rate_hz) and 0.0 < self.rate_hz <= 2000.0):
             raise InputFileError(None, "imu.rate_hz", f"must lie in (0, 2000] Hz, "
                                                       f"got {self.rate_hz!r}")
+        if self.filter_states not in FILTER_STATES:
+            raise InputFileError(None, "imu.filter_states", f"must be one of "
+                                 f"{', '.join(FILTER_STATES)}, got {self.filter_states!r}")
         for name in ("gyro_misalign_deg", "accel_misalign_deg"):
             if any(getattr(self, name)[i][i] != 0.0 for i in range(3)):
                 raise InputFileError(None, f"imu.{name}",
@@ -300,7 +315,8 @@ class ImuSpec:
 
     def noise_si(self) -> ImuNoise:
         """The error figures in SI units (ARW [rad/sqrt(s)], VRW [m/s/sqrt(s)], ...)."""
-        return ImuNoise(gyro=self._triad("gyro"), accel=self._triad("accel"))
+        return ImuNoise(gyro=self._triad("gyro"), accel=self._triad("accel"),
+                        filter_states=self.filter_states)
 
     # -- application --------------------------------------------------------------------
     def corrupt(self, ideal, rng) -> ImuData:
@@ -335,8 +351,9 @@ class ImuSpec:
         """Parse the ``[imu]`` table (errors name ``where.key``)."""
         t = Table(d, where)
         kw = {"rate_hz": t.number("rate_hz", cls.rate_hz, lo=0.0, hi=2000.0, lo_open=True)}
+        kw["filter_states"] = t.string("filter_states", "constant", choices=FILTER_STATES)
         for f in fields(cls):
-            if f.name == "rate_hz":
+            if f.name in ("rate_hz", "filter_states"):
                 continue
             kind, hi = _FIELDS[f.name][3], _limit(f.name)
             if kind == "vec":
@@ -353,5 +370,7 @@ class ImuSpec:
 
     def to_dict(self) -> dict:
         """The ``[imu]`` table (TOML-ready; round-trips through :meth:`from_dict`)."""
+        # filter_states only when set, so that older scenarios keep their cache keys
         return {k: (list(map(list, v)) if k.endswith("misalign_deg") else
-                    list(v) if isinstance(v, tuple) else v) for k, v in asdict(self).items()}
+                    list(v) if isinstance(v, tuple) else v) for k, v in asdict(self).items()
+                if k != "filter_states" or v != "constant"}

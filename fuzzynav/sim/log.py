@@ -94,7 +94,8 @@ def cache_key(scenario: Scenario, seed: int) -> str:
 
 def _generate(scenario: Scenario, seed: int) -> SensorLog:
     truth = generate(scenario.start_lla_rad, scenario.segments, scenario.imu.rate_hz,
-                     scenario.initial_speed_mps, np.deg2rad(scenario.initial_heading_deg))
+                     scenario.initial_speed_mps, np.deg2rad(scenario.initial_heading_deg),
+                     sea=scenario.sea)
     imu = scenario.imu.corrupt(truth, component_rng(seed, "imu"))
     sensors = {name: spec.simulate(truth, component_rng(seed, f"sensor:{name}"),
                                    scenario.start_utc)
@@ -130,7 +131,8 @@ def _meta(arrays, prefix: str) -> dict:
 
 def _from_arrays(a, scenario: Scenario, seed: int) -> SensorLog:
     truth = Trajectory(**{k: a[f"truth.{k}"] for k in _TRUTH_ARRAYS},
-                       imu_rate_hz=float(a["imu_rate_hz"]), segments=scenario.segments)
+                       imu_rate_hz=float(a["imu_rate_hz"]), segments=scenario.segments,
+                       sea=scenario.sea)
     imu = ImuData(**{k: a[f"imu.{k}"] for k in _IMU_ARRAYS}, meta=_meta(a, "imu.meta."))
     sensors = {}
     for name in a["sensor_names"].tolist():

@@ -8,6 +8,7 @@ File layout (every key, unit and default in ``docs/simulation.md``)::
     [imu]                             # ImuSpec fields (datasheet units) and rate_hz
     [[segments]]                      # Segment fields, one table per segment, in order
     [sensors.<name>]                  # kind = "<registered kind>" and that kind's fields
+    [sea]                             # optional: ship roll/pitch/yaw/heave and current
 
 Every problem is one :class:`fuzzynav.errors.InputFileError` naming the file, the TOML key
 path (``segments[3].turn_deg``, ``sensors.gps.rate_hz``) and what was wrong.
@@ -27,6 +28,7 @@ import numpy as np
 from fuzzynav.errors import DataMissingError, InputFileError, UnknownNameError
 from fuzzynav.sim.imu import ImuSpec
 from fuzzynav.sim.scenario_checks import check_scenario
+from fuzzynav.sim.sea import SeaState
 from fuzzynav.sim.segments import SEGMENT_KINDS, Profile, Segment
 from fuzzynav.sim.sensors import spec_class
 from fuzzynav.sim.tomltable import Table, parse_toml, read_toml, with_path
@@ -62,6 +64,8 @@ class Scenario:
     imu : ImuSpec
     sensors : Mapping[str, Spec]
         Sensor name -> registered sensor ``Spec`` (read-only mapping).
+    sea : SeaState or None
+        Hull oscillations and water current of a ship (:mod:`fuzzynav.sim.sea`).
     """
 
     name: str
@@ -75,6 +79,7 @@ class Scenario:
     segments: tuple
     imu: ImuSpec
     sensors: types.MappingProxyType
+    sea: SeaState | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "segments", tuple(self.segments))
@@ -114,7 +119,7 @@ class Scenario:
             "segments": [{k: v for k, v in asdict(s).items() if v is not None}
                          for s in self.segments],
             "sensors": {name: _sensor_dict(spec) for name, spec in self.sensors.items()},
-        }
+        } | ({"sea": self.sea.to_dict()} if self.sea is not None else {})
 
     def canonical(self) -> str:
         """Canonical JSON of everything that shapes the data (not name or description)."""
@@ -189,10 +194,12 @@ def scenario_from_dict(d: dict, default_name: str = "scenario") -> Scenario:
     if sens is not None:
         for key in list(sens.data):
             sensors[key] = _sensor(sens.table(key), key)
+    sea_table = top.table("sea", required=False)
+    sea = SeaState.from_dict(sea_table.data, sea_table.where) if sea_table else None
     top.finish()
     # Scenario() runs the cross-field checks (scenario_checks) and the motion check
     return Scenario(name=name, description=description, segments=segments, imu=imu,
-                    sensors=sensors, **start)
+                    sensors=sensors, sea=sea, **start)
 
 
 # -- built-ins and loading -------------------------------------------------------------------

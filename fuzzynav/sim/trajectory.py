@@ -61,6 +61,7 @@ class Trajectory:
     omega_nb_b: np.ndarray
     imu_rate_hz: float
     segments: tuple = field(default=())
+    sea: object = None  # the SeaState of a ship scenario (sensors read its current)
 
     @property
     def n_samples(self) -> int:
@@ -75,15 +76,27 @@ class Trajectory:
 
 
 def _kinematics(prof: dict):
-    """Velocity, acceleration, Euler angles and body rate from profile values."""
+    """Velocity, acceleration, Euler angles and body rate from profile values.
+
+    The velocity follows the track (``heading``, ``pitch``); the hull's attitude is the
+    track's unless the profile carries ``body_*`` angles (a sea state, :mod:`fuzzynav.sim.sea`),
+    and ``heave_dot``/``heave_ddot`` add a vertical motion.
+    """
     s, sd = prof["speed"], prof["speed_dot"]
     hd, th, thd = prof["heading"], prof["pitch"], prof["pitch_dot"]
-    psid, ga, gad = prof["heading_dot"], prof["roll"], prof["roll_dot"]
+    psid = prof["heading_dot"]
     sh, ch, sp, cp = np.sin(hd), np.cos(hd), np.sin(th), np.cos(th)
-    u = np.stack([sh * cp, ch * cp, sp], -1)  # forward axis in ENU (no side-slip)
+    u = np.stack([sh * cp, ch * cp, sp], -1)  # forward axis of the track in ENU
     du = np.stack([ch * cp * psid - sh * sp * thd, -sh * cp * psid - ch * sp * thd, cp * thd], -1)
     vel_n = s[..., None] * u
     acc_n = sd[..., None] * u + s[..., None] * du
+    if "heave_dot" in prof:
+        vel_n[..., 2] += prof["heave_dot"]
+        acc_n[..., 2] += prof["heave_ddot"]
+    hd, psid = prof.get("body_heading", hd), prof.get("body_heading_dot", psid)
+    th, thd = prof.get("body_pitch", th), prof.get("body_pitch_dot", thd)
+    ga, gad = prof.get("body_roll", prof["roll"]), prof.get("body_roll_dot", prof["roll_dot"])
+    sp, cp = np.sin(th), np.cos(th)
     sg, cg = np.sin(ga), np.cos(ga)
     # body rate of C_bn = R3(-heading) R1(pitch) R2(roll), expressed in body axes
     omega_nb_b = np.stack([psid * sg * cp + thd * cg, -psid * sp + gad,
@@ -157,7 +170,7 @@ def _body_rate_and_force(prof_nodes, lat_n, h_n):
 
 
 def generate(start_lla_rad, segments, imu_rate_hz, initial_speed_mps=0.0,
-             initial_heading_rad=0.0) -> Trajectory:
+             initial_heading_rad=0.0, sea=None) -> Trajectory:
     """Truth and ideal IMU increments of a segment trajectory.
 
     Parameters
@@ -170,12 +183,20 @@ def generate(start_lla_rad, segments, imu_rate_hz, initial_speed_mps=0.0,
         IMU sampling rate [Hz]; the trajectory is cut to a whole number of samples.
     initial_speed_mps, initial_heading_rad : float
         Motion state at the start (heading clockwise from north).
+    sea : SeaState, optional
+        Hull oscillations on top of the track (:mod:`fuzzynav.sim.sea`); kept on the result
+        for the sensors (the current).
 
     Returns
     -------
     Trajectory
     """
     profile = Profile(segments, initial_speed_mps, initial_heading_rad)
+
+    def evaluate(t):
+        prof = profile.evaluate(t)
+        return prof if sea is None else sea.apply(prof, t)
+
     dt = 1.0 / float(imu_rate_hz)
     n = int(np.floor(profile.duration_s * imu_rate_hz + 1e-9))
     time_s = np.arange(n + 1) / float(imu_rate_hz)
@@ -186,8 +207,8 @@ def generate(start_lla_rad, segments, imu_rate_hz, initial_speed_mps=0.0,
     b = b[np.abs(b / dt - np.round(b / dt)) > 1e-9]
     edges = np.union1d(time_s, b)
     quad = _Quadrature(edges)
-    vel_e, _, _, _ = _kinematics(profile.evaluate(edges))
-    prof_nodes = profile.evaluate(quad.t)
+    vel_e, _, _, _ = _kinematics(evaluate(edges))
+    prof_nodes = evaluate(quad.t)
     vel_nodes, _, _, _ = _kinematics(prof_nodes)
     lla_e, lat_n, h_n = _integrate_position(quad, vel_e, vel_nodes, np.asarray(start_lla_rad, float))
     omega_ib_b, f_b = _body_rate_and_force(prof_nodes, lat_n, h_n)
@@ -196,10 +217,10 @@ def generate(start_lla_rad, segments, imu_rate_hz, initial_speed_mps=0.0,
     dtheta_b = np.add.reduceat(quad.integrals(omega_ib_b), starts, axis=0)
     dv_b = np.add.reduceat(quad.integrals(f_b), starts, axis=0)
     on_grid = np.searchsorted(edges, time_s)
-    vel_n, _, att, omega_nb_b = _kinematics(profile.evaluate(time_s))
+    vel_n, _, att, omega_nb_b = _kinematics(evaluate(time_s))
     att = att.copy()
     att[:, 2] = attitude.wrap_2pi(att[:, 2])
     return Trajectory(time_s=time_s, lla=lla_e[on_grid], vel_n=vel_n, att=att,
                       q_bn=attitude.euler_to_quat(att), dtheta_b=dtheta_b, dv_b=dv_b,
                       omega_nb_b=omega_nb_b, imu_rate_hz=float(imu_rate_hz),
-                      segments=tuple(segments))
+                      segments=tuple(segments), sea=sea)

@@ -5,7 +5,9 @@ A model is a numba kernel with the fixed signature :data:`MEAS_SIG`::
     m = kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan)
 
 * ``nav`` — strapdown state (:mod:`fuzzynav.nav.strapdown` layout), ``C_bn`` its DCM;
-* ``aux`` — ``[omega_ib_b (3) rad/s, f_b (3) m/s^2]`` of the latest IMU interval;
+* ``aux`` — ``[omega_ib_b (3) rad/s, f_b (3) m/s^2]`` of the latest IMU interval, then the
+  current sensor-state estimates ``xs`` (the states after the core, from ``aux[6]``), so
+  that a model with its own states (a DVL scale factor) forms its residual with them;
 * ``row`` — this epoch's data row (by default ``[z..., sigma...]`` of the SensorData);
 * ``par`` — constants packed by the model's ``pack`` function (lever arms, switches);
 * ``dt_back`` — how long ago [s] the measurement was taken (it is processed at the first
@@ -56,6 +58,11 @@ class MeasurementModel:
         ``pack(sensor_data, options: dict) -> float64 array`` of constants ``par``.
     rows : callable
         ``rows(sensor_data) -> (M, W) float64`` data rows.
+    states : callable, optional
+        ``states(sensor_data, options) -> tuple of (block, tau_s, sigma0, steady_sigma)``:
+        state blocks the model wants in the layout
+        (:func:`fuzzynav.filters.sensor_states.with_sensor_states` adds them and passes
+        their starts to ``pack`` as ``options["state_start"]``).
     """
 
     kind: str
@@ -64,6 +71,7 @@ class MeasurementModel:
     channels: tuple
     pack: Callable
     rows: Callable = default_rows
+    states: Callable | None = None
 
     def channel_index(self, name: str) -> int:
         """Index of channel ``name`` (clear error when the model has no such channel)."""
@@ -77,7 +85,7 @@ class MeasurementModel:
 
 
 MODELS = Registry("measurement model", __name__, ("gnss", "polarization", "nhc", "magnetometer",
-                                                  "bds"))
+                                                  "bds", "log", "neutral_point"))
 
 
 def register(model: MeasurementModel) -> MeasurementModel:

@@ -19,7 +19,8 @@ import numpy as np
 from fuzzynav.registry import Registry
 
 #: kind name -> Spec class
-SENSOR_KINDS = Registry("sensor kind", __name__, ("gnss", "polarization", "magnetometer", "bds"))
+SENSOR_KINDS = Registry("sensor kind", __name__, ("gnss", "polarization", "magnetometer", "bds",
+                                                  "log", "nhc", "neutral_point"))
 
 
 def register(kind: str):

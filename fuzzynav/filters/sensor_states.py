@@ -1,0 +1,59 @@
+"""State blocks asked for by measurement models (a log's scale factor, bias and current).
+
+A measurement model may declare ``states(sensor_data, options)``: the blocks it estimates.
+:func:`with_sensor_states` appends them to a filter setup's error model (after the blocks
+already there), gives them their initial sigma and driving noise, and tells the model where
+they are through ``sensor_options[name]["state_start"]`` (block kind -> first state index),
+which its ``pack`` function turns into kernel constants.  A second sensor asking for a block
+of the same kind gets its own block, tagged with the sensor's name (``log_bias:log2``).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+from fuzzynav.filters import measurements
+
+
+def _noise(tau_s: float, sigma0: float, steady: float) -> tuple:
+    """``(initial sigma, driving-noise density)``: 2 steady^2 / tau for Gauss-Markov."""
+    q = 0.0 if math.isinf(tau_s) else 2.0 * steady * steady / tau_s
+    return (float(sigma0), q)
+
+
+def with_sensor_states(setup, sensors: dict):
+    """``setup`` (a :class:`~fuzzynav.filters.named.FilterSetup`) with the sensors' blocks.
+
+    Parameters
+    ----------
+    setup : FilterSetup
+    sensors : mapping name -> SensorData
+
+    Returns
+    -------
+    FilterSetup
+        The same setup when no model asks for states.
+    """
+    config = setup.config
+    extra, noise = list(config.model.extra), list(config.extra_noise_si)
+    options = {nm: dict(v) for nm, v in setup.sensor_options.items()}
+    names = {nm for nm, _ in extra}
+    owned = {}
+    for nm in sorted(sensors):
+        model = measurements.get(sensors[nm].kind)
+        if model.states is None:
+            continue
+        for block, tau, sigma0, steady in model.states(sensors[nm], options.get(nm, {})):
+            name = block if block not in names else f"{block}:{nm}"
+            names.add(name)
+            extra.append((name, float(tau)))
+            noise.append(_noise(tau, sigma0, steady))
+            owned.setdefault(nm, []).append((block, name))
+    if not owned:
+        return setup
+    model = replace(config.model, extra=tuple(extra))
+    config = config.with_(model=model, extra_noise_si=tuple(noise))
+    for nm, blocks in owned.items():
+        options.setdefault(nm, {})["state_start"] = {b: model.layout.start(name)
+                                                      for b, name in blocks}
+    return replace(setup, config=config, sensor_options=options)

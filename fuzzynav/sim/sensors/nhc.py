@@ -1,0 +1,94 @@
+"""Non-holonomic constraint pseudo-measurements of a ship: sensor kind ``nhc``.
+
+The constraint says the body lateral (``x_b``) and vertical (``z_b``) velocities over ground
+are zero; it is fed to the filter's ``nhc`` model (:mod:`fuzzynav.filters.measurements.nhc`)
+as the rows ``[v_x, v_z, sigma_x, sigma_z]``.  What makes it wrong on a ship:
+
+* the hull's own motion — yaw swinging the bow off the track (``v sin(yaw)`` sideways),
+  heave and pitch (vertical) — already in the truth (:mod:`fuzzynav.sim.sea`);
+* the current's lateral component and the leeway (wind drift, ``v tan(leeway)``): a real
+  ship's ground track has them sideways.  Our truth keeps the ground track along the keel,
+  so they are put into the pseudo-measurement instead, ``v_x = -(c_x + v tan(leeway))``:
+  the residual ``INS - constraint`` is then what it would be on the real ship;
+* optional white noise ``noise_mps``.
+
+``sigma`` is the claimed 1-sigma (paper 003: 0.2 m/s); ``meta["true_sigma"]`` is the RMS of
+the simulated error per column over the run (a single figure; the error is not white).
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from fuzzynav.sim.sensors import SensorData, epoch_indices, register
+from fuzzynav.sim.sensors.log import body_velocity
+from fuzzynav.sim.tomltable import Table
+
+
+@register("nhc")
+@dataclass(frozen=True)
+class Spec:
+    """Ship non-holonomic constraints (a ``kind = "nhc"`` sensor table).
+
+    Parameters
+    ----------
+    rate_hz : float
+        Pseudo-measurement rate [Hz].
+    sigma_mps : float
+        Claimed 1-sigma of both rows [m/s] (paper 003: 0.2).
+    noise_mps : float
+        White noise added to both rows [m/s].
+    leeway_deg : float
+        Leeway angle: a sideways drift of ``speed tan(leeway)`` [deg].
+    current_error : bool
+        Put the current's lateral component into the pseudo-measurement.
+    """
+
+    rate_hz: float = 10.0
+    sigma_mps: float = 0.2
+    noise_mps: float = 0.0
+    leeway_deg: float = 0.0
+    current_error: bool = True
+
+    kind = "nhc"
+
+    def columns(self) -> int:
+        """Measurement columns per epoch (memory budget)."""
+        return 2
+
+    def simulate(self, truth, rng, start_utc=None) -> SensorData:
+        """Constraint pseudo-measurements along ``truth``."""
+        idx = epoch_indices(truth, 0.0, self.rate_hz)
+        z = np.zeros((idx.size, 2))
+        water_b = body_velocity(truth, idx)
+        ground_b = body_velocity(truth, idx, through_water=False)
+        if self.current_error:
+            # body-lateral current = lateral ground velocity minus lateral water velocity
+            z[:, 0] -= ground_b[:, 0] - water_b[:, 0]
+        z[:, 0] -= water_b[:, 1] * np.tan(np.deg2rad(self.leeway_deg))
+        z += self.noise_mps * rng.standard_normal(z.shape)
+        # the error a filter meets: the true body velocity minus the pseudo-measurement
+        err = ground_b[:, [0, 2]] - z
+        rms = np.sqrt(np.mean(err**2, axis=0)) if idx.size else np.zeros(2)
+        meta = {"true_sigma": np.tile(rms, (idx.size, 1)), "rate_hz": float(self.rate_hz)}
+        return SensorData(kind=self.kind, time_s=np.asarray(truth.time_s)[idx], z=z,
+                          sigma=np.full((idx.size, 2), self.sigma_mps), meta=meta)
+
+    @classmethod
+    def from_dict(cls, d: dict, where: str) -> "Spec":
+        """Parse a sensor table; errors name ``where.key``."""
+        t = Table(d, where)
+        t.string("kind", "nhc", choices=("nhc",))
+        kw = {"rate_hz": t.number("rate_hz", 10.0, lo=0.0, hi=1000.0, lo_open=True),
+              "sigma_mps": t.number("sigma_mps", 0.2, lo=0.0, hi=100.0, lo_open=True),
+              "noise_mps": t.number("noise_mps", 0.0, lo=0.0, hi=100.0),
+              "leeway_deg": t.number("leeway_deg", 0.0, lo=-30.0, hi=30.0),
+              "current_error": t.boolean("current_error", True)}
+        t.finish()
+        return cls(**kw)
+
+    def to_dict(self) -> dict:
+        """The sensor table (TOML-ready)."""
+        return {"kind": self.kind, **asdict(self)}
+
