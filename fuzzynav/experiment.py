@@ -14,6 +14,7 @@ import pandas as pd
 from fuzzynav.errors import UnknownNameError
 from fuzzynav.filters.named import FilterContext, FilterSetup, get_filter, parse_filter_spec
 from fuzzynav.filters.runner import InitialState, run_filter
+from fuzzynav.filters.sensor_states import add_sensor_states
 from fuzzynav.metrics import errors_vs_trajectory, improvement_ci, mean_ci, rms_metrics
 from fuzzynav.nav import attitude, earth
 from fuzzynav.sim.log import SensorLog, component_rng, simulate
@@ -46,7 +47,7 @@ def setup_for(log: SensorLog, filter_name: str, options=None) -> FilterSetup:
     """Configuration and adapters of a named filter for a simulated log."""
     ctx = FilterContext(imu_noise=log.scenario.imu.noise_si(), sensors=dict(log.sensors),
                         options=dict(options or {}))
-    return get_filter(filter_name).make(ctx)
+    return add_sensor_states(get_filter(filter_name).make(ctx), ctx.sensors, ctx.options)
 
 
 def run_on_log(log: SensorLog, filter_name: str, options=None, t_start_s: float = 0.0,

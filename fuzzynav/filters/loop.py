@@ -225,7 +225,7 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
     wv = np.zeros(max(n, M))
     out_a = np.zeros(2 + M)
     diag = np.zeros(ev_diag.shape[1])
-    aux = np.zeros(6)
+    aux = np.zeros(6 + xs.size)  # IMU rates/force, then the sensor states (models read them)
     qd = q_diag.copy()
     bg = np.zeros(3)
     ba = np.zeros(3)
@@ -261,6 +261,8 @@ def run_loop(imu, start, model, events, sensors, meas_fns, adapt_fns, settings, 
             s = ev_s[e]
             a = s_adapt[s]
             H[:, :] = 0.0
+            for i in range(xs.size):
+                aux[6 + i] = xs[i]
             m = meas_fns[s_meas[s]](nav, C, aux, ev_data[e], s_mpar[s], t - ev_t[e], z, H, R,
                                     chan)
             if m == 0:

@@ -25,7 +25,8 @@ def setup_with_systems(log, systems: dict) -> FilterSetup:
     """The EKF configuration of a log with the given fuzzy systems bound to its sensors."""
     base = setup_for(log, "ekf")
     items = [(fis, f"<candidate {name}>") for name, fis in systems.items()]
-    return FilterSetup(base.config, bind_systems(items, log.sensors, required=True))
+    return FilterSetup(base.config, bind_systems(items, log.sensors, required=True),
+                       base.sensor_options)
 
 
 #: ratio given to a metric when the candidate's run failed or is not finite
@@ -73,7 +74,7 @@ class Evaluator:
         log = self.log(scenario, seed)
         setup = setup_with_systems(log, systems)
         res = run_filter(log.imu, log.sensors, perturbed_initial_state(log, setup),
-                         setup.config, setup.adapters)
+                         setup.config, setup.adapters, setup.sensor_options)
         metrics = rms_metrics(errors_vs_trajectory(res, log.truth), self.config.t_start_s)
         metrics["completed"] = float(res.ok)
         return res, metrics

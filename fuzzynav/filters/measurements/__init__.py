@@ -5,7 +5,9 @@ A model is a numba kernel with the fixed signature :data:`MEAS_SIG`::
     m = kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan)
 
 * ``nav`` — strapdown state (:mod:`fuzzynav.nav.strapdown` layout), ``C_bn`` its DCM;
-* ``aux`` — ``[omega_ib_b (3) rad/s, f_b (3) m/s^2]`` of the latest IMU interval;
+* ``aux`` — ``[omega_ib_b (3) rad/s, f_b (3) m/s^2]`` of the latest IMU interval, then the
+  current sensor-state estimates ``xs`` (the states after the core, from ``aux[6]``), so
+  that a model with its own states (a DVL scale factor) forms its residual with them;
 * ``row`` — this epoch's data row (by default ``[z..., sigma...]`` of the SensorData);
 * ``par`` — constants packed by the model's ``pack`` function (lever arms, switches);
 * ``dt_back`` — how long ago [s] the measurement was taken (it is processed at the first
@@ -76,7 +78,7 @@ class MeasurementModel:
                                    self.channels + ("all",)) from None
 
 
-MODELS = Registry("measurement model", __name__, ("gnss", "polarization", "nhc"))
+MODELS = Registry("measurement model", __name__, ("gnss", "polarization", "nhc", "dvl"))
 
 
 def register(model: MeasurementModel) -> MeasurementModel:

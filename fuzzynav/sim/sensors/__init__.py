@@ -19,7 +19,7 @@ import numpy as np
 from fuzzynav.registry import Registry
 
 #: kind name -> Spec class
-SENSOR_KINDS = Registry("sensor kind", __name__, ("gnss", "polarization"))
+SENSOR_KINDS = Registry("sensor kind", __name__, ("gnss", "polarization", "dvl"))
 
 
 def register(kind: str):
