@@ -74,7 +74,7 @@ def rms_metrics(err: NavErrors, t_start_s: float = 0.0) -> dict:
     Returns a dict with ``rms_pos_{e,n,u}_m``, ``rms_pos_h_m`` (horizontal),
     ``rms_pos_m`` (3-D), ``rms_vel_{e,n,u}_mps``, ``rms_vel_mps``,
     ``rms_{pitch,roll,heading}_deg``, ``rms_att_deg`` (RMS over the three angles) and
-    ``max_pos_h_m``.
+    ``max_pos_h_m`` and ``mean_pos_h_m`` (largest and mean horizontal error, paper 004).
     """
     sel = err.time_s >= t_start_s
     p, v, a = err.pos_m[sel], err.vel_mps[sel], np.rad2deg(err.att_rad[sel])
@@ -86,6 +86,7 @@ def rms_metrics(err: NavErrors, t_start_s: float = 0.0) -> dict:
     out["rms_pos_h_m"] = rms(np.hypot(p[:, 0], p[:, 1]))
     out["rms_pos_m"] = rms(np.linalg.norm(p, axis=1))
     out["max_pos_h_m"] = float(np.max(np.hypot(p[:, 0], p[:, 1]))) if p.size else float("nan")
+    out["mean_pos_h_m"] = float(np.mean(np.hypot(p[:, 0], p[:, 1]))) if p.size else float("nan")
     out.update({f"rms_vel_{ax}_mps": rms(v[:, i]) for i, ax in enumerate(AXES)})
     out["rms_vel_mps"] = rms(np.linalg.norm(v, axis=1))
     out.update({f"rms_{nm}_deg": rms(a[:, i]) for i, nm in enumerate(ATT_NAMES)})

@@ -36,7 +36,7 @@ class PaperClaims:
 
 
 #: prefix -> PaperClaims; one built-in module per paper
-CLAIMS = Registry("paper claims", "fuzzynav.claims", ("paper000",))
+CLAIMS = Registry("paper claims", "fuzzynav.claims", ("paper000", "paper004"))
 
 
 def register(claims: PaperClaims) -> PaperClaims:

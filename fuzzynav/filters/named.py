@@ -65,7 +65,7 @@ class NamedFilter:
     takes_rules: bool = False  # reads rule files (``rules`` option): others refuse them
 
 
-FILTERS = Registry("filter", "fuzzynav.filters", ("catalog",))
+FILTERS = Registry("filter", "fuzzynav.filters", ("catalog", "tuned_qr"))
 
 
 def register_filter(name: str, description: str, takes_rules: bool = False):
