@@ -104,12 +104,12 @@ def run_recording(spec, filter_name, options, args) -> int:
     """
     from fuzzynav.realdata.validate import check_finite, metrics_table, validate
 
+    settings = settings_from(args)
     rec = load_recording(spec, args)
     if isinstance(rec, list):  # several recordings of one kind (akit trajectories)
         from fuzzynav.realdata.akit_cli import run_akit
 
         return run_akit(spec, rec, filter_name, options, args)
-    settings = settings_from(args)
     seeds = list(range(args.seed, args.seed + args.mc))
     vals = [validate(rec, filter_name, settings, s, options) for s in seeds]
     df = metrics_table(vals)
