@@ -6,6 +6,7 @@ gives, per column, every metric as ``{"mean", "ci95", "values"}`` like the rtkli
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import pandas as pd
@@ -54,7 +55,6 @@ def json_summary(spec, recs, filter_name, df) -> dict:
     """Everything of the run as JSON-ready data (the rtklib layout: columns of metrics)."""
     from fuzzynav.metrics import mean_ci
     from fuzzynav.realdata.akit import INIT_OPTIONS
-    from fuzzynav.realdata.cli import _clean
 
     metric_cols = [c for c in df.columns if c.startswith(("rms_", "max_", "mean_", "end_"))
                    or c == "distance_m"]
@@ -65,7 +65,7 @@ def json_summary(spec, recs, filter_name, df) -> dict:
         feeds[label] = {m: {"mean": mean_ci(sub[m]).mean,
                             "ci95": [mean_ci(sub[m]).lo, mean_ci(sub[m]).hi],
                             "values": [float(x) for x in sub[m]]} for m in metric_cols}
-    return _clean({"data": str(spec), "directory": str(recs[0].directory),
+    return _json_ready({"data": str(spec), "directory": str(recs[0].directory),
                    "filter": filter_name, "trajectories": [r.trajectory for r in recs],
                    "settings": {k: list(v) if isinstance(v, tuple) else v
                                 for k, v in INIT_OPTIONS.items()},
@@ -75,6 +75,16 @@ def json_summary(spec, recs, filter_name, df) -> dict:
                    "feeds": feeds,
                    "status": {f"traj {r.trajectory}": s for r, s in
                               zip(recs, ["ok" if c >= 1 else "stopped" for c in df["completed"]])}})
+
+
+def _json_ready(x):
+    """NaN and infinities as None, recursively (JSON has no NaN)."""
+    if isinstance(x, dict):
+        return {k: _json_ready(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_json_ready(v) for v in x]
+    finite = not isinstance(x, float) or math.isfinite(x)
+    return x if finite else None
 
 
 def run_akit(spec, recs, filter_name, options, args) -> int:
