@@ -11,9 +11,10 @@ multipliers it finds are constants, so the filter itself is an EKF with
 * ``r_scale``: factor on every measurement variance (all channels), or ``r_scale_<channel>``
   per channel (``r_scale_vel_b`` for the DVL).
 
-Give them as filter options, or as ``apso_file``: a JSON file (written by
-``fuzzynav.tuning.apso``) whose ``multipliers`` object holds the same keys.  Without either
-the filter is the plain EKF.
+Give them as filter options, or as an APSO result file — a JSON file written by
+``python -m fuzzynav.tuning.apso`` whose ``multipliers`` object holds the same keys — given as
+the filter's rule file (``--filter apso@rules/paper004_apso.json``, ``--rules FILE`` or the
+option ``apso_file``).  Without any the filter is the plain EKF.
 """
 from __future__ import annotations
 
@@ -72,11 +73,17 @@ def scaled_config(base, mult: dict):
 
 
 @register_filter("apso", "EKF with Q/R multipliers tuned by paper 004's adaptive PSO "
-                         "(options q_scale_att/vel/gyro/accel, r_scale[_<channel>], or "
-                         "apso_file; none = the EKF)")
+                         "(an APSO result file as its rule file, e.g. "
+                         "apso@paper004_apso.json; none = the EKF)", takes_rules=True)
 def _apso(ctx) -> FilterSetup:
+    from fuzzynav.filters.catalog import find_rule_file
+
     opts = dict(ctx.options)
-    mult = read_multipliers(opts["apso_file"]) if opts.get("apso_file") else {}
+    given = opts.get("apso_file") or opts.get("rules")
+    files = [given] if isinstance(given, (str, Path)) else list(given or [])
+    if len(files) > 1:
+        raise InputFileError(files[1], "", "apso takes one result file")
+    mult = read_multipliers(find_rule_file(files[0])) if files else {}
     mult.update(check_multipliers({k: v for k, v in opts.items()
                                    if k in Q_KEYS or str(k).startswith("r_scale")}))
     cfg = scaled_config(config_from_imu(ctx.imu_noise, **config_overrides(opts)), mult)
