@@ -52,3 +52,15 @@ def write_section(name: str, body: str) -> None:
     with os.fdopen(fd, "w") as fh:
         fh.write(text)
     publish(tmp, DOC)
+
+
+def write_results(doc: Path, body: str) -> None:
+    """Replace the text between ``<!-- results:begin -->`` and ``<!-- results:end -->`` of
+    a docs page (e.g. docs/paper004.md), atomically."""
+    a, b = "<!-- results:begin -->", "<!-- results:end -->"
+    text = doc.read_text()
+    text = text.split(a)[0] + a + "\n" + body + "\n" + b + text.split(b)[1]
+    fd, tmp = tempfile.mkstemp(dir=doc.parent, prefix=f".{doc.stem}.", suffix=".md")
+    with os.fdopen(fd, "w") as fh:
+        fh.write(text)
+    publish(tmp, doc)

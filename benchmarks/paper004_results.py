@@ -20,12 +20,11 @@ import numpy as np
 import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _report import machine  # noqa: E402
+from _report import machine, write_results  # noqa: E402
 
 from fuzzynav import plots  # noqa: E402
 from fuzzynav.claims.paper004 import PAPER004_IMPROVEMENT, PAPER004_LAKE  # noqa: E402
 from fuzzynav.experiment import monte_carlo, run_on_log  # noqa: E402
-from fuzzynav.fileio import publish  # noqa: E402
 from fuzzynav.metrics import errors_vs_trajectory, improvement_ci, mean_ci  # noqa: E402
 from fuzzynav.report import render  # noqa: E402
 from fuzzynav.sim.log import simulate  # noqa: E402
@@ -213,13 +212,7 @@ def main(argv=None):
     parts += ["Figures: " + ", ".join(f"[{p.name}](figures/{p.name})" for p in figs), ""]
     parts += [f"![{p.stem}](figures/{p.name})" for p in figs]
     text = "\n".join(parts)
-    doc = ROOT / "docs" / "paper004.md"
-    body = doc.read_text()
-    a, b = "<!-- results:begin -->", "<!-- results:end -->"
-    body = body.split(a)[0] + a + "\n" + text + "\n" + b + body.split(b)[1]
-    tmp = doc.with_suffix(".md.tmp")
-    tmp.write_text(body)
-    publish(tmp, doc)
+    write_results(ROOT / "docs" / "paper004.md", text)
     print(text)
 
 
