@@ -39,11 +39,12 @@ FILTERS = {  # label -> filter spec (options below)
     "Huber γ = 1.345": "huber",
     "Sage–Husa": "sage-husa",
     "VB": "vb",
-    "APSO (tuned Q/R)": f"apso@{R}paper004_apso.json",
+    "APSO (tuned Q/R)": "apso@studies/paper004_apso.result.json",  # see APSO
     "fuzzy R-scaling (tuned)": f"fakf@{R}paper004_fuzzy_dvl.json",
 }
 SCENARIOS = ("paper004", "paper004-clean", "paper004-heavy", "paper004-dropouts")
-REAL_FILTERS = ("ekf", "ekf-st", "huber", "sage-husa", "vb", f"apso@{R}paper004_apso.json")
+APSO = "apso@studies/paper004_apso.result.json"
+REAL_FILTERS = ("ekf", "ekf-st", "huber", "sage-husa", "vb", APSO)
 FIG = ROOT / "docs" / "figures"
 
 
@@ -139,7 +140,7 @@ def real_table(df, key="rms_pos_h_m") -> str:
 def figures(dfs, cache, recs, ekf_results) -> list:
     """Convergence/inertia of the APSO, simulated error curves, A-KIT map and errors."""
     out = []
-    doc = json.loads((ROOT / R / "paper004_apso.json").read_text())
+    doc = json.loads((ROOT / "studies" / "paper004_apso.result.json").read_text())
     hist = pd.DataFrame(doc["history"])
     fig, ax = plots.plt.subplots(figsize=(6, 3.2))
     ax.plot(hist["iteration"], hist["best"], "o-", label="best fitness (m)")

@@ -12,9 +12,9 @@ multipliers it finds are constants, so the filter itself is an EKF with
   per channel (``r_scale_vel_b`` for the DVL).
 
 Give them as filter options, or as an APSO result file — a JSON file written by
-``python -m fuzzynav.tuning.apso`` whose ``multipliers`` object holds the same keys — given as
-the filter's rule file (``--filter apso@rules/paper004_apso.json``, ``--rules FILE`` or the
-option ``apso_file``).  Without any the filter is the plain EKF.
+``python -m fuzzynav.tuning.apso`` whose ``multipliers`` object holds the same keys — given
+as the filter's rule file (``--filter apso@studies/paper004_apso.result.json``, ``--rules
+FILE`` or the option ``apso_file``).  Without any the filter is the plain EKF.
 """
 from __future__ import annotations
 
@@ -73,8 +73,8 @@ def scaled_config(base, mult: dict):
 
 
 @register_filter("apso", "EKF with Q/R multipliers tuned by paper 004's adaptive PSO "
-                         "(an APSO result file as its rule file, e.g. "
-                         "apso@paper004_apso.json; none = the EKF)", takes_rules=True)
+                         "(an APSO result file as its rule file, e.g. apso@studies/"
+                         "paper004_apso.result.json; none = the EKF)", takes_rules=True)
 def _apso(ctx) -> FilterSetup:
     from fuzzynav.filters.catalog import find_rule_file
 

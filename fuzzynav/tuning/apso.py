@@ -3,7 +3,8 @@
 The study machinery of :mod:`fuzzynav.tuning.study` tunes rule files; the APSO of paper 004
 tunes constant noise multipliers, so it is this small driver instead::
 
-    python -m fuzzynav.tuning.apso studies/paper004_apso.toml --out rules/paper004_apso.json
+    python -m fuzzynav.tuning.apso studies/paper004_apso.toml \
+        --out studies/paper004_apso.result.json
 
 Each particle is a vector of log10 multipliers (``[apso.bounds]``: key -> [lo, hi]; keys of
 :mod:`fuzzynav.filters.tuned_qr`); fitness = mean over the training runs of the RMS
@@ -12,7 +13,7 @@ horizontal position error against the truth (the paper's f(Q, R) over a window o
 ``[study.pso] inertia[0]`` to ``inertia[1]`` (:func:`fuzzynav.tuning.pso.inertia`, the same
 schedule as the rule-file PSO).  The result file holds the best multipliers, the
 convergence history, the test table and an ``expected`` block that
-``tests/test_rules_regression.py`` re-runs.
+``tests/tuning/test_apso.py`` re-runs.
 """
 from __future__ import annotations
 

@@ -57,3 +57,12 @@ def test_multipliers_are_log_uniform_in_the_bounds():
     hi = multipliers(cfg, [1.0, 1.0, 1.0])
     assert lo == pytest.approx({"q_scale_att": 0.01, "q_scale_vel": 0.01, "r_scale": 0.1})
     assert hi == pytest.approx({"q_scale_att": 100.0, "q_scale_vel": 100.0, "r_scale": 100.0})
+
+
+def test_the_tuned_result_reproduces_its_expected_metrics(tmp_path):
+    """The shipped APSO result file re-run on its ``expected`` scenario and seed (the
+    mechanism of tests/test_rules_regression.py; the file is not a rule file, so it is not
+    in rules/)."""
+    from tests.test_rules_regression import check_expected
+
+    check_expected(ROOT / "studies" / "paper004_apso.result.json", tmp_path)
