@@ -17,7 +17,9 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-EXAMPLES = sorted(STUDIES.glob("*.toml"))
+# study configs; files with an [apso] table are read by fuzzynav.tuning.apso instead
+# (paper 004's Q/R swarm, tests/tuning/test_apso.py)
+EXAMPLES = sorted(p for p in STUDIES.glob("*.toml") if "apso" not in tomllib.loads(p.read_text()))
 
 
 def _ctrl(**kw):
