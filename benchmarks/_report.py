@@ -54,11 +54,13 @@ def write_section(name: str, body: str) -> None:
     publish(tmp, DOC)
 
 
-def write_results(doc: Path, text: str) -> None:
-    """Replace the ``<!-- results:begin -->`` ... ``<!-- results:end -->`` part of ``doc``."""
-    body = doc.read_text()
+def write_results(doc: Path, body: str) -> None:
+    """Replace the text between ``<!-- results:begin -->`` and ``<!-- results:end -->`` of
+    a docs page (e.g. docs/paper004.md), atomically."""
     a, b = "<!-- results:begin -->", "<!-- results:end -->"
-    body = body.split(a)[0] + a + "\n" + text + "\n" + b + body.split(b)[1]
-    tmp = doc.with_suffix(".md.tmp")
-    tmp.write_text(body)
+    text = doc.read_text()
+    text = text.split(a)[0] + a + "\n" + body + "\n" + b + text.split(b)[1]
+    fd, tmp = tempfile.mkstemp(dir=doc.parent, prefix=f".{doc.stem}.", suffix=".md")
+    with os.fdopen(fd, "w") as fh:
+        fh.write(text)
     publish(tmp, doc)

@@ -47,7 +47,8 @@ def setup_for(log: SensorLog, filter_name: str, options=None) -> FilterSetup:
     """Configuration and adapters of a named filter for a simulated log."""
     ctx = FilterContext(imu_noise=log.scenario.imu.noise_si(), sensors=dict(log.sensors),
                         options=dict(options or {}))
-    return with_sensor_states(get_filter(filter_name).make(ctx), ctx.sensors)
+    return with_sensor_states(get_filter(filter_name).make(ctx), ctx.sensors,
+                              ctx.options)
 
 
 def run_on_log(log: SensorLog, filter_name: str, options=None, t_start_s: float = 0.0,

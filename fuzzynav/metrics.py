@@ -75,7 +75,7 @@ def rms_metrics(err: NavErrors, t_start_s: float = 0.0) -> dict:
     ``rms_pos_m`` (3-D), ``rms_vel_{e,n,u}_mps``, ``rms_vel_mps``, ``rms_vel_h_mps``
     (horizontal), ``final_pos_h_m`` (horizontal error at the end),
     ``rms_{pitch,roll,heading}_deg``, ``rms_att_deg`` (RMS over the three angles) and
-    ``max_pos_h_m``.
+    ``max_pos_h_m`` and ``mean_pos_h_m`` (largest and mean horizontal error, paper 004).
     """
     sel = err.time_s >= t_start_s
     p, v, a = err.pos_m[sel], err.vel_mps[sel], np.rad2deg(err.att_rad[sel])
@@ -87,6 +87,7 @@ def rms_metrics(err: NavErrors, t_start_s: float = 0.0) -> dict:
     out["rms_pos_h_m"] = rms(np.hypot(p[:, 0], p[:, 1]))
     out["rms_pos_m"] = rms(np.linalg.norm(p, axis=1))
     out["max_pos_h_m"] = float(np.max(np.hypot(p[:, 0], p[:, 1]))) if p.size else float("nan")
+    out["mean_pos_h_m"] = float(np.mean(np.hypot(p[:, 0], p[:, 1]))) if p.size else float("nan")
     out.update({f"rms_vel_{ax}_mps": rms(v[:, i]) for i, ax in enumerate(AXES)})
     out["rms_vel_mps"] = rms(np.linalg.norm(v, axis=1))
     out["rms_vel_h_mps"] = rms(np.hypot(v[:, 0], v[:, 1]))

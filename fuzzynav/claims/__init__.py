@@ -37,7 +37,7 @@ class PaperClaims:
 
 #: prefix -> PaperClaims; one built-in module per paper
 CLAIMS = Registry("paper claims", "fuzzynav.claims", ("paper000", "paper001", "paper002",
-                                                    "paper003"))
+                                                    "paper003", "paper004"))
 
 
 def register(claims: PaperClaims) -> PaperClaims:

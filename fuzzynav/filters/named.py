@@ -87,7 +87,7 @@ class NamedFilter:
 
 
 FILTERS = Registry("filter", "fuzzynav.filters", ("catalog", "subsets", "bank_named",
-                                                   "baselines", "catalog_paper003"))
+                                                   "baselines", "catalog_paper003", "tuned_qr"))
 
 
 def register_filter(name: str, description: str, takes_rules: bool = False,

@@ -1,4 +1,4 @@
-"""State blocks asked for by measurement models (a log's scale factor, bias and current).
+"""State blocks asked for by measurement models (a log's scale factor, a DVL's misalignment).
 
 A measurement model may declare ``states(sensor_data, options)``: the blocks it estimates.
 :func:`with_sensor_states` appends them to a filter setup's error model (after the blocks
@@ -21,19 +21,26 @@ def _noise(tau_s: float, sigma0: float, steady: float) -> tuple:
     return (float(sigma0), q)
 
 
-def with_sensor_states(setup, sensors: dict):
+def with_sensor_states(setup, sensors: dict, filter_options=None):
     """``setup`` (a :class:`~fuzzynav.filters.named.FilterSetup`) with the sensors' blocks.
 
     Parameters
     ----------
     setup : FilterSetup
     sensors : mapping name -> SensorData
+    filter_options : dict, optional
+        The named filter's options: ``sensor_states = False`` adds nothing (e.g. the A-KIT
+        runs); the others (e.g. ``dvl_scale_sigma``) reach every model's ``states``, under
+        the sensor's own ``sensor_options``.
 
     Returns
     -------
     FilterSetup
         The same setup when no model asks for states.
     """
+    filter_options = dict(filter_options or {})
+    if not filter_options.get("sensor_states", True):
+        return setup
     config = setup.config
     extra, noise = list(config.model.extra), list(config.extra_noise_si)
     options = {nm: dict(v) for nm, v in setup.sensor_options.items()}
@@ -43,7 +50,8 @@ def with_sensor_states(setup, sensors: dict):
         model = measurements.get(sensors[nm].kind)
         if model.states is None:
             continue
-        for block, tau, sigma0, steady in model.states(sensors[nm], options.get(nm, {})):
+        for block, tau, sigma0, steady in model.states(sensors[nm],
+                                                         {**filter_options, **options.get(nm, {})}):
             name = block if block not in names else f"{block}:{nm}"
             names.add(name)
             extra.append((name, float(tau)))

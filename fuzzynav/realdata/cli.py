@@ -106,6 +106,10 @@ def run_recording(spec, filter_name, options, args) -> int:
 
     settings = settings_from(args)
     rec = load_recording(spec, args)
+    if isinstance(rec, list):  # several recordings of one kind (akit trajectories)
+        from fuzzynav.realdata.akit_cli import run_akit
+
+        return run_akit(spec, rec, filter_name, options, args)
     seeds = list(range(args.seed, args.seed + args.mc))
     vals = [validate(rec, filter_name, settings, s, options) for s in seeds]
     df = metrics_table(vals)

@@ -60,6 +60,17 @@ def _load_rtklib(directory, mounting="auto", imu_delay_s=None, span_s=None, sess
     return load_rtklib(directory, mounting=mounting, span_s=span_s, session=session, **kw)
 
 
+@register_source("akit", "A-KIT AUV recordings: IMU/DVL/GT_trajectoryN.csv + corrected/ "
+                         "(akit:DIR:N, N = 3, 1-8 or 1,4; e.g. ../shared/datasets/akit)")
+def _load_akit(directory, mounting="auto", imu_delay_s=None, span_s=None, session=None):
+    from fuzzynav.sim.loaders.akit import load_akit
+
+    if mounting not in ("auto", None) or imu_delay_s is not None or span_s is not None:
+        raise FuzzynavError("--data akit: --mounting, --imu-delay and --span do not apply "
+                            "(the loader establishes the frames and lags from the data)")
+    return load_akit(directory, session)
+
+
 #: mounting files shipped with the package (``--mounting NAME``)
 MOUNTINGS_DIR = Path(__file__).resolve().parent / "mountings"
 

@@ -85,7 +85,7 @@ class MeasurementModel:
 
 
 MODELS = Registry("measurement model", __name__, ("gnss", "polarization", "nhc", "magnetometer",
-                                                  "bds", "log", "neutral_point"))
+                                                  "bds", "log", "neutral_point", "dvl"))
 
 
 def register(model: MeasurementModel) -> MeasurementModel:

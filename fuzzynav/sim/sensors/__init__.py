@@ -20,7 +20,7 @@ from fuzzynav.registry import Registry
 
 #: kind name -> Spec class
 SENSOR_KINDS = Registry("sensor kind", __name__, ("gnss", "polarization", "magnetometer", "bds",
-                                                  "log", "nhc", "neutral_point"))
+                                                  "log", "nhc", "neutral_point", "dvl"))
 
 
 def register(kind: str):

@@ -1,0 +1,275 @@
+"""Loader of the A-KIT AUV recordings (Snapir AUV, Phins INS 100 Hz, RDI DVL 1 Hz, Delph
+post-processed reference; ``../shared/datasets/akit``, trajectories 1-8).
+
+Conventions, established from the data (``docs/data.md``; the numbers come from
+``benchmarks/akit_conventions.py``):
+
+* the IMU (``IMU_trajectoryN.csv``, top level only) gives specific force [m/s^2] and rates
+  [rad/s] in a forward-right-down body frame: the accelerometer z axis reads -9.79 m/s^2;
+* the reference and the DVL are read from ``corrected/``: there the columns headed
+  Longitude / Latitude really hold longitude / latitude (in the top-level GT files they are
+  swapped), and the pitch has the sign the IMU sees (10-s means of the forward specific
+  force follow +g sin(pitch) with correlation 0.80-0.96 on all eight trajectories; -0.80 to
+  -0.96 with the top-level pitch).  Attitude is ZYX Euler (roll, pitch, yaw) of
+  body FRD to NED; velocity NED; altitude is minus the depth;
+* the reference lags the IMU by about one sample on most trajectories: the yaw rate of the
+  reference matches the gyro best when read one sample later (0 on trajectories 5 and 6);
+  the loader measures this lag per trajectory (:func:`reference_lag`) and moves the
+  reference earlier by it.  The DVL is on the IMU's clock;
+* the DVL velocity is that of the IMU point (the filter's residuals show no lever-arm
+  effect), while the reference is given at a point about 1.8 m forward of it: the lateral
+  difference between the DVL and the reference velocity rotated into the body is the yaw
+  rate times that offset (:func:`reference_offset`, fitted per trajectory).
+
+Everything is returned in fuzzynav's frames: ENU navigation, body RFU
+(``x_rfu = y_frd, y_rfu = x_frd, z_rfu = -z_frd``).
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from fuzzynav.errors import DataMissingError, InputFileError
+from fuzzynav.nav import attitude
+from fuzzynav.sim.imu import ImuData
+from fuzzynav.sim.sensors import SensorData
+
+#: FRD <-> RFU and NED <-> ENU: the same axis swap (a proper rotation, its own inverse)
+SWAP = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+#: sign of the IMU file's x, y, z columns in body FRD: the y axis is reversed (left).  Found
+#: from the data: with it reversed the gyro y rate anticorrelates with the reference's pitch
+#: rate (-0.54 to -0.96) while x and z follow roll and yaw rates (+0.7, +0.99), and the
+#: lateral specific force is minus (forward speed x yaw rate - g sin roll); the z column
+#: reads -9.79 m/s^2 (down).  A left-handed file frame, fixed by one sign.
+IMU_FILE_TO_FRD = np.array([1.0, -1.0, 1.0])
+#: columns of each file kind, as headed in the recordings
+COLUMNS = {"IMU": 7, "DVL": 4, "GT": 10}
+#: the DVL's 1-sigma per axis according to the source [m/s]
+DVL_SIGMA_MPS = 0.02
+#: largest reference lag searched [samples]
+MAX_LAG = 3
+#: accelerometer z mean must be within this of -g (FRD, at sea level) [m/s^2]
+GRAVITY_TOLERANCE = 0.5
+
+
+@dataclass(frozen=True)
+class Reference:
+    """The post-processed reference in fuzzynav's frames (on the IMU clock)."""
+
+    time_s: np.ndarray
+    lla: np.ndarray      # (K, 3) lat, lon [rad], h [m]
+    vel_n: np.ndarray    # (K, 3) ENU [m/s]
+    q_bn: np.ndarray     # (K, 4) body RFU -> ENU
+
+
+@dataclass(frozen=True)
+class AkitRecording:
+    """One A-KIT trajectory, ready for the filter."""
+
+    trajectory: int
+    directory: Path
+    imu: ImuData
+    dvl: SensorData
+    reference: Reference
+    lag_samples: float
+    reference_offset_b: np.ndarray  # reference point in body RFU from the IMU [m]
+    files: dict = field(default_factory=dict)
+    kind = "akit"
+
+
+def parse_trajectories(text) -> list[int]:
+    """``"3"``, ``"1,4,6"`` or ``"1-8"`` (and mixtures) -> sorted trajectory numbers."""
+    out = set()
+    for part in str(text if text is not None else "1-8").split(","):
+        m = re.fullmatch(r"\s*(\d+)\s*(?:-\s*(\d+)\s*)?", part)
+        if not m or (m.group(2) and int(m.group(2)) < int(m.group(1))):
+            raise InputFileError(None, "--data trajectory",
+                                 f"expected N, N-M or a comma list, got {text!r}")
+        lo = int(m.group(1))
+        out.update(range(lo, int(m.group(2) or lo) + 1))
+    return sorted(out)
+
+
+def read_table(path: Path, kind: str) -> np.ndarray:
+    """A numeric CSV with one header line; every row complete and finite, time increasing."""
+    if not path.is_file():
+        raise DataMissingError(f"{path}: A-KIT file not found")
+    try:
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputFileError(path, "", f"cannot be read ({exc.__class__.__name__})") from None
+    lines = text.splitlines()
+    if len(lines) < 3:
+        raise InputFileError(path, "line 2", "no data rows (a header and at least 2 rows)")
+    ncol = COLUMNS[kind]
+    rows = []
+    for i, line in enumerate(lines[1:], start=2):
+        parts = line.split(",")
+        if len(parts) != ncol:
+            raise InputFileError(path, f"line {i}", f"has {len(parts)} columns, expected "
+                                                    f"{ncol} (a cut or damaged row)")
+        try:
+            vals = [float(p) for p in parts]
+        except ValueError:
+            raise InputFileError(path, f"line {i}", f"a field is not a number: {line[:60]!r}") \
+                from None
+        if not all(np.isfinite(vals)):
+            raise InputFileError(path, f"line {i}", "a field is not finite")
+        rows.append(vals)
+    a = np.array(rows)
+    bad = np.flatnonzero(np.diff(a[:, 0]) <= 0)
+    if bad.size:
+        raise InputFileError(path, f"line {bad[0] + 3}, column Time [s]",
+                             "time does not increase")
+    return a
+
+
+def _check_imu(path, imu):
+    fz = imu[:, 3].mean()
+    if abs(fz + 9.8) > GRAVITY_TOLERANCE:
+        raise InputFileError(path, "column ACC Z [m/s^2]",
+                             f"mean {fz:.3f} m/s^2: not gravity on a forward-right-down IMU "
+                             "(expected about -9.8)")
+
+
+def _check_span(path, t, imu_t):
+    if t[0] > imu_t[0] + 2.0 or t[-1] < imu_t[-1] - 2.0:
+        raise InputFileError(path, "column Time [s]",
+                             f"covers {t[0]:.1f}-{t[-1]:.1f} s, the IMU {imu_t[0]:.1f}-"
+                             f"{imu_t[-1]:.1f} s (a truncated file?)")
+
+
+def imu_increments(t, acc_file, gyro_file) -> ImuData:
+    """Trapezoidal increments of the sampled rates, in body RFU.
+
+    The files' y columns (accelerometer and gyro) have the opposite sign of a
+    forward-right-down frame (:data:`IMU_FILE_TO_FRD`); they are turned round first.
+    """
+    acc_frd, gyro_frd = acc_file * IMU_FILE_TO_FRD, gyro_file * IMU_FILE_TO_FRD
+    dt = np.diff(t)[:, None]
+    dth = 0.5 * (gyro_frd[1:] + gyro_frd[:-1]) * dt
+    dv = 0.5 * (acc_frd[1:] + acc_frd[:-1]) * dt
+    return ImuData(time_s=t.copy(), dtheta_b=dth @ SWAP.T, dv_b=dv @ SWAP.T,
+                   meta={"frame": "RFU from FRD"})
+
+
+def reference_attitude(rpy) -> np.ndarray:
+    """Quaternions (body RFU -> ENU) of ZYX Euler angles (roll, pitch, yaw) FRD -> NED."""
+    r, p, y = rpy[:, 0], rpy[:, 1], rpy[:, 2]
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    C = np.array([[cp * cy, sr * sp * cy - cr * sy, cr * sp * cy + sr * sy],
+                  [cp * sy, sr * sp * sy + cr * cy, cr * sp * sy - sr * cy],
+                  [-sp, sr * cp, cr * cp]])
+    C_frd_ned = np.moveaxis(C, -1, 0)
+    return np.array([attitude.dcm_to_quat(SWAP @ Cm @ SWAP) for Cm in C_frd_ned])
+
+
+def _parabola_min(cost) -> float:
+    """Position of the minimum of sampled costs, refined by a parabola through three."""
+    i = int(np.argmin(cost))
+    if 0 < i < len(cost) - 1:
+        c0, c1, c2 = cost[i - 1], cost[i], cost[i + 1]
+        den = c0 - 2.0 * c1 + c2
+        if den > 0.0:
+            return i + 0.5 * (c0 - c2) / den
+    return float(i)
+
+
+def reference_lag(imu, gt) -> float:
+    """Samples (fractional, 0..MAX_LAG) by which the reference yaw rate trails the gyro's.
+
+    The streams are resampled onto grids of about 1 s; a lag of half a sample turns into
+    degrees of heading at the start of a fast turn, so the minimum is refined between the
+    whole-sample shifts.
+    """
+    t = gt[:, 0]
+    yaw_rate = np.gradient(np.unwrap(gt[:, 9]), t)
+    edges = np.concatenate([[t[0] - 0.5 * (t[1] - t[0])], 0.5 * (t[1:] + t[:-1]),
+                            [t[-1] + 0.5 * (t[-1] - t[-2])]])
+    which = np.searchsorted(edges, imu[:, 0]) - 1
+    ok = (which >= 0) & (which < t.size)
+    gz = np.bincount(which[ok], imu[ok, 6], t.size) / np.maximum(np.bincount(which[ok],
+                                                                             None, t.size), 1)
+    gz *= np.cos(gt[:, 7])
+    cost = [np.mean((gz[:t.size - s] - yaw_rate[s:]) ** 2) for s in range(MAX_LAG + 1)]
+    return max(_parabola_min(cost), 0.0)
+
+
+def reference_at(gt, t_new) -> Reference:
+    """The reference (columns of a GT file) interpolated at ``t_new`` [s], in our frames."""
+    t = gt[:, 0]
+    cols = gt[:, 1:10].copy()
+    cols[:, 8] = np.unwrap(cols[:, 8])  # yaw: interpolate without the wrap
+    g = np.column_stack([np.interp(t_new, t, cols[:, i]) for i in range(9)])
+    return Reference(time_s=np.asarray(t_new, float),
+                     lla=np.column_stack([g[:, 1], g[:, 0], g[:, 2]]),
+                     vel_n=g[:, 3:6] @ SWAP.T, q_bn=reference_attitude(g[:, 6:9]))
+
+
+def dvl_lag(dvl, gt, ref_lag: float) -> int:
+    """Samples by which the DVL trails the IMU: the shift that best matches its forward
+    velocity to the reference's (rotated into the body), minus the reference's own lag."""
+    from fuzzynav.nav import attitude
+
+    C = attitude.quat_to_dcm(reference_attitude(gt[:, 7:10]))
+    fwd_ref = np.einsum("ki,ki->k", C[:, :, 1], gt[:, 4:7] @ SWAP.T)
+    fwd = dvl[:, 1]
+    n = min(fwd.size, fwd_ref.size)
+    cost = [np.mean((fwd[:n - s] - fwd_ref[s:n]) ** 2) for s in range(MAX_LAG + 1)]
+    return max(int(round(_parabola_min(cost) - ref_lag)), 0)
+
+
+def reference_offset(imu: ImuData, dvl: SensorData, ref: Reference) -> np.ndarray:
+    """Position of the reference point in body RFU relative to the IMU [m].
+
+    The DVL agrees with the IMU-point velocity (no lever-arm effect in the filter's
+    residuals) but not with the reference velocity rotated into the body: their lateral
+    difference is the yaw rate times a forward offset ``r_y``,
+    ``(v_dvl - C_nb v_ref)_x = omega_z r_y``; fitted by least squares (only ``r_y``: the
+    roll and pitch rates are too small to fix the other components).
+    """
+    from fuzzynav.nav import attitude
+
+    k = np.clip(np.searchsorted(ref.time_s, dvl.time_s - 1e-9), 0, ref.time_s.size - 1)
+    C = attitude.quat_to_dcm(ref.q_bn[k])
+    lateral = dvl.z[:, 0] - np.einsum("ki,ki->k", C[:, :, 0], ref.vel_n[k])
+    t = imu.time_s
+    wz = np.interp(dvl.time_s, 0.5 * (t[1:] + t[:-1]), imu.dtheta_b[:, 2] / np.diff(t))
+    r_y = float(np.dot(wz, lateral) / max(np.dot(wz, wz), 1e-30))
+    return np.array([0.0, r_y, 0.0])
+
+
+def load_trajectory(directory, n: int) -> AkitRecording:
+    """Read trajectory ``n`` of an A-KIT directory (see the module notes for frames)."""
+    d = Path(directory)
+    files = {"imu": d / f"IMU_trajectory{n}.csv", "dvl": d / "corrected" / f"DVL_trajectory{n}.csv",
+             "reference": d / "corrected" / f"GT_trajectory{n}.csv"}
+    imu = read_table(files["imu"], "IMU")
+    dvl = read_table(files["dvl"], "DVL")
+    gt = read_table(files["reference"], "GT")
+    _check_imu(files["imu"], imu)
+    _check_span(files["dvl"], dvl[:, 0], imu[:, 0])
+    _check_span(files["reference"], gt[:, 0], imu[:, 0])
+    lag = reference_lag(imu, gt)
+    dt_ref = float(np.median(np.diff(gt[:, 0])))
+    # the reference epochs moved earlier by the lag, resampled on the IMU start's grid
+    t_ref = np.arange(imu[0, 0], gt[-1, 0] - lag * dt_ref + 1e-9, dt_ref)
+    ref = reference_at(gt, t_ref + lag * dt_ref)
+    ref = Reference(t_ref, ref.lla, ref.vel_n, ref.q_bn)
+    # a DVL sample trailing the IMU by k samples describes the motion k samples later
+    t_dvl = dvl[:, 0] + (dvl[1, 0] - dvl[0, 0]) * dvl_lag(dvl, gt, lag)
+    inside = (t_dvl > imu[0, 0]) & (t_dvl <= imu[-1, 0])
+    z = dvl[inside, 1:4] @ SWAP.T
+    sensor = SensorData("dvl", t_dvl[inside], z, np.full(z.shape, DVL_SIGMA_MPS),
+                        {"rate_hz": 1.0 / float(np.median(np.diff(dvl[:, 0])))})
+    inc = imu_increments(imu[:, 0], imu[:, 1:4], imu[:, 4:7])
+    return AkitRecording(n, d, inc, sensor, ref, lag, reference_offset(inc, sensor, ref),
+                         {k: str(v) for k, v in files.items()})
+
+
+def load_akit(directory, trajectories="1-8") -> list[AkitRecording]:
+    """Load several trajectories (``"1-8"``, ``"2"``, ``"1,3"``)."""
+    return [load_trajectory(directory, n) for n in parse_trajectories(trajectories)]

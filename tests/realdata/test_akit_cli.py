@@ -1,0 +1,38 @@
+"""``fuzzynav run --data akit:DIR:N`` on a synthetic recording: JSON layout, errors."""
+import json
+
+import numpy as np
+import pytest
+
+from tests.realdata.test_cli_errors import _run
+from tests.sim.akit_files import auv_trajectory, write_akit
+
+
+@pytest.fixture(scope="module")
+def two_trajectories(tmp_path_factory):
+    d = tmp_path_factory.mktemp("akit-cli")
+    tr = auv_trajectory()
+    write_akit(d, tr, n=1, lag=1)
+    write_akit(d, tr, n=2, lag=0)
+    return d
+
+
+def test_json_has_a_column_per_trajectory_and_the_pooled_one(two_trajectories):
+    code, out, err = _run("run", "--data", f"akit:{two_trajectories}:1-2", "--json")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["trajectories"] == [1, 2] and set(doc["feeds"]) == {"traj 1", "traj 2", "all"}
+    pooled = doc["feeds"]["all"]["rms_pos_h_m"]
+    np.testing.assert_allclose(pooled["mean"], np.mean(pooled["values"]), rtol=1e-12)
+    # error-free synthetic IMU and DVL: the aided INS stays within a metre over 120 s
+    assert max(pooled["values"]) < 1.0
+    assert abs(doc["start"]["1"]["reference_lag_samples"] - 1.0) < 0.2
+
+
+def test_text_table_and_bad_options(two_trajectories):
+    code, out, _ = _run("run", "--data", f"akit:{two_trajectories}:2")
+    assert code == 0 and "as % of the distance travelled" in out and "traj 2" in out
+    code, _, err = _run("run", "--data", f"akit:{two_trajectories}:2", "--span", "0,10")
+    assert code == 2 and "do not apply" in err
+    code, _, err = _run("run", "--data", f"akit:{two_trajectories}:5")
+    assert code == 2 and "IMU_trajectory5.csv" in err and len(err.strip().splitlines()) == 1

@@ -1,0 +1,62 @@
+"""Writer of synthetic A-KIT recordings for the tests (the layout of ../shared/datasets/akit).
+
+:func:`write_akit` turns a simulated trajectory into ``IMU_trajectoryN.csv`` (body FRD with
+the y columns reversed, as the real files are) and ``corrected/GT_`` / ``DVL_trajectoryN.csv``
+(NED, ZYX Euler, the reference lagging by ``lag`` samples), so that the loader's conventions
+are checked against a truth we know.
+"""
+import numpy as np
+
+from fuzzynav.nav import attitude
+from fuzzynav.sim.segments import Segment
+from fuzzynav.sim.trajectory import generate
+
+SWAP = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+START = np.array([0.5733, 0.6090, -20.0])  # lat, lon [rad], h (the Haifa area)
+HEAD = {"IMU": "Time [s],ACC X [m/s^2],ACC Y [m/s^2],ACC Z [m/s^2],GYRO X [rad/s],"
+               "GYRO Y [rad/s],GYRO Z [rad/s]",
+        "DVL": "Time [s],DVL X [m/s],DVL Y [m/s],DVL Z [m/s]",
+        "GT": "Time [s],Longitude [rad],Latitude [rad],Altitude [m],V North [m/s],"
+              "V East [m/s],V Down [m/s],Roll [rad],Pitch [rad],Yaw [rad]"}
+
+
+def auv_trajectory(duration_s=120.0):
+    segs = [Segment("turn", 20, turn_deg=60), Segment("cruise", 20),
+            Segment("turn", 20, turn_deg=-90), Segment("climb", 30, pitch_deg=-5),
+            Segment("turn", duration_s - 90, turn_deg=120)]
+    return generate(START, segs, 100.0, 2.0, 0.5)
+
+
+def _euler_frd_ned(q_bn):
+    out = []
+    for C in attitude.quat_to_dcm(q_bn):
+        F = SWAP @ C @ SWAP
+        out.append([np.arctan2(F[2, 1], F[2, 2]), -np.arcsin(F[2, 0]),
+                    np.arctan2(F[1, 0], F[0, 0])])
+    return np.array(out)
+
+
+def _write(path, kind, rows):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    lines = [HEAD[kind]] + [",".join(repr(float(x)) for x in r) for r in rows]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def write_akit(directory, tr, n=1, lag=1):
+    """Write trajectory ``n``; returns the 1-Hz truth indices of the DVL/GT rows."""
+    dt = np.diff(tr.time_s)[:, None]
+    rates = np.vstack([tr.dtheta_b / dt, tr.dtheta_b[-1:] / dt[-1]])
+    force = np.vstack([tr.dv_b / dt, tr.dv_b[-1:] / dt[-1]])
+    flip = np.array([1.0, -1.0, 1.0])
+    _write(directory / f"IMU_trajectory{n}.csv", "IMU",
+           np.column_stack([tr.time_s, (force @ SWAP.T) * flip, (rates @ SWAP.T) * flip]))
+    idx = np.arange(0, tr.time_s.size, 100)
+    C = attitude.quat_to_dcm(tr.q_bn[idx])
+    v_b = np.einsum("kji,kj->ki", C, tr.vel_n[idx])
+    _write(directory / "corrected" / f"DVL_trajectory{n}.csv", "DVL",
+           np.column_stack([tr.time_s[idx], v_b @ SWAP.T]))
+    src = np.concatenate([np.repeat(idx[:1], lag), idx[:idx.size - lag]])  # lagging
+    _write(directory / "corrected" / f"GT_trajectory{n}.csv", "GT",
+           np.column_stack([tr.time_s[idx], tr.lla[src, 1], tr.lla[src, 0], tr.lla[src, 2],
+                            tr.vel_n[src] @ SWAP.T, _euler_frd_ned(tr.q_bn[src])]))
+    return idx
