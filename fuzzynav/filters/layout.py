@@ -215,6 +215,10 @@ class StateLayout:
 CORE = StateLayout(CORE_BLOCKS)
 X_ATT, X_VEL, X_POS = CORE.start("att"), CORE.start("vel"), CORE.start("pos")
 N_CORE = CORE.n
+
+#: the ``aux`` vector the loop hands to measurement models: corrected body rate [rad/s],
+#: specific force [m/s^2], then the sensor-state estimates (``xs``, the states after the core)
+AUX_RATE, AUX_FORCE, AUX_XS = 0, 3, 6
 #: today's two layouts: random-constant gyro and accelerometer biases (15 states), and with
 #: a second, Gauss-Markov gyro block (18 states)
 LAYOUT_15 = CORE.extended(("gyro_bias", 3), ("accel_bias", 3))

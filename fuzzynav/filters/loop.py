@@ -27,7 +27,7 @@ from fuzzynav.filters.bank_fusion import FUSED_NOW, SHARED, STALE, after_propaga
 from fuzzynav.filters.error_st import EM_ST, st_measurement, st_reset, st_to_phi, \
     st_velocity_variance
 from fuzzynav.filters.feedback import bias_totals, feedback
-from fuzzynav.filters.layout import X_VEL
+from fuzzynav.filters.layout import AUX_FORCE, AUX_RATE, AUX_XS, X_VEL
 from fuzzynav.nav.layout import NAV_SIZE, PREV_SIZE
 from fuzzynav.nav.strapdown import init_prev, mech_step, quat_to_dcm_into
 
@@ -228,7 +228,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
     wv = np.zeros(max(n, M))
     out_a = np.zeros(2 + M)
     diag = np.zeros(ev_diag.shape[1])
-    aux = np.zeros(6 + xs.size)  # IMU rates/force, then the sensor states (models read them)
+    aux = np.zeros(AUX_XS + xs.size)  # rate, force, then the sensor states (for the models)
     bg = np.zeros(3)
     ba = np.zeros(3)
     dth_c = np.zeros(3)
@@ -252,8 +252,8 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
         for i in range(3):
             dth_c[i] = dth[k, i] - bg[i] * dt
             dv_c[i] = dv[k, i] - ba[i] * dt
-            aux[i] = dth_c[i] / dt
-            aux[3 + i] = dv_c[i] / dt
+            aux[AUX_RATE + i] = dth_c[i] / dt
+            aux[AUX_FORCE + i] = dv_c[i] / dt
         mech_step(nav, prev, dth_c, dv_c, dt, f_n)
         quat_to_dcm_into(nav, C)
         for i in range(3):
@@ -273,7 +273,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
             P, x, qd, Qacc = P3[s_local[s]], X[s_local[s]], QD[s_local[s]], Qacc3[s_local[s]]
             H[:, :] = 0.0
             for i in range(xs.size):
-                aux[6 + i] = xs[i]
+                aux[AUX_XS + i] = xs[i]
             m = meas_fns[s_meas[s]](nav, C, aux, ev_data[e], s_mpar[s], t - ev_t[e], z, H, R,
                                     chan)
             if m == 0:

@@ -6,7 +6,7 @@ A model is a numba kernel with the fixed signature :data:`MEAS_SIG`::
 
 * ``nav`` — strapdown state (:mod:`fuzzynav.nav.strapdown` layout), ``C_bn`` its DCM;
 * ``aux`` — ``[omega_ib_b (3) rad/s, f_b (3) m/s^2]`` of the latest IMU interval, then the
-  current sensor-state estimates ``xs`` (the states after the core, from ``aux[6]``), so
+  current sensor-state estimates ``xs`` (the states after the core, from ``aux[AUX_XS]``, :mod:`fuzzynav.filters.layout`), so
   that a model with its own states (a DVL scale factor) forms its residual with them;
 * ``row`` — this epoch's data row (by default ``[z..., sigma...]`` of the SensorData);
 * ``par`` — constants packed by the model's ``pack`` function (lever arms, switches);

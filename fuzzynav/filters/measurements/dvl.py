@@ -30,13 +30,12 @@ import numba as nb
 import numpy as np
 
 from fuzzynav import units
-from fuzzynav.filters.layout import N_CORE, X_ATT, X_VEL
+from fuzzynav.filters.layout import AUX_XS, N_CORE, X_ATT, X_VEL
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.nav.layout import NAV_VEL
 
 #: state blocks this model can use, in the order of their starts in ``par[3:6]``
 DVL_BLOCKS = ("dvl_scale", "dvl_misalignment", "lever_arm")
-_AUX_XS = 6  # sensor states start here in ``aux``
 
 
 @nb.njit(cache=True)
@@ -44,7 +43,7 @@ def _state(aux, start, i, default):
     """Component ``i`` of a sensor block's estimate (``default`` when the block is absent)."""
     if start < 0:
         return default
-    return aux[_AUX_XS + start - N_CORE + i]
+    return aux[AUX_XS + start - N_CORE + i]
 
 
 @nb.njit(cache=True)

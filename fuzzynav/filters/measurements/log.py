@@ -18,7 +18,7 @@ is corrected by *adding* the update (``xs += x``, as the IMU bias blocks), so it
 (checked against finite differences in ``tests/filters/test_log_model.py``).  Without a
 current state the current is an error of the reading, and it is unobservable without a
 position fix anyway: a ``water_current`` block only bounds it by its prior.  Channel:
-``log``.  The estimates come from ``aux[6:]`` (the sensor states); the block starts from
+``log``.  The estimates come from ``aux[AUX_XS:]`` (the sensor states); the block starts from
 ``options["state_start"]``, filled by :func:`fuzzynav.filters.sensor_states.with_sensor_states`.
 """
 from __future__ import annotations
@@ -28,7 +28,7 @@ import math
 import numba as nb
 import numpy as np
 
-from fuzzynav.filters.layout import COUPLE_NONE, N_CORE, X_ATT, X_VEL, register_block
+from fuzzynav.filters.layout import AUX_XS, COUPLE_NONE, N_CORE, X_ATT, X_VEL, register_block
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.nav.layout import NAV_VEL
 
@@ -44,7 +44,7 @@ LOG_STATES = (("log_scale", math.inf, 0.02, 0.0), ("log_bias", math.inf, 1.0, 0.
 @nb.njit(cache=True)
 def _state(aux, par, j):
     """Estimate of the log state whose start is ``par[j]`` (0 when the block is absent)."""
-    return aux[6 + int(par[j]) - N_CORE] if par[j] >= 0.0 else 0.0
+    return aux[AUX_XS + int(par[j]) - N_CORE] if par[j] >= 0.0 else 0.0
 
 
 @nb.njit(MEAS_SIG, cache=True)
@@ -55,7 +55,7 @@ def log_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
     k, b = _state(aux, par, 0), _state(aux, par, 1)
     we, wn = _state(aux, par, 2), 0.0
     if par[2] >= 0.0:
-        wn = aux[6 + int(par[2]) + 1 - N_CORE]
+        wn = aux[AUX_XS + int(par[2]) + 1 - N_CORE]
     ve, vn, vu = nav[NAV_VEL] - we, nav[NAV_VEL + 1] - wn, nav[NAV_VEL + 2]
     cx, cy, cz = C_bn[0, 1], C_bn[1, 1], C_bn[2, 1]
     s = cx * ve + cy * vn + cz * vu
