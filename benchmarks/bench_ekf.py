@@ -51,11 +51,19 @@ def base_tree(rev: str) -> Path:
     return dest
 
 
+def tree_env(tree: Path) -> dict:
+    """Environment importing fuzzynav from ``tree``, with the source-keyed numba cache on
+    (kernels of the benchmark files themselves must not be shared between the trees)."""
+    env = dict(os.environ, PYTHONPATH=str(tree))
+    env.pop("FUZZYNAV_NUMBA_CACHE", None)
+    return env
+
+
 class Worker:
     """One ``_ekf_worker.py`` process importing fuzzynav from ``tree``."""
 
     def __init__(self, tree: Path, cache_dir: str, minutes: float):
-        env = dict(os.environ, PYTHONPATH=str(tree))
+        env = tree_env(tree)
         self.proc = subprocess.Popen(
             [sys.executable, str(HERE / "_ekf_worker.py"), cache_dir, str(minutes)],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env, text=True, cwd=tree)
@@ -109,7 +117,32 @@ def agreement(workers, tmp) -> dict:
     return out
 
 
-def section(times, ratios, agree, base, rounds, load0, load1) -> str:
+def breakdowns(trees) -> dict:
+    """``profile_ekf.py`` run once per tree (one after the other): rev -> its JSON."""
+    out = {}
+    for rev, tree in trees.items():
+        env = tree_env(tree)
+        run = subprocess.run([sys.executable, str(HERE / "profile_ekf.py"), "--json"],
+                             cwd=tree, env=env, check=True, capture_output=True, text=True)
+        out[rev] = json.loads(run.stdout.strip().splitlines()[-1])
+    return out
+
+
+def breakdown_rows(prof) -> list:
+    """Markdown rows: part, then µs per call and ms per run of the base and this tree."""
+    b, nw = prof["base"], prof["new"]
+    rows = [f"| mechanization and loop, per IMU sample | {b['samples']:,} | "
+            f"{1e3 * b['mech_ms'] / b['samples']:.3f} | {b['mech_ms']:.1f} | "
+            f"{1e3 * nw['mech_ms'] / nw['samples']:.3f} | {nw['mech_ms']:.1f} |"]
+    for name, (us_b, cnt) in b["parts"].items():
+        us_n = nw["parts"][name][0]
+        rows.append(f"| {name} | {cnt:,} | {us_b:.2f} | {us_b * cnt * 1e-3:.1f} | {us_n:.2f} | "
+                    f"{us_n * cnt * 1e-3:.1f} |")
+    rows.append(f"| whole run (measured) | | | {b['total_ms']:.1f} | | {nw['total_ms']:.1f} |")
+    return rows
+
+
+def section(times, ratios, agree, prof, base, rounds, load0, load1) -> str:
     rows = []
     for case, (_, label) in CASES.items():
         mb, mn = (1e3 * float(np.median(times[case][r])) for r in ("base", "new"))
@@ -127,6 +160,11 @@ def section(times, ratios, agree, base, rounds, load0, load1) -> str:
         "Agreement of the paper000 runs (this tree against the base): largest differences.", "",
         "| filter | position (m) | velocity (m/s) | sigma (relative) | NIS | same event flags |",
         "|---|---|---|---|---|---|", *ag, "",
+        "Where a paper000 `ekf` run spends its time (`benchmarks/profile_ekf.py`: each part "
+        "timed alone in a compiled loop, CPU time, times its count in a run; the "
+        "mechanization is the run without sensors less its propagations):", "",
+        "| part | calls per run | base µs/call | base ms | this tree µs/call | this tree ms |",
+        "|---|---|---|---|---|---|", *breakdown_rows(prof), "",
         "Target of issue 9: the paper000 EKF run at most 0.5x the base revision's time, "
         "nothing else slower. Rerun on an idle machine for clean figures; the ratios are "
         "meaningful under load because the rounds alternate."])
@@ -151,7 +189,8 @@ def main(argv=None):
         finally:
             for w in workers.values():
                 w.proc.kill()
-    text = section(times, ratios, agree, args.base, args.rounds, load0, os.getloadavg()[0])
+        prof = breakdowns(trees)
+    text = section(times, ratios, agree, prof, args.base, args.rounds, load0, os.getloadavg()[0])
     print(text)
     if not args.no_write:
         write_section("ekf-speed", text)

@@ -31,7 +31,7 @@ from fuzzynav.sim.log import simulate
 from fuzzynav.sim.scenario import load_scenario
 
 
-@nb.njit
+@nb.njit(cache=True)
 def _propagation(reps, P0, nav, C, f_n, q, bs, bk, bi):
     n = P0.shape[0]
     F, Phi, Qd, w, P = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n)), P0.copy()
@@ -43,7 +43,7 @@ def _propagation(reps, P0, nav, C, f_n, q, bs, bk, bi):
     return P
 
 
-@nb.njit
+@nb.njit(cache=True)
 def _measurement(reps, fns, idx, nav, C, aux, row, par, z, H, R, chan):
     m = 0
     for _ in range(reps):
@@ -52,7 +52,7 @@ def _measurement(reps, fns, idx, nav, C, aux, row, par, z, H, R, chan):
     return m
 
 
-@nb.njit
+@nb.njit(cache=True)
 def _update(reps, P0, H, R, m, z):
     n, M = P0.shape[0], H.shape[0]
     P, PHt, HPH, S, L = P0.copy(), np.zeros((n, M)), np.zeros((M, M)), np.zeros((M, M)), np.zeros((M, M))
@@ -72,7 +72,7 @@ def _update(reps, P0, H, R, m, z):
     return P
 
 
-@nb.njit
+@nb.njit(cache=True)
 def _feedback_record(reps, nav0, P, out_t, out_nav, out_xs, out_sig):
     nav, prev, xs, x, C = nav0.copy(), np.zeros(PREV_SIZE), np.zeros(out_xs.shape[1]), \
         np.full(P.shape[0], 1e-12), np.zeros((3, 3))

@@ -44,13 +44,7 @@ def propagate(P, Phi, Qd, work):
     n = P.shape[0]
     d = diagonal_tail(Phi)
     for i in range(d):  # work = Phi P
-        for j in range(n):
-            work[i, j] = 0.0
-        for k in range(n):
-            a = Phi[i, k]
-            if a != 0.0:
-                for j in range(n):
-                    work[i, j] += a * P[k, j]
+        row_times(Phi[i], P, work[i])
     for i in range(d, n):
         a = Phi[i, i]
         for j in range(n):
@@ -63,6 +57,30 @@ def propagate(P, Phi, Qd, work):
             P[i, j] += work[i, j] * Phi[j, j]
         for j in range(i + 1, n):
             P[j, i] = P[i, j]
+
+
+@nb.njit(cache=True)
+def row_times(a, B, out):
+    """``out = a B`` (a row times a square matrix), four columns at a time in registers;
+    each entry sums ``a[k] B[k, j]`` in index order."""
+    n = a.size
+    j = 0
+    while j + 4 <= n:
+        s0 = s1 = s2 = s3 = 0.0
+        for k in range(n):
+            w = a[k]
+            s0 += w * B[k, j]
+            s1 += w * B[k, j + 1]
+            s2 += w * B[k, j + 2]
+            s3 += w * B[k, j + 3]
+        out[j], out[j + 1], out[j + 2], out[j + 3] = s0, s1, s2, s3
+        j += 4
+    while j < n:
+        s = 0.0
+        for k in range(n):
+            s += a[k] * B[k, j]
+        out[j] = s
+        j += 1
 
 
 @nb.njit(cache=True)
@@ -95,22 +113,37 @@ def row_dots(a, B, j0, j1, out):
 
 @nb.njit(cache=True)
 def sparse_left_mul(A, B, out):
-    """``out = A B`` for square ``A``, skipping the zeros of ``A`` (the system matrices).
-
-    Rows of ``B`` from :func:`diagonal_tail` on contribute their diagonal entry only.
-    """
+    """``out = A B`` for square ``A``, skipping the zeros of ``A`` (the system matrices)."""
     n = A.shape[0]
-    d = diagonal_tail(B)
     out[:, :] = 0.0
     for i in range(n):
-        for k in range(n):
-            a = A[i, k]
-            if a != 0.0:
-                if k < d:
-                    for j in range(n):
-                        out[i, j] += a * B[k, j]
-                else:
-                    out[i, k] += a * B[k, k]
+        _add_rows(A, i, B, n, out)
+
+
+@nb.njit(cache=True)
+def _add_rows(A, i, B, k_end, out):
+    """``out[i] += sum_k A[i, k] B[k]`` over ``k < k_end``, skipping the zeros of ``A``."""
+    for k in range(k_end):
+        a = A[i, k]
+        if a != 0.0:
+            for j in range(B.shape[1]):
+                out[i, j] += a * B[k, j]
+
+
+@nb.njit(cache=True)
+def square_tail(F, d, out):
+    """``out = F F`` for ``F`` whose rows from ``d`` on are diagonal (:func:`diagonal_tail`).
+
+    Each entry sums the same products in the same order as :func:`sparse_left_mul`.
+    """
+    n = F.shape[0]
+    out[:, :] = 0.0
+    for i in range(d):
+        _add_rows(F, i, F, d, out)
+        for j in range(d, n):  # the tail rows contribute their diagonal entry only
+            out[i, j] += F[i, j] * F[j, j]
+    for i in range(d, n):
+        out[i, i] = F[i, i] * F[i, i]
 
 
 @nb.njit(cache=True)
