@@ -4,7 +4,8 @@ Started by ``bench_ekf.py`` once per revision (``PYTHONPATH`` selects the source
 kept alive, so the two revisions are timed in alternation within one run.  Protocol on
 stdin/stdout, one JSON document per line: the worker answers ``{"ready": ...}`` after
 loading the data and compiling, then for each request ``{"case": name, "repeat": k}`` the
-``k`` wall and CPU times [s]; ``{"dump": name, "path": p}`` saves that case's solution and
+``k`` wall and CPU times [s]; ``{"profile": 1}`` answers ``profile_ekf.profile()``;
+``{"dump": name, "path": p}`` saves that case's solution and
 event log to ``p`` (for the agreement check); ``{"quit": 1}`` ends it.
 """
 from __future__ import annotations
@@ -77,6 +78,11 @@ def main():
         req = json.loads(line)
         if "quit" in req:
             break
+        if "profile" in req:
+            import profile_ekf  # noqa: E402  (same directory, on sys.path)
+
+            print(json.dumps(profile_ekf.profile(cache_dir)), flush=True)
+            continue
         if "dump" in req:
             _dump(cases[req["dump"]](), req["path"])
             print(json.dumps({"ok": 1}), flush=True)

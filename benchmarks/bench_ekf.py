@@ -117,14 +117,19 @@ def agreement(workers, tmp) -> dict:
     return out
 
 
-def breakdowns(trees) -> dict:
-    """``profile_ekf.py`` run once per tree (one after the other): rev -> its JSON."""
+def breakdowns(workers, rounds=2) -> dict:
+    """``profile_ekf.profile()`` in both workers, alternating: rev -> per-part medians."""
+    runs = {rev: [] for rev in workers}
+    for k in range(rounds):
+        for rev in (list(workers) if k % 2 == 0 else list(workers)[::-1]):
+            runs[rev].append(workers[rev].ask(profile=1))
     out = {}
-    for rev, tree in trees.items():
-        env = tree_env(tree)
-        run = subprocess.run([sys.executable, str(HERE / "profile_ekf.py"), "--json"],
-                             cwd=tree, env=env, check=True, capture_output=True, text=True)
-        out[rev] = json.loads(run.stdout.strip().splitlines()[-1])
+    for rev, profs in runs.items():
+        med = lambda key: float(np.median([p[key] for p in profs]))  # noqa: E731
+        out[rev] = {"total_ms": med("total_ms"), "mech_ms": med("mech_ms"),
+                    "samples": profs[0]["samples"],
+                    "parts": {nm: [float(np.median([p["parts"][nm][0] for p in profs])), cnt]
+                              for nm, (_, cnt) in profs[0]["parts"].items()}}
     return out
 
 
@@ -146,8 +151,9 @@ def section(times, ratios, agree, prof, base, rounds, load0, load1) -> str:
     rows = []
     for case, (_, label) in CASES.items():
         mb, mn = (1e3 * float(np.median(times[case][r])) for r in ("base", "new"))
-        q = np.percentile(ratios[case], [25, 75])
-        rows.append(f"| {label} | {mb:,.2f} | {mn:,.2f} | {mn / mb:.2f} | {q[0]:.2f}-{q[1]:.2f} |")
+        q = np.percentile(ratios[case], [25, 50, 75])
+        rows.append(f"| {label} | {mb:,.2f} | {mn:,.2f} | {mn / mb:.2f} | "
+                    f"{q[1]:.2f} ({q[0]:.2f}-{q[2]:.2f}) |")
     ag = [f"| {c} | {a['pos_m']:.1e} | {a['vel_mps']:.1e} | {a['sigma_rel']:.1e} | "
           f"{a['nis_abs']:.1e} | {'yes' if a['flags_same'] else 'NO'} |" for c, a in agree.items()]
     return "\n".join([
@@ -155,14 +161,15 @@ def section(times, ratios, agree, prof, base, rounds, load0, load1) -> str:
         f"Base revision `{base}` and this tree timed in the same run, {rounds} alternating "
         f"rounds per case (wall time, median over all runs; one core each). Machine: "
         f"{machine()}; load average {load0:.2f} at the start, {load1:.2f} at the end.", "",
-        "| case | base (ms) | this tree (ms) | ratio | per-round ratio, IQR |",
+        "| case | base (ms) | this tree (ms) | ratio of the medians | per-round ratio, median (IQR) |",
         "|---|---|---|---|---|", *rows, "",
         "Agreement of the paper000 runs (this tree against the base): largest differences.", "",
         "| filter | position (m) | velocity (m/s) | sigma (relative) | NIS | same event flags |",
         "|---|---|---|---|---|---|", *ag, "",
         "Where a paper000 `ekf` run spends its time (`benchmarks/profile_ekf.py`: each part "
         "timed alone in a compiled loop, CPU time, times its count in a run; the "
-        "mechanization is the run without sensors less its propagations):", "",
+        "mechanization is the run without sensors less its propagations; medians of two "
+        "alternating profiles per tree):", "",
         "| part | calls per run | base µs/call | base ms | this tree µs/call | this tree ms |",
         "|---|---|---|---|---|---|", *breakdown_rows(prof), "",
         "Target of issue 9: the paper000 EKF run at most 0.5x the base revision's time, "
@@ -186,10 +193,10 @@ def main(argv=None):
                 print(f"{rev}: {w.ask()['ready']}", file=sys.stderr)
             times, ratios = timed_rounds(workers, args.rounds)
             agree = agreement(workers, tmp)
+            prof = breakdowns(workers)
         finally:
             for w in workers.values():
                 w.proc.kill()
-        prof = breakdowns(trees)
     text = section(times, ratios, agree, prof, args.base, args.rounds, load0, os.getloadavg()[0])
     print(text)
     if not args.no_write:

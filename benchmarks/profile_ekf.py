@@ -8,8 +8,8 @@ mechanization per IMU sample, covariance propagation (``fill_F`` + ``discretize`
 ``kalman.propagate``), the measurement models, the update (innovation covariance,
 Cholesky, NIS, gain, Joseph, covariance check), feedback, recording.
 
-Imports whichever fuzzynav is first on ``sys.path``, so ``bench_ekf.py`` runs it for the
-base revision too.  Usage: ``python benchmarks/profile_ekf.py [--json]``.
+Imports whichever fuzzynav is first on ``sys.path``, so ``bench_ekf.py`` runs it in its
+workers for the base revision and this tree, alternating.  Usage: ``python benchmarks/profile_ekf.py [--json]``.
 """
 from __future__ import annotations
 
@@ -106,8 +106,9 @@ def run_ms(log, setup, sensors, repeat=5):
     return 1e3 * float(np.median(t)), res
 
 
-def profile() -> dict:
-    log = simulate(load_scenario("paper000"), 0, tempfile.mkdtemp())
+def profile(cache_dir=None) -> dict:
+    """Per-part costs and counts of a paper000 ``ekf`` run (see the module docstring)."""
+    log = simulate(load_scenario("paper000"), 0, cache_dir or tempfile.mkdtemp())
     setup = setup_for(log, "ekf")
     cfg, sensors = setup.config, setup.sensors_for(log.sensors)
     tb = _sensor_tables(sensors, {}, {}, None)
