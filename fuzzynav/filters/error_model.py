@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
-from fuzzynav.filters.kalman import sparse_left_mul
+from fuzzynav.filters.kalman import diagonal_tail, row_dots, square_tail
 from fuzzynav.filters.layout import (BLOCK_KINDS, CORE, COUPLE_ACCEL, COUPLE_GYRO, X_ATT,
                                      X_POS, X_VEL, StateLayout, kind_of)
 from fuzzynav.nav.earth import E2, OMEGA_IE, gravity_nb, radii_nb
@@ -240,17 +240,28 @@ def discretize(F, q_diag, dt, Phi, Qd, work):
     work : (n, n) scratch.
     """
     n = F.shape[0]
-    transition(F, dt, Phi, work)
+    d = diagonal_tail(F)
+    _transition(F, d, dt, Phi, work)
     h2 = 0.5 * dt * dt
-    # Qd = Q dt + (F Q + Q F^T) dt^2/2 + F Q F^T dt^3/3 with diagonal Q
+    # Qd = Q dt + (F Q + Q F^T) dt^2/2 + F Q F^T dt^3/3 with diagonal Q.  Rows of F from
+    # its diagonal tail on hold only F[j, j], so (F Q F^T)[i, j] = F[i, j] q_j F[j, j]
+    # there; above it the rows are dense (zeros add exact zeros: same sums as skipping).
     h3 = dt * dt * dt / 3.0
-    for i in range(n):
+    FQ = work  # F diag(q), row by row, as the products below group them
+    for i in range(d):
+        for k in range(n):
+            FQ[i, k] = F[i, k] * q_diag[k]
+    for i in range(n):  # Qd[i, j >= i]: the F Q F^T dot products first, into the row
         for j in range(i, n):
+            Qd[i, j] = 0.0
+        if i < d:
+            row_dots(FQ[i], F, i, d, Qd[i])
+        for j in range(i, n):
+            if j < d:
+                acc = Qd[i, j]
+            else:
+                acc = F[i, j] * q_diag[j] * F[j, j]
             s = (F[i, j] * q_diag[j] + q_diag[i] * F[j, i]) * h2
-            acc = 0.0
-            for k in range(n):
-                if q_diag[k] != 0.0:
-                    acc += F[i, k] * q_diag[k] * F[j, k]
             s += acc * h3
             if i == j:
                 s += q_diag[i] * dt
@@ -261,8 +272,14 @@ def discretize(F, q_diag, dt, Phi, Qd, work):
 @nb.njit(cache=True)
 def transition(F, dt, Phi, work):
     """Second-order transition matrix ``Phi = I + F dt + (F dt)^2 / 2`` (``work``: scratch)."""
+    _transition(F, diagonal_tail(F), dt, Phi, work)
+
+
+@nb.njit(cache=True)
+def _transition(F, d, dt, Phi, work):
+    """:func:`transition` for ``F`` with rows diagonal from ``d`` on."""
     n = F.shape[0]
-    sparse_left_mul(F, F, work)  # work = F @ F
+    square_tail(F, d, work)  # work = F @ F
     h2 = 0.5 * dt * dt
     for i in range(n):
         for j in range(n):

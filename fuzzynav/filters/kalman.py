@@ -1,11 +1,11 @@
 """Kalman-filter kernels as pure numba functions on plain arrays.
 
-* :func:`propagate` — ``P <- Phi P Phi^T + Qd`` skipping the zeros of ``Phi``;
+* :func:`propagate` — ``P <- Phi P Phi^T + Qd``, the diagonal tail of ``Phi`` as scalings;
 * :func:`innovation_cov` — ``PHt = P H^T``, ``HPH = H P H^T`` for ``m`` rows;
 * :func:`cholesky`, :func:`chol_solve`, :func:`nis` — small dense solves on ``S``;
 * :func:`joseph_update` — ``x = K r`` and the Joseph-form covariance
-  ``P = (I - K H) P (I - K H)^T + K R K^T`` (evaluated as ``A P - (A P H^T) K^T + K R K^T``
-  with ``A P = P - K (P H^T)^T``), then symmetrised;
+  ``P = (I - K H) P (I - K H)^T + K R K^T``, expanded exactly into
+  ``P - K (P H^T)^T + (K S - P H^T) K^T`` (one pass over the upper triangle);
 * :func:`covariance_ok` — finite, positive diagonal, correlations within [-1, 1].
 
 Shapes: ``n`` states, ``m <= M`` measurement rows; work arrays are passed in so that the
@@ -19,25 +19,96 @@ import numba as nb
 
 
 @nb.njit(cache=True)
+def diagonal_tail(A):
+    """First row ``d`` from which every row of square ``A`` is zero off the diagonal.
+
+    The system and transition matrices have this shape: the sensor-error blocks only decay
+    (or stay), so their rows hold a diagonal entry at most.  Kernels treat rows ``>= d`` as
+    a diagonal and the rows above as dense (they are ~85 % filled).
+    """
+    n = A.shape[0]
+    for i in range(n - 1, -1, -1):
+        for j in range(n):
+            if j != i and A[i, j] != 0.0:
+                return i + 1
+    return 0
+
+
+@nb.njit(cache=True)
 def propagate(P, Phi, Qd, work):
-    """In place ``P <- Phi P Phi^T + Qd`` (``work`` is an n x n scratch array)."""
+    """In place ``P <- Phi P Phi^T + Qd`` (``work`` is an n x n scratch array).
+
+    Rows of ``Phi`` from :func:`diagonal_tail` on are scalings; the others are multiplied
+    densely (a zero entry adds an exact zero, so the result is the same as skipping it).
+    """
     n = P.shape[0]
-    work[:, :] = 0.0
-    for i in range(n):
-        for k in range(n):
-            a = Phi[i, k]
-            if a != 0.0:
-                for j in range(n):
-                    work[i, j] += a * P[k, j]
-    for i in range(n):
+    d = diagonal_tail(Phi)
+    for i in range(d):  # work = Phi P
+        row_times(Phi[i], P, work[i])
+    for i in range(d, n):
+        a = Phi[i, i]
+        for j in range(n):
+            work[i, j] = a * P[i, j]
+    for i in range(n):  # P = work Phi^T + Qd, upper triangle (row i of P is free now)
         for j in range(i, n):
-            s = Qd[i, j]
-            for k in range(n):
-                b = Phi[j, k]
-                if b != 0.0:
-                    s += work[i, k] * b
-            P[i, j] = s
-            P[j, i] = s
+            P[i, j] = Qd[i, j]
+        row_dots(work[i], Phi, i, d, P[i])
+        for j in range(max(i, d), n):
+            P[i, j] += work[i, j] * Phi[j, j]
+        for j in range(i + 1, n):
+            P[j, i] = P[i, j]
+
+
+@nb.njit(cache=True)
+def row_times(a, B, out):
+    """``out = a B`` (a row times a square matrix), four columns at a time in registers;
+    each entry sums ``a[k] B[k, j]`` in index order."""
+    n = a.size
+    j = 0
+    while j + 4 <= n:
+        s0 = s1 = s2 = s3 = 0.0
+        for k in range(n):
+            w = a[k]
+            s0 += w * B[k, j]
+            s1 += w * B[k, j + 1]
+            s2 += w * B[k, j + 2]
+            s3 += w * B[k, j + 3]
+        out[j], out[j + 1], out[j + 2], out[j + 3] = s0, s1, s2, s3
+        j += 4
+    while j < n:
+        s = 0.0
+        for k in range(n):
+            s += a[k] * B[k, j]
+        out[j] = s
+        j += 1
+
+
+@nb.njit(cache=True)
+def row_dots(a, B, j0, j1, out):
+    """``out[j] += a . B[j]`` for the rows ``j0 <= j < j1`` of ``B``.
+
+    Four rows at a time: four independent sums share each load of ``a`` (the dot products
+    of the covariance kernels are latency-bound one at a time); every sum still runs in
+    index order, so the result is the same as one dot product after another.
+    """
+    n = a.size
+    j = j0
+    while j + 4 <= j1:
+        s0, s1, s2, s3 = out[j], out[j + 1], out[j + 2], out[j + 3]
+        for k in range(n):
+            w = a[k]
+            s0 += w * B[j, k]
+            s1 += w * B[j + 1, k]
+            s2 += w * B[j + 2, k]
+            s3 += w * B[j + 3, k]
+        out[j], out[j + 1], out[j + 2], out[j + 3] = s0, s1, s2, s3
+        j += 4
+    while j < j1:
+        s = out[j]
+        for k in range(n):
+            s += a[k] * B[j, k]
+        out[j] = s
+        j += 1
 
 
 @nb.njit(cache=True)
@@ -46,25 +117,47 @@ def sparse_left_mul(A, B, out):
     n = A.shape[0]
     out[:, :] = 0.0
     for i in range(n):
-        for k in range(n):
-            a = A[i, k]
-            if a != 0.0:
-                for j in range(n):
-                    out[i, j] += a * B[k, j]
+        _add_rows(A, i, B, n, out)
+
+
+@nb.njit(cache=True)
+def _add_rows(A, i, B, k_end, out):
+    """``out[i] += sum_k A[i, k] B[k]`` over ``k < k_end``, skipping the zeros of ``A``."""
+    for k in range(k_end):
+        a = A[i, k]
+        if a != 0.0:
+            for j in range(B.shape[1]):
+                out[i, j] += a * B[k, j]
+
+
+@nb.njit(cache=True)
+def square_tail(F, d, out):
+    """``out = F F`` for ``F`` whose rows from ``d`` on are diagonal (:func:`diagonal_tail`).
+
+    Each entry sums the same products in the same order as :func:`sparse_left_mul`.
+    """
+    n = F.shape[0]
+    out[:, :] = 0.0
+    for i in range(d):
+        _add_rows(F, i, F, d, out)
+        for j in range(d, n):  # the tail rows contribute their diagonal entry only
+            out[i, j] += F[i, j] * F[j, j]
+    for i in range(d, n):
+        out[i, i] = F[i, i] * F[i, i]
 
 
 @nb.njit(cache=True)
 def times_Ht(A, H, m, out):
     """``out[:, :m] = A H^T`` for the first ``m`` rows of H, skipping H's zeros."""
     n = A.shape[0]
-    for i in range(n):
-        for r in range(m):
-            s = 0.0
-            for k in range(n):
-                h = H[r, k]
-                if h != 0.0:
-                    s += A[i, k] * h
-            out[i, r] = s
+    for r in range(m):
+        for i in range(n):
+            out[i, r] = 0.0
+        for k in range(n):  # a measurement row touches a few states: test each once
+            h = H[r, k]
+            if h != 0.0:
+                for i in range(n):
+                    out[i, r] += A[i, k] * h
 
 
 @nb.njit(cache=True)
@@ -74,13 +167,14 @@ def innovation_cov(P, H, m, PHt, HPH):
     times_Ht(P, H, m, PHt)
     for a in range(m):
         for b in range(a, m):
-            s = 0.0
-            for k in range(n):
-                h = H[a, k]
-                if h != 0.0:
-                    s += h * PHt[k, b]
-            HPH[a, b] = s
-            HPH[b, a] = s
+            HPH[a, b] = 0.0
+        for k in range(n):
+            h = H[a, k]
+            if h != 0.0:
+                for b in range(a, m):
+                    HPH[a, b] += h * PHt[k, b]
+        for b in range(a + 1, m):
+            HPH[b, a] = HPH[a, b]
 
 
 @nb.njit(cache=True)
@@ -134,20 +228,40 @@ def nis(L, m, r, work):
 
 @nb.njit(cache=True)
 def gain(L, m, PHt, K, work):
-    """``K = PHt S^-1`` (rows of PHt solved against the Cholesky factor of S)."""
-    for i in range(PHt.shape[0]):
-        for r in range(m):
-            work[r] = PHt[i, r]
-        chol_solve_vec(L, m, work, work)  # safe in place: see chol_solve_vec
-        for r in range(m):
-            K[i, r] = work[r]
+    """``K = PHt S^-1`` (rows of PHt solved against the Cholesky factor of S).
+
+    All rows are solved together, one substitution step at a time over every row (the
+    rows are independent, so the steps overlap), with ``1 / L[r, r]`` formed once into
+    ``work[:m]`` instead of a division per entry.
+    """
+    n = PHt.shape[0]
+    for r in range(m):
+        work[r] = 1.0 / L[r, r]
+    for r in range(m):  # L Y^T = PHt^T
+        for i in range(n):
+            s = PHt[i, r]
+            for k in range(r):
+                s -= L[r, k] * K[i, k]
+            K[i, r] = s * work[r]
+    for r in range(m - 1, -1, -1):  # L^T K^T = Y^T
+        for i in range(n):
+            s = K[i, r]
+            for k in range(r + 1, m):
+                s -= L[k, r] * K[i, k]
+            K[i, r] = s * work[r]
 
 
 @nb.njit(cache=True)
 def joseph_update(P, H, R, m, r, PHt, K, x, AP, APHt):
     """State correction ``x = K r`` and Joseph-form covariance update, in place.
 
-    ``R`` is the diagonal measurement variance (length >= m); ``K`` must hold the gain.
+    ``R`` is the diagonal measurement variance (length >= m); ``K`` must hold the gain;
+    ``AP`` (n x n, n >= m) and ``APHt`` (n x m) are scratch.  The Joseph form
+    ``(I - K H) P (I - K H)^T + K R K^T`` is expanded, exactly for any ``K``, into
+    ``P - K (P H^T)^T + V K^T`` with ``V = K S - P H^T`` and ``S = H P H^T + R``: ``V``
+    is the gain's residual (zero for the exact optimal gain), so the form keeps Joseph's
+    first-order insensitivity to gain errors while costing ``2 m`` products per entry of
+    the upper triangle instead of two ``n x n x m`` products; the result is symmetric.
     """
     n = P.shape[0]
     for i in range(n):
@@ -155,26 +269,50 @@ def joseph_update(P, H, R, m, r, PHt, K, x, AP, APHt):
         for a in range(m):
             s += K[i, a] * r[a]
         x[i] = s
-    # A P = P - K (P H^T)^T
+    S = AP  # S[:m, :m] = H P H^T + R from the sparse rows of H
+    for a in range(m):
+        for b in range(m):
+            S[a, b] = 0.0
+        for k in range(n):
+            h = H[a, k]
+            if h != 0.0:
+                for b in range(m):
+                    S[a, b] += h * PHt[k, b]
+        S[a, a] += R[a]
+    V = APHt
     for i in range(n):
-        for j in range(n):
-            s = P[i, j]
-            for a in range(m):
-                s -= K[i, a] * PHt[j, a]
-            AP[i, j] = s
-    times_Ht(AP, H, m, APHt)
-    # P = A P - (A P H^T) K^T + K R K^T, symmetrised
+        for a in range(m):
+            s = -PHt[i, a]
+            for b in range(m):
+                s += K[i, b] * S[b, a]
+            V[i, a] = s
     for i in range(n):
-        for j in range(i, n):
-            s = AP[i, j]
-            for a in range(m):
-                s += -APHt[i, a] * K[j, a] + K[i, a] * R[a] * K[j, a]
-            t = AP[j, i]
-            for a in range(m):
-                t += -APHt[j, a] * K[i, a] + K[j, a] * R[a] * K[i, a]
-            v = 0.5 * (s + t)
-            P[i, j] = v
-            P[j, i] = v
+        row_dots_diff(V[i], K[i], m, K, PHt, i, n, P[i])
+        for j in range(i + 1, n):
+            P[j, i] = P[i, j]
+
+
+@nb.njit(cache=True)
+def row_dots_diff(a, c, m, B, D, j0, j1, out):
+    """``out[j] += a[:m] . B[j, :m] - c[:m] . D[j, :m]`` for ``j0 <= j < j1``, four rows at
+    a time (the Joseph update's rank-2m correction; see :func:`row_dots`)."""
+    j = j0
+    while j + 4 <= j1:
+        s0, s1, s2, s3 = out[j], out[j + 1], out[j + 2], out[j + 3]
+        for k in range(m):
+            u, w = a[k], c[k]
+            s0 += u * B[j, k] - w * D[j, k]
+            s1 += u * B[j + 1, k] - w * D[j + 1, k]
+            s2 += u * B[j + 2, k] - w * D[j + 2, k]
+            s3 += u * B[j + 3, k] - w * D[j + 3, k]
+        out[j], out[j + 1], out[j + 2], out[j + 3] = s0, s1, s2, s3
+        j += 4
+    while j < j1:
+        s = out[j]
+        for k in range(m):
+            s += a[k] * B[j, k] - c[k] * D[j, k]
+        out[j] = s
+        j += 1
 
 
 @nb.njit(cache=True)
@@ -184,12 +322,12 @@ def covariance_ok(P):
     for i in range(n):
         if not (P[i, i] > 0.0) or not math.isfinite(P[i, i]):
             return False
-    for i in range(n):
+    ok = True
+    for i in range(n):  # no early exit: the comparisons run as one branch-free pass
         for j in range(i + 1, n):
             c = P[i, j]
-            if not math.isfinite(c) or c * c > P[i, i] * P[j, j] * (1.0 + 1e-9):
-                return False
-    return True
+            ok &= c * c <= P[i, i] * P[j, j] * (1.0 + 1e-9)  # False for NaN, inf
+    return ok
 
 
 @nb.njit(cache=True)

@@ -80,3 +80,28 @@ def test_discretisation_matches_van_loan():
     # second-order series: errors of order (F dt)^3
     assert np.abs(Phi - Phi_ref).max() < np.abs(F * dt).max() ** 3
     assert np.abs(Qd - Qd_ref).max() < 1e-2 * np.abs(Qd_ref).max()
+
+
+def test_discretisation_of_the_structured_model_matches_the_series():
+    """The kernels treat the sensor-block rows (decays only) as a diagonal: the 18-state
+    model with Gauss-Markov blocks and unforced position states must still give exactly
+    the second-order series written out with dense numpy products."""
+    model = ErrorModel(gyro_tau_s=(np.inf, 300.0), accel_tau_s=(200.0,))
+    n = model.n_states
+    q_bn = attitude.euler_to_quat(np.deg2rad([3.0, -2.0, 40.0]))
+    nav = strapdown.make_nav(START, np.array([12.0, -7.0, 0.4]), q_bn)
+    C = attitude.quat_to_dcm(q_bn)
+    F = np.zeros((n, n))
+    fill_F(F, nav, C, np.array([0.4, -0.2, 9.81]), *model.block_arrays())
+    q = np.random.default_rng(5).uniform(1e-9, 1e-6, n)
+    q[6:9] = 0.0  # no noise drives the position error directly
+    dt = 0.2
+    Phi, Qd, work = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
+    discretize(F, q, dt, Phi, Qd, work)
+    Q = np.diag(q)
+    Phi_ref = np.eye(n) + F * dt + F @ F * dt**2 / 2
+    Qd_ref = Q * dt + (F @ Q + Q @ F.T) * dt**2 / 2 + F @ Q @ F.T * dt**3 / 3
+    assert np.abs(np.diag(F)[15:]).min() > 0.0  # the tail really decays
+    np.testing.assert_allclose(Phi, Phi_ref, rtol=1e-13, atol=1e-15)
+    np.testing.assert_allclose(Qd, Qd_ref, rtol=1e-12, atol=1e-12 * np.abs(Qd_ref).max())
+    np.testing.assert_array_equal(Qd, Qd.T)

@@ -73,3 +73,43 @@ def test_scale_predicted_weights_only_the_propagated_part_of_the_seen_states():
     np.testing.assert_allclose(P, ref, rtol=1e-14)
     kalman.scale_predicted(P2, Q, 1.21, np.ones((1, 4)), 1, np.zeros(4))
     np.testing.assert_allclose(P2, all_seen, rtol=1e-14)
+
+
+def test_propagate_with_a_diagonal_tail_matches_numpy():
+    """Rows of Phi that only scale their state (sensor-error blocks) take a shortcut."""
+    rng = np.random.default_rng(6)
+    n = 18
+    P, Q = _spd(rng, n), _spd(rng, n)
+    Phi = rng.normal(size=(n, n))
+    Phi[12:] = 0.0
+    Phi[np.arange(12, n), np.arange(12, n)] = rng.uniform(0.9, 1.0, n - 12)
+    Phi[14, 14] = 0.0  # a zero on the tail's diagonal is still a (trivial) scaling
+    ref = Phi @ P @ Phi.T + Q
+    assert kalman.diagonal_tail(Phi) == 12
+    kalman.propagate(P, Phi, Q, np.zeros((n, n)))
+    np.testing.assert_allclose(P, ref, rtol=1e-12, atol=1e-12 * np.abs(ref).max())
+    np.testing.assert_array_equal(P, P.T)
+
+
+def test_joseph_update_is_the_joseph_form_for_any_gain():
+    """The expanded Joseph form equals (I-KH)P(I-KH)^T + KRK^T for a gain that is not the
+    optimal one too (that is what makes the form robust to gain errors)."""
+    rng = np.random.default_rng(7)
+    n, m, M = 15, 3, 5
+    P = _spd(rng, n)
+    H = np.zeros((M, n))
+    H[0, 6], H[1, 7], H[2, :3] = 1.0, 1.0, rng.normal(size=3)
+    R = np.r_[rng.uniform(0.5, 2.0, m), np.zeros(M - m)]
+    K = np.zeros((n, M))
+    K[:, :m] = rng.normal(size=(n, m))
+    Hm = H[:m]
+    A = np.eye(n) - K[:, :m] @ Hm
+    P_ref = A @ P @ A.T + K[:, :m] @ np.diag(R[:m]) @ K[:, :m].T
+    PHt, HPH = np.zeros((n, M)), np.zeros((M, M))
+    kalman.innovation_cov(P, H, m, PHt, HPH)
+    np.testing.assert_allclose(HPH[:m, :m], Hm @ P @ Hm.T, rtol=1e-13)
+    r, x = rng.normal(size=M), np.zeros(n)
+    kalman.joseph_update(P, H, R, m, r, PHt, K, x, np.zeros((n, n)), np.zeros((n, M)))
+    np.testing.assert_allclose(x, K[:, :m] @ r[:m], rtol=1e-12)
+    np.testing.assert_allclose(P, P_ref, rtol=1e-10, atol=1e-10 * np.abs(P_ref).max())
+    np.testing.assert_array_equal(P, P.T)

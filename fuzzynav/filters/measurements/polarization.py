@@ -35,6 +35,7 @@ import numpy as np
 from fuzzynav.filters.layout import X_ATT
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.nav import polarization as ps
+from fuzzynav.nav.polarization_geometry import aop_and_gradient, dot3, sun_body_partials
 
 MODES = {"angles": 0, "aop": 1}
 CH_HEADING, CH_PITCH, CH_AOP = 0, 1, 2
@@ -99,10 +100,14 @@ def _roll_sensitivity(aops, views, sun, p, roll, h):
     differentiation of the normal equations gives ``-(J^T J)^-1 J^T d aop/d roll``.
     """
     a00 = a01 = a11 = b0 = b1 = 0.0
+    # the sun's body-frame partials are the same for every view: computed once, the
+    # per-view partials are those of aop_euler_partials (same operations, same numbers)
+    s, ds_dp, ds_dr, ds_dh = sun_body_partials(sun, p, roll, h)
     for i in range(aops.size):
         if not math.isfinite(aops[i]):
             continue
-        _, dp, dr, dh = ps.aop_euler_partials(views[i], sun, p, roll, h)
+        _, g0, g1, g2 = aop_and_gradient(views[i], s[0], s[1], s[2])
+        dp, dr, dh = dot3(g0, g1, g2, ds_dp), dot3(g0, g1, g2, ds_dr), dot3(g0, g1, g2, ds_dh)
         a00 += dp * dp
         a01 += dp * dh
         a11 += dh * dh
