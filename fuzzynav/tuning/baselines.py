@@ -135,7 +135,7 @@ class BaselineObjective:
         scores = []
         for step, (scenario, seed) in runs:
             m = run_params(self.evaluator, self.name, params, scenario, seed)
-            scores.append(self.evaluator.score(self.evaluator.ratios(m, scenario, seed)))
+            scores.append(self.evaluator.judge(m, scenario, seed).score)
             trial.report(scores[-1], step=step)
             if trial.should_prune():
                 break

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from fuzzynav.filters import loop
+from fuzzynav.filters.feedback import feedback
 from fuzzynav.filters.layout import N_CORE
 from fuzzynav.filters.measurements import dvl
 from fuzzynav.filters.sensor_states import with_sensor_states
@@ -43,7 +43,7 @@ def _after_feedback(nav, xs, x):
     nav, xs = nav.copy(), xs.copy()
     prev = np.zeros(PREV_SIZE)
     init_prev(nav, prev)
-    loop._feedback(nav, prev, xs, x)
+    feedback(nav, prev, xs, x)
     return nav, xs
 
 

@@ -36,7 +36,7 @@ from fuzzynav.sim.tomltable import Table
 
 _ZERO3 = (0.0, 0.0, 0.0)
 #: largest sensible figures: anything beyond describes no receiver and overflows squares
-_MAX_POS_M = 1e5          # a 100-km error is no longer a fix
+MAX_POS_M = 1e5          # a 100-km error is no longer a fix
 _MAX_VEL_MPS = 1e3
 _MAX_SCALE = 1e4
 _MAX_LEVER_M = 1e3        # larger than any vehicle
@@ -112,7 +112,7 @@ class NoiseWindow:
         if not start < end:
             raise t.error("end_s", f"must be after start_s ({start!r}), got {end!r}")
         w = cls(start, end, t.number("scale", 1.0, lo=0.0, hi=_MAX_SCALE),
-                t.number("coloured_pos_m", 0.0, lo=0.0, hi=_MAX_POS_M),
+                t.number("coloured_pos_m", 0.0, lo=0.0, hi=MAX_POS_M),
                 t.number("coloured_vel_mps", 0.0, lo=0.0, hi=_MAX_VEL_MPS),
                 t.number("coloured_tau_s", 30.0, lo=0.0, lo_open=True))
         t.finish()
@@ -326,8 +326,8 @@ class Spec:
         for name in ("pos_sigma_m", "vel_sigma_mps", "gm_pos_sigma_m", "gm_vel_sigma_mps",
                      "claimed_pos_sigma_m", "claimed_vel_sigma_mps"):
             kw[name] = t.vector(name, 3, f[name].default, lo=0.0,
-                                hi=_MAX_POS_M if "pos" in name else _MAX_VEL_MPS)
-        kw["outlier_pos_m"] = t.number("outlier_pos_m", 0.0, lo=0.0, hi=_MAX_POS_M)
+                                hi=MAX_POS_M if "pos" in name else _MAX_VEL_MPS)
+        kw["outlier_pos_m"] = t.number("outlier_pos_m", 0.0, lo=0.0, hi=MAX_POS_M)
         kw["outlier_vel_mps"] = t.number("outlier_vel_mps", 0.0, lo=0.0, hi=_MAX_VEL_MPS)
         for name in ("outage_period_s", "outage_duration_s"):
             kw[name] = t.number(name, 0.0, lo=0.0)
