@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fuzzynav.sim.sensors import register
-from fuzzynav.sim.sensors.gnss import _MAX_POS_M, Spec as GnssSpec
+from fuzzynav.sim.sensors.gnss import MAX_POS_M, Spec as GnssSpec
 from fuzzynav.sim.tomltable import Table
 
 _BIAS_FIELDS = ("bias_m", "bias_sigma_m")
@@ -62,5 +62,5 @@ class Spec(GnssSpec):
     @classmethod
     def extra_fields(cls, t: Table) -> dict:
         """The two bias keys."""
-        return {name: t.vector(name, 3, (0.0, 0.0, 0.0), lo=-_MAX_POS_M if name == "bias_m"
-                               else 0.0, hi=_MAX_POS_M) for name in _BIAS_FIELDS}
+        return {name: t.vector(name, 3, (0.0, 0.0, 0.0), lo=-MAX_POS_M if name == "bias_m"
+                               else 0.0, hi=MAX_POS_M) for name in _BIAS_FIELDS}

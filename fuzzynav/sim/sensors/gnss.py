@@ -37,6 +37,7 @@ from fuzzynav.sim.tomltable import Table
 _ZERO3 = (0.0, 0.0, 0.0)
 #: largest sensible figures: anything beyond describes no receiver and overflows squares
 _MAX_POS_M = 1e5          # a 100-km error is no longer a fix
+MAX_POS_M = _MAX_POS_M   # public: the same bound for GNSS-like sensors (bds)
 _MAX_VEL_MPS = 1e3
 _MAX_SCALE = 1e4
 _MAX_LEVER_M = 1e3        # larger than any vehicle
