@@ -82,3 +82,26 @@ def test_the_fuzzy_local_keeps_the_heading_through_the_disturbance(log, results)
 
     assert zone_rms_deg("federated-p001") > 1.0
     assert zone_rms_deg("federated-fuzzy") < 0.3
+
+
+def test_in_reset_mode_fused_every_update_the_shares_do_not_matter(log, results):
+    # Carlson's equivalence holds for any shares summing to 1 (P_i^-1 = beta_i P_c^-1 sums
+    # to P_c^-1 whatever the beta_i): a share controller can act only in no-reset mode or
+    # with a fusion period; in no-reset mode the shares move the solution by several sigma
+    from dataclasses import replace
+
+    from fuzzynav.experiment import perturbed_initial_state
+    from fuzzynav.filters.runner import run_filter
+
+    setup = setup_for(log, "federated-p001-reset")
+    init = perturbed_initial_state(log, setup)
+    central = results["centralized"]
+    sig = central.state_sigma("pos")
+    for mode, bound in (("reset", 1e-6), ("no-reset", None)):
+        bank = replace(setup.config.bank, beta=(0.1, 0.1, 0.8), mode=mode)
+        res = run_filter(log.imu, log.sensors, init, setup.config.with_(bank=bank))
+        enu = np.array([earth.lla_to_enu(*a, *b) for a, b in zip(res.lla, central.lla)])
+        if bound:
+            assert np.all(np.abs(enu) <= bound * sig)
+        else:
+            assert np.max(np.abs(enu) / sig) > 1.0
