@@ -87,7 +87,8 @@ class NamedFilter:
 
 
 FILTERS = Registry("filter", "fuzzynav.filters", ("catalog", "subsets", "bank_named",
-                                                   "baselines", "catalog_paper003", "tuned_qr"))
+                                                   "baselines", "catalog_paper003", "tuned_qr",
+                                                   "paper001_banks"))
 
 
 def register_filter(name: str, description: str, takes_rules: bool = False,

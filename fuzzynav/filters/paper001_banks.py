@@ -1,0 +1,47 @@
+"""Paper 001's federated filters: three local filters SINS/BDS, SINS/polarization, SINS/magnetometer.
+
+The paper's master does no filtering and keeps no information share (beta_m = 0, no-reset
+mode) and the shares of the locals sum to 1; the paper does not state the three shares, so
+they are equal here (1/3 each).  ``federated-p001-reset`` is the same bank in Carlson's reset
+mode (with equal shares and fusion after every update it equals ``centralized``), and
+``federated-fuzzy`` gives the magnetometer's local filter the fuzzy R-scaling of
+``rules/paper001_mag.json`` (or the ``--rules`` given), the defence against the disturbance.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from fuzzynav.filters.bank_named import bank_setup
+from fuzzynav.filters.catalog import bind_rule_files
+from fuzzynav.filters.named import FilterContext, FilterSetup, register_filter
+from fuzzynav.filters.subsets import LOCAL_GROUPS, PAPER001_MAG_RULES
+
+#: the paper's shares are not stated (only beta_m = 0 and sum beta_i = 1): equal
+PAPER001_BETA = (1 / 3, 1 / 3, 1 / 3)
+
+
+def p001_bank(ctx: FilterContext, mode: str, adapters=None) -> FilterSetup:
+    """Paper 001's bank of three locals (BDS, polarization, magnetometer) in ``mode``."""
+    return bank_setup(ctx, LOCAL_GROUPS, mode, beta=PAPER001_BETA, adapters=adapters)
+
+
+@register_filter("federated-p001", "paper 001's federated filter: locals SINS/BDS, "
+                                   "SINS/polarization, SINS/magnetometer, no-reset master, "
+                                   "equal shares (the paper does not state them)")
+def _federated_p001(ctx: FilterContext) -> FilterSetup:
+    return p001_bank(ctx, "no-reset")
+
+
+@register_filter("federated-p001-reset", "paper 001's three locals in reset mode (locals "
+                                         "restart from the fused solution after each fusion)")
+def _federated_p001_reset(ctx: FilterContext) -> FilterSetup:
+    return p001_bank(ctx, "reset")
+
+
+@register_filter("federated-fuzzy", "federated-p001 with fuzzy R-scaling in the magnetometer's "
+                                    f"local filter (default rules/{PAPER001_MAG_RULES})",
+                 takes_rules=True)
+def _federated_fuzzy(ctx: FilterContext) -> FilterSetup:
+    given = ctx.options.get("rules") or [PAPER001_MAG_RULES]
+    paths = [given] if isinstance(given, (str, Path)) else given
+    return p001_bank(ctx, "no-reset", bind_rule_files(paths, ctx.sensors, required=True))
