@@ -14,7 +14,7 @@ Stacking ``C_0 .. C_(N-1)`` and vectorising (column-major) gives
     s.t. Q >= 0, R >= 0 (positive semidefinite)
 
 with cvxpy (Clarabel, else SCS), ``R_N_hat`` the sample autocovariances of the innovations.
-cvxpy is imported only here, on use (it is in the ``studies`` extra).
+cvxpy is imported only here, on use (it is the ``als`` extra, part of ``dev``).
 """
 from __future__ import annotations
 
@@ -94,7 +94,10 @@ def als_estimate(A, G, C, L, e, lags: int = 10, reg: float = 0.0, skip: int = 0,
     diagonal : bool
         Estimate diagonal ``Q`` and ``R`` only.
     """
-    import cvxpy as cp
+    try:
+        import cvxpy as cp
+    except ImportError:  # an optional extra: say how to get it, not a traceback
+        raise FuzzynavError("the als baseline needs cvxpy: pip install 'fuzzynav[als]'") from None
 
     G, C = np.atleast_2d(np.asarray(G, float)), np.atleast_2d(np.asarray(C, float))
     e = np.asarray(e, float).reshape(len(e), -1)
