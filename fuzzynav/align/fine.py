@@ -116,9 +116,10 @@ def run_fine(epochs: Epochs, layout: AlignLayout, noise: AlignNoise = AlignNoise
     x_hist[0], P_hist[0] = x, P
     if policy is not None:
         policy.reset(R0)
+    Phis = transition(layout, epochs.C_bn[:-1], epochs.f_n[1:], epochs.lat_rad,
+                      noise.period_s)
     for k in range(1, K + 1):
-        Phi = transition(layout, epochs.C_bn[k - 1], epochs.f_n[k], epochs.lat_rad,
-                         noise.period_s)
+        Phi = Phis[k - 1]
         x = Phi @ x
         P = Phi @ P @ Phi.T + Qd
         z = epochs.vel_n[k, :m]

@@ -79,17 +79,22 @@ def _selection(layout: AlignLayout) -> np.ndarray:
 
 
 def system_matrix(layout: AlignLayout, C_bn, f_n, lat_rad) -> np.ndarray:
-    """Continuous-time ``A`` at attitude ``C_bn`` and specific force ``f_n`` [m/s^2]."""
+    """Continuous-time ``A`` at attitude ``C_bn`` and specific force ``f_n`` [m/s^2].
+
+    ``C_bn`` (..., 3, 3) and ``f_n`` (..., 3) may carry leading epoch axes; ``A`` then has
+    them too, (..., n, n).
+    """
     L = LAYOUT_12
+    C_bn = np.asarray(C_bn, dtype=float)
     w = attitude.skew(earth.omega_ie_n(lat_rad))
-    A = np.zeros((L.n, L.n))
-    A[L.vel, L.vel] = -2.0 * w
-    A[L.vel, L.att] = attitude.skew(np.asarray(f_n, dtype=float))
-    A[L.vel, L.accel_bias] = C_bn
-    A[L.att, L.att] = -w
-    A[L.att, L.gyro_bias] = -C_bn
+    A = np.zeros(C_bn.shape[:-2] + (L.n, L.n))
+    A[..., L.vel, L.vel] = -2.0 * w
+    A[..., L.vel, L.att] = attitude.skew(np.asarray(f_n, dtype=float))
+    A[..., L.vel, L.accel_bias] = C_bn
+    A[..., L.att, L.att] = -w
+    A[..., L.att, L.gyro_bias] = -C_bn
     sel = _selection(layout)
-    return A[np.ix_(sel, sel)]
+    return A[..., sel[:, None], sel[None, :]]
 
 
 #: Taylor terms of ``expm(A T)``: ``A^k`` shrinks by ``w_ie T`` per power beyond the second
@@ -99,10 +104,14 @@ TAYLOR_TERMS = 6
 
 
 def transition(layout, C_bn, f_n, lat_rad, period_s) -> np.ndarray:
-    """``Phi = expm(A T)`` by its Taylor series (a 10x10 Pade ``expm`` costs ~50x more)."""
+    """``Phi = expm(A T)`` by its Taylor series (a 10x10 Pade ``expm`` costs ~50x more).
+
+    Vectorised over leading epoch axes of ``C_bn`` (..., 3, 3) and ``f_n`` (..., 3): the
+    whole run's transitions in one call, (..., n, n).
+    """
     AT = system_matrix(layout, C_bn, f_n, lat_rad) * period_s
-    Phi = np.eye(AT.shape[0])
-    term = np.eye(AT.shape[0])
+    Phi = np.broadcast_to(np.eye(AT.shape[-1]), AT.shape).copy()
+    term = Phi.copy()
     for k in range(1, TAYLOR_TERMS + 1):
         term = term @ AT / k
         Phi = Phi + term
