@@ -136,3 +136,16 @@ def test_motion_statistics_take_no_channel():
     from dataclasses import replace
     with pytest.raises(InputFileError, match=r"inputs\.v\.channel.*not a per-channel"):
         FuzzyRScaling(replace(doc_pol.fis, binding=doc), "probe.json")
+
+
+def test_a_recording_carries_fix_type_and_satellite_count_to_the_gnss_rows(rtklib_drive):
+    from fuzzynav.filters import measurements
+    from fuzzynav.sim.loaders.rtklib import load_rtklib
+
+    rec = load_rtklib(rtklib_drive, span_s=(0.0, 60.0))
+    rows = measurements.get("gnss").rows(rec.gnss)
+    cols = dict(measurements.get("gnss").quality)
+    # RTKLIB's Q and ns columns of the .pos file, epoch by epoch
+    np.testing.assert_array_equal(rows[:, cols["fix_type"]], rec.gnss.meta["q"])
+    np.testing.assert_array_equal(rows[:, cols["n_sat"]], rec.gnss.meta["ns"])
+    assert set(np.unique(rows[:, cols["fix_type"]])) <= {1.0, 2.0, 3.0, 4.0, 5.0, 6.0}
