@@ -149,3 +149,18 @@ def test_a_recording_carries_fix_type_and_satellite_count_to_the_gnss_rows(rtkli
     np.testing.assert_array_equal(rows[:, cols["fix_type"]], rec.gnss.meta["q"])
     np.testing.assert_array_equal(rows[:, cols["n_sat"]], rec.gnss.meta["ns"])
     assert set(np.unique(rows[:, cols["fix_type"]])) <= {1.0, 2.0, 3.0, 4.0, 5.0, 6.0}
+
+
+def test_the_recording_template_binds_to_a_recording_and_not_to_simulated_fixes(rtklib_drive):
+    from fuzzynav.filters import measurements
+    from fuzzynav.filters.adaptation.rq_scaling import FuzzyRQScaling
+    from fuzzynav.fuzzy import load_fis
+    from fuzzynav.sim.loaders.rtklib import load_rtklib
+
+    path = "rules/recording_rq_quality_gnss.json"
+    pol, model = FuzzyRQScaling(load_fis(path), path), measurements.get("gnss")
+    rec = load_rtklib(rtklib_drive, span_s=(0.0, 60.0))
+    pol.bind(model, model.rows(rec.gnss))  # Q and ns are there
+    sim = SensorData("gnss", rec.gnss.time_s, rec.gnss.z, rec.gnss.sigma)
+    with pytest.raises(InputFileError, match=r"inputs\.fix\.statistic.*carry no 'fix_type'"):
+        pol.bind(model, model.rows(sim))
