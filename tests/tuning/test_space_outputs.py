@@ -95,3 +95,21 @@ def test_types_must_name_system_types(tmp_path):
                             "types": ["mamdani", "tsk2"]}]}
     with pytest.raises(InputFileError, match=r"controllers.*types.*mamdani, sugeno"):
         study_config_from_dict(doc, tmp_path / "s.toml")
+
+
+def test_a_tuned_sugeno_system_runs_in_the_compiled_loop_as_it_evaluates():
+    from fuzzynav.filters.runner import run_filter
+    from tests.filters.simple_data import CONFIG
+    from tests.filters.test_context_inputs import _turntable
+
+    fis = _build("sugeno", ror=5, nis=1, trend=1, speed=1, rate=1, force=1, t=3, q=2)
+    imu, gnss, init, _ = _turntable(0.05, seconds=40.0)
+    res = run_filter(imu, {"gnss": gnss}, init, CONFIG,
+                     adapters={"gnss": FuzzyRQScaling(fis, "built")})
+    ev = res.events["gnss"]
+    col = {n: ev.diag[:, ev.diag_names.index(n)] for n in ("t", "q_scale", "ror")}
+    ref = fis.evaluate(_at(col["ror"]))  # the only input switched on is ror
+    np.testing.assert_allclose(col["t"], ref["t"], rtol=1e-9)
+    lo, hi = fis.outputs[1].range
+    np.testing.assert_allclose(col["q_scale"], ref["q"], rtol=1e-9)  # the level, not clamped
+    assert lo <= col["q_scale"].min() and col["q_scale"].max() <= hi
