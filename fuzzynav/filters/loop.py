@@ -22,6 +22,7 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.filters import kalman
+from fuzzynav.filters.adaptation import context
 from fuzzynav.filters.bank_fusion import FUSED_NOW, SHARED, STALE, after_propagation, fuse, \
     fusion_work, local_residual, master_covariance, propagate_locals, share
 from fuzzynav.filters.error_st import EM_ST, st_measurement, st_reset, st_to_phi, \
@@ -228,6 +229,8 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
     wv = np.zeros(max(n, M))
     out_a = np.zeros(2 + M)
     diag = np.zeros(ev_diag.shape[1])
+    ctx = np.zeros(context.size(M, ev_data.shape[1]))  # what a policy sees besides r
+    ctx[context.CTX_M] = M
     aux = np.zeros(AUX_XS + xs.size)  # rate, force, then the sensor states (for the models)
     bg = np.zeros(3)
     ba = np.zeros(3)
@@ -285,8 +288,10 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
             if carry:
                 local_residual(z, H, m, x)
             kalman.innovation_cov(P, H, m, PHt, HPH)
+            context.fill(ctx, nav, aux, R, m, ev_data[e])
             adapt_fns[a](afp[afp_off[s]:afp_off[s + 1]], aip[aip_off[s]:aip_off[s + 1]],
-                         ast[ast_off[s]:ast_off[s + 1]], z[:m], HPH, R, chan, m, out_a, diag)
+                         ast[ast_off[s]:ast_off[s + 1]], z[:m], HPH, R, chan, m, out_a, diag,
+                         ctx)
             for i in range(qd.size):
                 qd[i] *= out_a[1]
             for i in range(m):

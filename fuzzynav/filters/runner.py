@@ -55,13 +55,14 @@ def _sensor_tables(sensors, adapters, options, gate_probability):
     names = sorted(sensors)
     models = [measurements.get(sensors[nm].kind) for nm in names]
     M = max([mdl.max_rows for mdl in models], default=1)
-    bounds = [adapters.get(nm, NoAdaptation()).bind(mdl) for nm, mdl in zip(names, models)]
+    rows = [mdl.rows(sensors[nm]) for nm, mdl in zip(names, models)]
+    bounds = [adapters.get(nm, NoAdaptation()).bind(mdl, r)
+              for nm, mdl, r in zip(names, models, rows)]
     pars = [np.asarray(mdl.pack(sensors[nm], options.get(nm, {})), float)
             for nm, mdl in zip(names, models)]
     s_mpar = np.zeros((max(len(names), 1), max([p.size for p in pars], default=1)))
     for i, p in enumerate(pars):
         s_mpar[i, :p.size] = p
-    rows = [mdl.rows(sensors[nm]) for nm, mdl in zip(names, models)]
     W = max([r.shape[1] for r in rows], default=1)
     ev_t = np.concatenate([sensors[nm].time_s for nm in names] or [np.zeros(0)]).astype(float)
     ev_s = np.concatenate([np.full(len(r), i) for i, r in enumerate(rows)] or [np.zeros(0)])

@@ -13,7 +13,8 @@ Layout (every key in ``docs/studies.md``)::
     [[controllers]]  name, template (rule file), tune, partitions, free_triangles,
                      rule_weights, window = [lo, hi] (epochs), output_range = [lo, hi]
                      (bounds of the output's upper end), output_low = [lo, hi] (bounds of
-                     its lower end; default: the template's)
+                     its lower end; default: the template's), types = ["mamdani",
+                     "sugeno"] (the system types a trial may choose; default the template's)
 
 Every problem is one :class:`fuzzynav.errors.InputFileError` naming the file and key.
 """
@@ -31,6 +32,7 @@ from fuzzynav.tuning.samplers import get_optimiser, optimiser_names
 
 PRUNERS = ("none", "median", "wilcoxon")
 TUNE_MODES = ("both", "rules", "breakpoints")
+FIS_TYPES = ("mamdani", "sugeno")
 #: objective groups and the metric each is measured by
 GROUP_METRICS = {"pos": "rms_pos_m", "vel": "rms_vel_mps", "att": "rms_att_deg"}
 #: a study name becomes a file name (the journal) and an Optuna study name
@@ -54,6 +56,7 @@ class ControllerConfig:
     window: tuple | None = None
     output_range: tuple | None = None
     output_low: tuple | None = None
+    types: tuple = ("mamdani",)
 
 
 @dataclass(frozen=True)
@@ -202,6 +205,16 @@ def _window(t: Table):
     return (int(pair[0]), int(pair[1]))
 
 
+def _types(t: Table) -> tuple:
+    """``types``: the fuzzy-system types a trial may choose (``.type`` when several)."""
+    raw, _ = t._get("types", ["mamdani"])
+    if isinstance(raw, str):
+        raw = [raw]
+    if not isinstance(raw, list) or not raw or not all(v in FIS_TYPES for v in raw):
+        raise t.error("types", f"must be an array of {', '.join(FIS_TYPES)}, got {brief(raw)}")
+    return tuple(dict.fromkeys(raw))
+
+
 def _controller(t: Table, here: Path) -> ControllerConfig:
     name = t.string("name")
     tmpl = Path(t.string("template"))
@@ -231,7 +244,8 @@ def _controller(t: Table, here: Path) -> ControllerConfig:
                          rule_weights=t.boolean("rule_weights", False),
                          window=_window(t),
                          output_range=_factor_pair(t, "output_range"),
-                         output_low=_factor_pair(t, "output_low"))
+                         output_low=_factor_pair(t, "output_low"),
+                         types=_types(t))
     t.finish()
     if c.output_low and c.output_range and not c.output_low[1] < c.output_range[0]:
         raise t.error("output_low", "must lie below output_range (the output's low end "

@@ -12,8 +12,15 @@ For each controller (a template rule file):
   optional weights (``{ctrl}.weight.{struct}.{i}.{j}``);
 * a partition count of 1 on an input switches it off (one term true on its whole range, so
   the rule table does not depend on it): a study can select inputs;
-* the DoM window (``{ctrl}.window``) and the ends of the output range
-  (``{ctrl}.out_lo``, ``{ctrl}.out_hi``) where configured.
+* the DoM window (``{ctrl}.window``) and the ends of the first output's range
+  (``{ctrl}.out_lo``, ``{ctrl}.out_hi``) where configured;
+* a template with several outputs (``r_scale`` and ``q_scale`` of ``rq-scaling``) gets a
+  partition and a consequent per cell for each: the first output's parameters are named as
+  above, a further output ``o`` adds ``.{o}`` (``{ctrl}.rule.{struct}.{o}.{i}.{j}``) with
+  ``struct`` counting that output's terms;
+* with ``types = ["mamdani", "sugeno"]`` the trial chooses (``{ctrl}.type``): a Sugeno
+  system is zero-order TSK, each output term the constant at its triangle's peak, the
+  weighted average of the fired rules' constants (``wtaver``).
 
 ``tune = "rules"`` keeps the template's terms verbatim (a strong partition with evenly spread
 peaks for another count or a tuned output range; no gap or spread parameters),
@@ -31,8 +38,8 @@ import numpy as np
 
 from fuzzynav.errors import InputFileError
 from fuzzynav.filters.adaptation.binding import Binding
-from fuzzynav.fuzzy import (Antecedent, FuzzySystem, Rule, Term, Variable, load_fis,
-                            standard_labels, triangular_partition)
+from fuzzynav.fuzzy import (Antecedent, FuzzySystem, Operators, Rule, Term, Variable,
+                            load_fis, standard_labels, triangular_partition)
 
 _GAP = (0.05, 1.0)
 _SPREAD = (0.3, 1.5)
@@ -46,10 +53,10 @@ def check_against_template(cc) -> FuzzySystem:
     the template's own error if the rule file is broken.
     """
     tmpl = load_fis(cc.template)
-    if tmpl.type != "mamdani" or len(tmpl.outputs) != 1:
-        raise InputFileError(None, "template", f"{cc.template}: tuning needs a Mamdani "
-                             f"system with one output (this one: {tmpl.type}, "
-                             f"{len(tmpl.outputs)} outputs)")
+    if tmpl.type != "mamdani":
+        raise InputFileError(None, "template", f"{cc.template}: tuning starts from a Mamdani "
+                             f"system (this one: {tmpl.type}; types = [...] may make it "
+                             f"Sugeno)")
     names = set(tmpl.input_names) | set(tmpl.output_names)
     for var in cc.partitions:
         if var not in names:
@@ -61,9 +68,10 @@ def check_against_template(cc) -> FuzzySystem:
                 raise InputFileError(None, f"partitions.{v.name}", "tune = 'breakpoints' "
                                      "keeps the template's rule table, so the term count "
                                      f"stays the template's ({len(v.terms)})")
-    if 1 in cc.partitions.get(tmpl.output_names[0], ()):
-        raise InputFileError(None, f"partitions.{tmpl.output_names[0]}", "an output needs at "
-                             "least 2 terms (a count of 1 switches an input off)")
+    for out in tmpl.output_names:
+        if 1 in cc.partitions.get(out, ()):
+            raise InputFileError(None, f"partitions.{out}", "an output needs at least 2 "
+                                 "terms (a count of 1 switches an input off)")
     lo, hi = tmpl.outputs[0].range
     if cc.output_low is not None and cc.output_range is None and not cc.output_low[1] < hi:
         raise InputFileError(None, "output_low", f"must lie below the template's upper end "
@@ -125,16 +133,16 @@ class ControllerSpace:
             tris.append((peaks[k] - sl * left, peaks[k], peaks[k] + sr * right))
         return triangular_partition(tris, labels, strong=False)
 
-    def _variable(self, trial, var, is_output):
+    def _variable(self, trial, var, is_output, first=True):
         n = self._count(trial, var)
         lo, hi = var.range
         if n == 1 and not is_output:  # input selection: one term true on the whole range
             w = hi - lo
             return Variable(var.name, (float(lo), float(hi)),
                             (Term("any", "trap", (lo - w, lo, hi, hi + w)),), None)
-        if is_output and self.config.output_range is not None:
+        if is_output and first and self.config.output_range is not None:
             hi = trial.suggest_float(self._p("out_hi"), *self.config.output_range)
-        if is_output and self.config.output_low is not None:
+        if is_output and first and self.config.output_low is not None:
             lo = trial.suggest_float(self._p("out_lo"), *self.config.output_low)
         keep_names = self.config.tune == "breakpoints" or n == len(var.terms)
         labels = [t.name for t in var.terms] if keep_names else \
@@ -144,21 +152,26 @@ class ControllerSpace:
             if is_output else None
         return Variable(var.name, (float(lo), float(hi)), tuple(terms), default)
 
-    def _rules(self, trial, inputs, output):
+    def _rules(self, trial, inputs, outputs):
         if self.config.tune == "breakpoints":
             return self._template_rules(trial)
         counts = [len(v.terms) for v in inputs]
-        no = len(output.terms)
-        struct = "x".join(map(str, counts)) + f">{no}"
+        cells = "x".join(map(str, counts))
         rules = []
         for cell in itertools.product(*[range(c) for c in counts]):
             key = ".".join(map(str, cell))
-            k = trial.suggest_categorical(self._p(f"rule.{struct}.{key}"), list(range(no)))
+            then = []
+            for j, out in enumerate(outputs):
+                no = len(out.terms)
+                name = f"rule.{cells}>{no}" + (f".{out.name}" if j else "") + f".{key}"
+                k = trial.suggest_categorical(self._p(name), list(range(no)))
+                then.append((out.name, out.terms[k].name))
             weight = 1.0
             if self.config.rule_weights:
+                struct = cells + f">{len(outputs[0].terms)}"
                 weight = trial.suggest_float(self._p(f"weight.{struct}.{key}"), 0.0, 1.0)
             ants = tuple(Antecedent(v.name, v.terms[i].name) for v, i in zip(inputs, cell))
-            rules.append(Rule(ants, ((output.name, output.terms[k].name),), weight))
+            rules.append(Rule(ants, tuple(then), weight))
         return tuple(rules)
 
     def _template_rules(self, trial):
@@ -173,15 +186,41 @@ class ControllerSpace:
         """The fuzzy system of a trial."""
         t = self.template
         inputs = tuple(self._variable(trial, v, False) for v in t.inputs)
-        output = self._variable(trial, t.outputs[0], True)
+        outputs = tuple(self._variable(trial, v, True, k == 0) for k, v in enumerate(t.outputs))
         binding = self.binding
         if self.config.window is not None:
             binding = replace(binding, window=trial.suggest_int(self._p("window"),
                                                                 *self.config.window))
-        return FuzzySystem(name=f"{t.name}-tuned", type=t.type, operators=t.operators,
-                           inputs=inputs, outputs=(output,),
-                           rules=self._rules(trial, inputs, output),
-                           binding=binding.to_dict())
+        rules = self._rules(trial, inputs, outputs)
+        kind = self._type(trial)
+        ops = t.operators
+        if kind == "sugeno":
+            outputs = tuple(_sugeno_output(v) for v in outputs)
+            ops = Operators(ops.and_, ops.or_, None, None, "wtaver")
+        return FuzzySystem(name=f"{t.name}-tuned", type=kind, operators=ops, inputs=inputs,
+                           outputs=outputs, rules=rules, binding=binding.to_dict())
+
+    def _type(self, trial) -> str:
+        types = self.config.types
+        return types[0] if len(types) == 1 else trial.suggest_categorical(self._p("type"),
+                                                                          list(types))
+
+
+def _peak(term: Term) -> float:
+    """Where a Mamdani output term sits: its peak (tri, singleton), the middle of its
+    core (trap), else the mean of its parameters."""
+    p = term.params
+    if term.mf == "tri":
+        return float(p[1])
+    if term.mf == "trap":
+        return 0.5 * (p[1] + p[2])
+    return float(np.mean(p))
+
+
+def _sugeno_output(var: Variable) -> Variable:
+    """A Mamdani output as a zero-order Sugeno one: each term the constant at its peak."""
+    terms = tuple(Term(t.name, "constant", (_peak(t),)) for t in var.terms)
+    return Variable(var.name, var.range, terms, var.default)
 
 
 def build_all(spaces, trial) -> dict:

@@ -26,7 +26,7 @@ def _call(bound, r, HPH, R, chan):
     fns, _ = adaptation.kernel_table()
     out, diag = np.zeros(2 + r.size), np.zeros(adaptation.N_DIAG)
     st = fns[bound.kernel_id](bound.fp, bound.ip, bound.state, r, HPH, R.copy(), chan, r.size,
-                              out, diag)
+                              out, diag, np.zeros(32))
     return out, diag, st
 
 

@@ -69,7 +69,7 @@ def drive(adapter, epochs):
         Rbuf = np.concatenate([R, np.full(PAD, np.nan)])
         chan = np.concatenate([CHAN, np.full(PAD, 7)]).astype(np.int64)
         out, diag = np.full(2 + M + PAD, np.nan), np.zeros(n_diag)
-        kernel(bound.fp, bound.ip, st, r.copy(), HPH, Rbuf, chan, M, out, diag)
+        kernel(bound.fp, bound.ip, st, r.copy(), HPH, Rbuf, chan, M, out, diag, np.zeros(32))
         got.append((out.copy(), diag.copy(), Rbuf[:M].copy()))
     return got
 

@@ -24,7 +24,7 @@ def _lambdas(policy, epochs):
         out, diag = np.zeros(4), np.zeros(adaptation.N_DIAG)
         fns[bound.kernel_id](bound.fp, bound.ip, bound.state, np.array(r, float),
                              np.diag(np.array(hph, float)), np.array(R, float), chan, 2, out,
-                             diag)
+                             diag, np.zeros(32))
         assert out[1] == 1.0 and out[2] == 1.0 and out[3] == 1.0  # only P is weighted
         lams.append(out[0])
     return lams
@@ -121,6 +121,6 @@ def test_sage_husa_tuned_passes_its_bounds(tmp_path):
     out = np.zeros(4)
     fns[bound.kernel_id](bound.fp, bound.ip, bound.state, np.array([100.0, 0.0]),
                          np.eye(2), np.ones(2), np.array([0, 1], np.int64), 2, out,
-                         np.zeros(adaptation.N_DIAG))
+                         np.zeros(adaptation.N_DIAG), np.zeros(32))
     assert out[2] == pytest.approx(3.0) and out[3] == pytest.approx(0.5)
     assert math.isfinite(out[0])

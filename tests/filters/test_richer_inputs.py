@@ -61,7 +61,7 @@ def _drive(policy, rr, n=40):
         out, diag = np.zeros(8), np.zeros(adaptation.N_DIAG)
         r = np.full(6, 1.0 + rr * k)
         fns[bound.kernel_id](bound.fp, bound.ip, bound.state, r, np.eye(6), np.ones(6),
-                             chan, 6, out, diag)
+                             chan, 6, out, diag, np.zeros(32))
         qprod *= out[1]
         outs.append((out.copy(), diag.copy(), qprod))
     return outs

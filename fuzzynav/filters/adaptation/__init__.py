@@ -3,7 +3,7 @@
 At each measurement epoch of a sensor, after its residual ``r`` (length ``m``), ``H P- H^T``
 and the nominal variances ``R`` are formed and before the update, the sensor's policy runs::
 
-    status = kernel(fp, ip, st, r, HPH, R, chan, m, out, diag)
+    status = kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx)
 
 * ``fp`` / ``ip`` — the policy's float / int constants (e.g. a compiled fuzzy system);
 * ``st`` — its mutable state (innovation windows, running estimates), kept across epochs;
@@ -13,6 +13,8 @@ and the nominal variances ``R`` are formed and before the update, the sensor's p
   1 = none; see :func:`fuzzynav.filters.kalman.scale_predicted`), ``out[1]`` multiplies the process noise from
   now on (1 = unchanged), ``out[2 + i]`` multiplies ``R[i]`` for this update; ``diag[:4]``
   diagnostic values logged per epoch (alpha, DoM, ...);
+* ``ctx`` — the epoch's motion state, nominal variances and data row
+  (:mod:`~fuzzynav.filters.adaptation.context`), read by context statistics;
 * ``status`` — bit flags: 1 an input of a fuzzy system was clamped, 2 no rule fired.
 
 A policy is one module here defining an :class:`Adapter` subclass and registering it.
@@ -29,7 +31,7 @@ from fuzzynav.registry import Registry
 
 ADAPT_SIG = types.int64(types.float64[:], types.int64[:], types.float64[:], types.float64[:],
                         types.float64[:, :], types.float64[:], types.int64[:], types.int64,
-                        types.float64[:], types.float64[:])
+                        types.float64[:], types.float64[:], types.float64[:])
 #: number of diagnostic values a policy may log per epoch
 N_DIAG = 4
 
@@ -56,12 +58,18 @@ class Adapter:
     kernel = None
     diag_names: tuple = ()
 
+    def check_rows(self, model, rows) -> None:
+        """Refuse data ``rows`` (of measurement ``model``) the policy cannot run on."""
+
     def arrays(self, model):
         """``(fp, ip, state)`` for a sensor served by measurement ``model``."""
         return np.zeros(1), np.zeros(1, dtype=np.int64), np.zeros(1)
 
-    def bind(self, model) -> Bound:
-        """Arrays and kernel id for the loop."""
+    def bind(self, model, rows=None) -> Bound:
+        """Arrays and kernel id for the loop (``rows``: the sensor's data rows, checked by
+        :meth:`check_rows` when given)."""
+        if rows is not None:
+            self.check_rows(model, rows)
         fp, ip, st = self.arrays(model)
         _, index = kernel_table()
         return Bound(index[self.name], np.ascontiguousarray(fp, dtype=float),
@@ -70,7 +78,7 @@ class Adapter:
 
 
 @nb.njit(ADAPT_SIG, cache=True)
-def none_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
+def none_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     out[0] = 1.0
     out[1] = 1.0
     for i in range(m):

@@ -12,14 +12,19 @@ Keys (``docs/fuzzy.md``): ``adapter`` (a fuzzy adaptation policy), ``inputs`` (f
 -> ``statistic`` and ``channel``), ``outputs`` (fuzzy output -> the policy quantity it
 drives), ``window`` (epochs, default 10), ``sensor`` (a sensor name or kind, optional),
 ``normalisation`` (how ``dom`` is reduced: ``relative-trace``, the only one and default).
+Statistics: the innovation ones of :mod:`~fuzzynav.filters.adaptation.window` and the
+epoch-context ones of :mod:`~fuzzynav.filters.adaptation.context` (motion state, the
+sensor's reported sigma, receiver quality columns).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from fuzzynav.errors import InputFileError
 from fuzzynav.filters import adaptation, measurements
-from fuzzynav.filters.adaptation import window
+from fuzzynav.filters.adaptation import context, window
 from fuzzynav.fuzzy.io import MAX_QUOTE, brief
 
 #: the DoM/ROR window in epochs, inclusive bounds
@@ -149,7 +154,30 @@ class Binding:
     def statistic_codes(self) -> list:
         """Kernel code of each input's statistic (:func:`window.statistic`)."""
         return [window.DOM_NORMALISATIONS[self.normalisation] if b.statistic == "dom"
-                else window.STATISTICS[b.statistic] for b in self.inputs]
+                else context.STATISTICS[b.statistic] for b in self.inputs]
+
+    def column(self, b: InputBinding, model, source=None) -> int:
+        """Data-row column of the receiver-quality statistic of input ``b`` in ``model``'s
+        rows (the model's ``quality``); refused when the model has no such column."""
+        cols = dict(model.quality)
+        if b.statistic not in cols:
+            has = ", ".join(cols) or "none"
+            raise _Where(source).error(
+                f"inputs.{b.name}.statistic", f"the {model.kind} model carries no "
+                f"{b.statistic!r} column (its quality columns: {has})")
+        return cols[b.statistic]
+
+    def check_rows(self, model, rows, source=None) -> None:
+        """Refuse receiver-quality inputs whose column holds no number in data ``rows``
+        (simulated GNSS has no fix type or satellite count; recordings do)."""
+        for b in self.inputs:
+            if b.statistic in context.QUALITY:
+                col = self.column(b, model, source)
+                if rows.shape[0] and not np.isfinite(rows[:, col]).any():
+                    raise _Where(source).error(
+                        f"inputs.{b.name}.statistic", f"the {model.kind} data carry no "
+                        f"{b.statistic!r} (simulated data have none; a recording's receiver "
+                        f"reports it, e.g. --data rtklib:)")
 
     def check_channels(self, model, source=None) -> None:
         """Refuse channels that measurement ``model`` does not have."""
@@ -180,13 +208,16 @@ def _input(w: _Where, name: str, spec) -> InputBinding:
     where = f"inputs.{name}"
     spec = w.mapping(spec, where, _INPUT_KEYS)
     stat = spec.get("statistic")
-    if stat not in window.STATISTICS:
+    if stat not in context.STATISTICS:
         raise w.error(f"{where}.statistic", f"unknown statistic {brief(stat)}; "
-                                            f"known: {', '.join(window.STATISTICS)}")
+                                            f"known: {', '.join(context.STATISTICS)}")
     chan = spec.get("channel", "all")
     if chan not in known_channels():
         raise w.error(f"{where}.channel", f"unknown channel {brief(chan)}; "
                                           f"known: {', '.join(known_channels())}")
+    if chan != "all" and (stat in context.MOTION or stat in context.QUALITY):
+        raise w.error(f"{where}.channel", f"{stat!r} is not a per-channel statistic: "
+                                          f"leave channel out or write 'all'")
     return InputBinding(name, stat, chan)
 
 

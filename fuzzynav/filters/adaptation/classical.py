@@ -35,7 +35,7 @@ def _ones(out, m):
 
 
 @nb.njit(ADAPT_SIG, cache=True)
-def constant_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
+def constant_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     out[0] = 1.0
     out[1] = 1.0
     for i in range(m):
@@ -62,7 +62,7 @@ class ConstantScale(Adapter):
 
 
 @nb.njit(ADAPT_SIG, cache=True)
-def sage_husa_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
+def sage_husa_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     b, floor, cap = fp[0], fp[1], fp[2]
     k = st[0]
     d = (1.0 - b) / (1.0 - b ** (k + 1.0))
@@ -100,7 +100,7 @@ class SageHusa(Adapter):
 
 
 @nb.njit(ADAPT_SIG, cache=True)
-def huber_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
+def huber_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     gamma = fp[0]
     out[0] = 1.0
     out[1] = 1.0
@@ -130,7 +130,7 @@ class Huber(Adapter):
 
 
 @nb.njit(ADAPT_SIG, cache=True)
-def fading_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
+def fading_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     rho, beta, lam_max = fp[0], fp[1], fp[2]
     trv, trr, trh = 0.0, 0.0, 0.0
     first = st[0] == 0.0
@@ -173,7 +173,7 @@ class FadingMemory(Adapter):
 
 
 @nb.njit(ADAPT_SIG, cache=True)
-def vb_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
+def vb_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     rho, n_iter = fp[0], int(fp[1])
     a = st[1:1 + _MAXROWS]
     b = st[1 + _MAXROWS:1 + 2 * _MAXROWS]

@@ -27,8 +27,8 @@ from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
 
 
 @nb.njit(ADAPT_SIG, cache=True)
-def alpha_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
-    status, x, y = evaluate(fp, ip, st, r, HPH, R, chan, m)
+def alpha_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
+    status, x, y = evaluate(fp, ip, st, r, HPH, R, chan, m, ctx)
     alpha = y[ip[IP_OUT]]
     if not alpha >= fp[1]:  # fp[1]: the lowest alpha allowed (1, or the output range's low end)
         alpha = fp[1] if math.isfinite(alpha) else 1.0

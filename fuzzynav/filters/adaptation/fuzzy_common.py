@@ -3,7 +3,7 @@
 Array layout of a fuzzy policy (all numba-friendly flat arrays):
 
 * ``ip`` — header (:data:`IP_HEADER` ints), then ``(statistic code, channel id)`` per fuzzy
-  input, then the compiled system's ``iparams`` (starting at ``ip[IP_FIS]``);
+  input (for ``fix_type`` / ``n_sat`` the data-row column instead of a channel), then the compiled system's ``iparams`` (starting at ``ip[IP_FIS]``);
 * ``fp`` — ``fp[0] = k`` the number of policy floats, ``fp[1:1+k]`` those floats, then the
   compiled system's ``fparams``;
 * ``st`` — the innovation window, then ``x`` (inputs), ``y`` (outputs), the system's work
@@ -14,11 +14,13 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from fuzzynav.filters.adaptation import window
+from fuzzynav.filters.adaptation import context, window
 from fuzzynav.fuzzy.kernels import eval_compiled
 
 IP_NIN, IP_NOUT, IP_NCHAN, IP_WIN, IP_OUT, IP_FIS = 0, 1, 2, 3, 4, 5
 IP_HEADER = 8
+#: statistic codes below this come from the innovation window, the others from ``ctx``
+N_WINDOW_STATS = len(window.STATISTICS)
 N_SCALARS = 4
 
 
@@ -30,7 +32,8 @@ def pack(fis, source, binding, model, role: str, floats=()):
     """
     binding.check_channels(model, source)
     cf = fis.compile()
-    table = [(code, model.channel_index(b.channel))
+    table = [(code, binding.column(b, model, source) if b.statistic in context.QUALITY
+              else model.channel_index(b.channel))
              for code, b in zip(binding.statistic_codes(), binding.inputs)]
     n_win, n_ch = binding.window, len(model.channels)
     head = np.zeros(IP_HEADER, dtype=np.int64)
@@ -45,8 +48,9 @@ def pack(fis, source, binding, model, role: str, floats=()):
 
 
 @nb.njit(cache=True)
-def evaluate(fp, ip, st, r, HPH, R, chan, m):
-    """Push the window, form the bound statistics, evaluate the system.
+def evaluate(fp, ip, st, r, HPH, R, chan, m, ctx):
+    """Push the window, form the bound statistics (innovation ones from the window, the
+    others from the epoch context ``ctx``), evaluate the system.
 
     Returns ``(status, x, y)`` with ``x``/``y`` views into ``st``.
     """
@@ -57,8 +61,11 @@ def evaluate(fp, ip, st, r, HPH, R, chan, m):
     y = st[w + n_in:w + n_in + n_out]
     work = st[w + n_in + n_out:st.size - N_SCALARS]
     for j in range(n_in):
-        x[j] = window.statistic_of(ip[IP_HEADER + 2 * j], st, 0, n_win, n_ch, HPH, R, chan,
-                                   m, ip[IP_HEADER + 2 * j + 1], r)
+        kind, c = ip[IP_HEADER + 2 * j], ip[IP_HEADER + 2 * j + 1]
+        if kind >= N_WINDOW_STATS:
+            x[j] = context.statistic(kind, ctx, chan, m, c)
+        else:
+            x[j] = window.statistic_of(kind, st, 0, n_win, n_ch, HPH, R, chan, m, c, r)
     status = eval_compiled(fp[1 + int(fp[0]):], ip[ip[IP_FIS]:], x, y, work)
     return status, x, y
 

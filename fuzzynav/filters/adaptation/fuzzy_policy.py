@@ -43,6 +43,9 @@ class FuzzyPolicy(Adapter):
         """Measurement channels the rule file reads."""
         return self.binding.channels
 
+    def check_rows(self, model, rows) -> None:
+        self.binding.check_rows(model, rows, self.source)
+
     def arrays(self, model):
         return pack(self.fis, self.source, self.binding, model, self.role, self.policy_floats())
 

@@ -18,7 +18,7 @@ S_MIN, S_MAX = 1e-3, 1e3
 
 
 @nb.njit(cache=True)
-def r_step(fp, ip, st, r, HPH, R, chan, m):
+def r_step(fp, ip, st, r, HPH, R, chan, m, ctx):
     """Evaluate the system on statistics that see ``R(k-1)`` and step the running factor.
 
     Returns ``(status, x, y, s, t)``: the fuzzy inputs and outputs, the new factor ``s``
@@ -30,7 +30,7 @@ def r_step(fp, ip, st, r, HPH, R, chan, m):
     s = sc[0]
     for i in range(m):  # the statistics see R(k-1), the running adapted variance
         R[i] *= s
-    status, x, y = evaluate(fp, ip, st, r, HPH, R, chan, m)
+    status, x, y = evaluate(fp, ip, st, r, HPH, R, chan, m, ctx)
     for i in range(m):
         R[i] /= s
     t = y[ip[IP_OUT]]
@@ -42,8 +42,8 @@ def r_step(fp, ip, st, r, HPH, R, chan, m):
 
 
 @nb.njit(ADAPT_SIG, cache=True)
-def rscale_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
-    status, x, y, s, t = r_step(fp, ip, st, r, HPH, R, chan, m)
+def rscale_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
+    status, x, y, s, t = r_step(fp, ip, st, r, HPH, R, chan, m, ctx)
     out[0] = 1.0
     out[1] = 1.0
     for i in range(m):

@@ -25,8 +25,8 @@ IP_QOUT = 6
 
 
 @nb.njit(ADAPT_SIG, cache=True)
-def rq_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag):
-    status, x, y, s, t = r_step(fp, ip, st, r, HPH, R, chan, m)
+def rq_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
+    status, x, y, s, t = r_step(fp, ip, st, r, HPH, R, chan, m, ctx)
     sc = scalars(st)
     if sc[1] == 0.0:  # the process-noise level starts nominal
         sc[1] = 1.0

@@ -63,6 +63,9 @@ class MeasurementModel:
         state blocks the model wants in the layout
         (:func:`fuzzynav.filters.sensor_states.with_sensor_states` adds them and passes
         their starts to ``pack`` as ``options["state_start"]``).
+    quality : tuple of (str, int)
+        Receiver-quality columns of ``rows`` by statistic name (e.g. ``("n_sat", 13)``),
+        readable by adaptation policies (:mod:`fuzzynav.filters.adaptation.context`).
     """
 
     kind: str
@@ -72,6 +75,7 @@ class MeasurementModel:
     pack: Callable
     rows: Callable = default_rows
     states: Callable | None = None
+    quality: tuple = ()
 
     def channel_index(self, name: str) -> int:
         """Index of channel ``name`` (clear error when the model has no such channel)."""

@@ -1,7 +1,9 @@
 """GNSS position and velocity, loosely coupled, with a lever arm.
 
-Data row: ``[lat_rad, lon_rad, h_m, vel_e, vel_n, vel_u, sigma x 6]`` (NaN entries are
-skipped, so position-only receivers work).  Parameters: ``lever_arm_b`` [m, body RFU] of the
+Data row: ``[lat_rad, lon_rad, h_m, vel_e, vel_n, vel_u, sigma x 6, Q, ns]`` (NaN entries
+are skipped, so position-only receivers work; ``Q`` the RTKLIB solution quality, 1 fixed ...
+6 PPP, and ``ns`` the satellite count come from ``meta["q"]`` / ``meta["ns"]`` of a
+recording, NaN for simulated fixes; they feed only adaptation policies).  Parameters: ``lever_arm_b`` [m, body RFU] of the
 antenna from the IMU, and switches ``use_position`` / ``use_velocity``.
 
 Residuals (INS minus GNSS, ENU metres and m/s) at the measurement time::
@@ -19,7 +21,7 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.filters.layout import X_ATT, X_POS, X_VEL
-from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
+from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, default_rows, register
 from fuzzynav.nav.earth import radii_nb
 from fuzzynav.nav.layout import NAV_H, NAV_LAT, NAV_LON, NAV_VEL
 
@@ -75,5 +77,18 @@ def _pack(data, options) -> np.ndarray:
                      float(options.get("use_velocity", True))])
 
 
+#: receiver-quality columns of a data row, after ``[z x 6, sigma x 6]``
+QUALITY = (("fix_type", 12), ("n_sat", 13))
+
+
+def _rows(data) -> np.ndarray:
+    """Default rows plus the receiver's per-epoch quality (NaN where the data have none)."""
+    n = data.time_s.size
+    extra = [np.broadcast_to(np.asarray(data.meta.get(k, np.nan), float), (n,))
+             for k in ("q", "ns")]
+    return np.column_stack([default_rows(data), *extra])
+
+
 MODEL = register(MeasurementModel(kind="gnss", kernel=gnss_kernel, max_rows=6,
-                                  channels=("pos", "vel"), pack=_pack))
+                                  channels=("pos", "vel"), pack=_pack, rows=_rows,
+                                  quality=QUALITY))

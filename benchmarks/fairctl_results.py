@@ -1,0 +1,71 @@
+"""The richer fuzzy controller (``studies/paper000_fair_ctl.toml``) against the tuned baselines.
+
+Tunes the controller of ``paper000_fair_ctl.toml`` (rq-scaling: R step and Q level, inputs
+selected among ROR, NIS, trend, speed, angular rate and |f| - g, Mamdani or Sugeno) with
+``--trials`` trials on the training runs of ``paper000_fair.toml``, runs it and the classical
+filters with the tuned parameters already in ``studies/paper000_baselines.json`` on every
+held-out run, and prints per scenario the paired difference of its score against the best
+classical baseline, with 95 % CIs (never pooled).  It reuses the scoring of
+``benchmarks/science_results.py`` and writes no page (``docs/science.md`` is that script's)::
+
+    nice python benchmarks/fairctl_results.py --trials 30 --workers 2 --work /tmp/ctl
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+import science_results as sr  # noqa: E402
+
+STUDY = ROOT / "studies" / "paper000_fair_ctl.toml"
+PARAMS = ROOT / "studies" / "paper000_baselines.json"
+
+
+def tune(trials: int, workers: int, work: Path, cache: str):
+    """Run (or resume) the study; the chosen trial's systems and the config."""
+    from fuzzynav.tuning.config import load_study_config
+    from fuzzynav.tuning.export import choose_trial, systems_of
+    from fuzzynav.tuning.run import run_study
+
+    cfg = load_study_config(STUDY)
+    study = run_study(cfg, trials, workers, f"journal:{work / 'fair_ctl.journal'}", cache)
+    trial = choose_trial(study, cfg)
+    return cfg, systems_of(cfg, trial), trial
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--trials", type=int, default=30, help="trials (default 30, the "
+                                                          "baselines' budget)")
+    p.add_argument("--workers", type=int, default=2)
+    p.add_argument("--work", required=True, help="directory for the journal and the runs")
+    p.add_argument("--seeds", type=int, help="held-out seeds per scenario (default: all)")
+    p.add_argument("--cache", default=str(sr.default_cache_dir()), help="simulation cache")
+    args = p.parse_args(argv)
+    work = Path(args.work)
+    work.mkdir(parents=True, exist_ok=True)
+    t0 = time.time()
+    cfg, systems, trial = tune(args.trials, args.workers, work, args.cache)
+    if args.seeds:
+        keep = sorted({d for _, d in cfg.test})[:args.seeds]
+        cfg = replace(cfg, test=tuple(r for r in cfg.test if r[1] in keep))
+    df = sr.held_out_table(cfg, systems, PARAMS, args.cache)
+    df.to_csv(work / "fair_ctl_runs.csv", index=False)
+    scenarios = list(dict.fromkeys(s for s, _ in cfg.test))
+    scores = sr.scores_to(df, sr.REF)
+    rows, text, tally = sr.comparison_lines(scores, scenarios)
+    print(f"trial {trial.number}: training value {trial.value:.4f}; params {trial.params}")
+    print("\n".join(sr.ratio_table(scores, list(dict.fromkeys(df["filter"])), scenarios)))
+    print("\n".join(rows + [""] + text + [""]))
+    print(sr.summary_text(tally, len(scenarios)))
+    print(f"{(time.time() - t0) / 60:.1f} min wall, {sr.cpu_minutes():.1f} min CPU")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
