@@ -22,6 +22,7 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.filters import kalman
+from fuzzynav.filters.bank_beta import ShareControl, push_innovation, update_shares
 from fuzzynav.filters.bank_fusion import FUSED_NOW, SHARED, STALE, after_propagation, fuse, \
     fusion_work, local_residual, master_covariance, propagate_locals, share
 from fuzzynav.filters.error_st import EM_ST, st_measurement, st_reset, st_to_phi, \
@@ -49,13 +50,15 @@ class Start(NamedTuple):
 
 
 class Bank(NamedTuple):
-    """The bank: local filter of each sensor, information shares ``beta`` (per local), reset
-    mode (1) or not (0), fusion period [s] (0 = after every accepted update)."""
+    """The bank: local filter of each sensor, information shares ``beta`` (per local;
+    written when ``ctl`` sets them), reset mode (1) or not (0), fusion period [s] (0 = after
+    every accepted update), the share controller (:mod:`fuzzynav.filters.bank_beta`)."""
 
     local: np.ndarray
     beta: np.ndarray
     reset: int
     period: float
+    ctl: ShareControl
 
 
 class BankState(NamedTuple):
@@ -113,7 +116,8 @@ class Settings(NamedTuple):
 
 class Outputs(NamedTuple):
     """Recorded solution (every ``out_stride`` samples): time, nav, sensor states, the
-    fused sigma, and per local filter its error state ``xl`` and sigma ``sigl`` (K, L, n)."""
+    fused sigma, per local filter its error state ``xl`` and sigma ``sigl`` (K, L, n), and
+    the information shares ``beta`` (K, L)."""
 
     t: np.ndarray
     nav: np.ndarray
@@ -121,6 +125,7 @@ class Outputs(NamedTuple):
     sig: np.ndarray
     xl: np.ndarray
     sigl: np.ndarray
+    beta: np.ndarray
 
 
 class EventOutputs(NamedTuple):
@@ -149,10 +154,10 @@ def _sigma_into(row, P, nav, em):
 
 
 @nb.njit(cache=True)
-def _record(j, t, nav, xs, st, P_master, out, em):
+def _record(j, t, nav, xs, st, P_master, beta, out, em):
     """Record output ``j``; ``P_master`` is the master's covariance (see
     :func:`~fuzzynav.filters.bank_fusion.master_covariance`)."""
-    out_t, out_nav, out_xs, out_sig, out_xl, out_sigl = out
+    out_t, out_nav, out_xs, out_sig, out_xl, out_sigl, out_beta = out
     out_t[j] = t
     for i in range(NAV_SIZE):
         out_nav[j, i] = nav[i]
@@ -160,6 +165,7 @@ def _record(j, t, nav, xs, st, P_master, out, em):
         out_xs[j, i] = xs[i]
     P3, X = st.P, st.x
     for k in range(X.shape[0]):
+        out_beta[j, k] = beta[k]
         _sigma_into(out_sigl[j, k], P3[k], nav, em)
         for i in range(X.shape[1]):
             out_xl[j, k, i] = X[k, i]
@@ -185,7 +191,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
     blk_start, blk_kind, blk_inv_tau, em = model
     ev_t, ev_s, ev_data = events
     s_meas, s_mpar, s_adapt, afp, afp_off, aip, aip_off, ast, ast_off, s_gate = sensors
-    s_local, beta, reset, period = bank
+    s_local, beta, reset, period, ctl = bank
     P3, X, QD, Pg, xg = state
     max_prop_dt, out_stride = settings
     ev_r, ev_S, ev_nis, ev_flag, ev_diag = evout
@@ -245,7 +251,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
         e += 1
     _record(0, time_s[0], nav, xs, state,
             P3[0] if NL == 1 else master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork),
-            out, em)
+            beta, out, em)
     for k in range(N):
         dt = time_s[k + 1] - time_s[k]
         bias_totals(xs, blk_start, blk_kind, bg, ba)
@@ -298,6 +304,8 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
                 ev_flag[e] = EV_BAD_S
                 e += 1
                 continue
+            if ctl.on:  # the share controller reads every formed innovation, gated or not
+                push_innovation(ctl.stat[s_local[s]], ev_nis[e], m, z, S)
             thr = s_gate[s, m]
             if thr > 0.0 and ev_nis[e] > thr:
                 ev_flag[e] = EV_GATED
@@ -328,6 +336,8 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
                 x[:] = 0.0
                 ok = kalman.covariance_ok(P)
             elif period <= 0.0 or t_meas - t_fused >= period - 1e-9:
+                if ctl.on:  # new shares first: a reset shares P_g by them
+                    update_shares(ctl, beta, QD)
                 ok = fuse(P3, X, Pg, xg, fwork)
                 if ok:
                     share(P3, X, Qacc3, Pg, xg, beta, reset)
@@ -347,7 +357,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
             fstate = after_propagation(fstate, reset)
         if (k + 1) % out_stride == 0:
             _record((k + 1) // out_stride, t, nav, xs, state, P3[0] if NL == 1 else
-                    master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork), out, em)
+                    master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork), beta, out, em)
     return ST_OK, N
 
 

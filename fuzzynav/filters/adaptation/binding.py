@@ -12,6 +12,8 @@ Keys (``docs/fuzzy.md``): ``adapter`` (a fuzzy adaptation policy), ``inputs`` (f
 -> ``statistic`` and ``channel``), ``outputs`` (fuzzy output -> the policy quantity it
 drives), ``window`` (epochs, default 10), ``sensor`` (a sensor name or kind, optional),
 ``normalisation`` (how ``dom`` is reduced: ``relative-trace``, the only one and default).
+Besides the per-sensor policies, ``adapter`` may name a filter-bank controller
+(:data:`BANK_CONTROLLERS`: ``beta-sharing``, :mod:`fuzzynav.filters.beta_controller`).
 """
 from __future__ import annotations
 
@@ -27,6 +29,19 @@ WINDOW_RANGE = (1, 10000)
 DEFAULT_WINDOW = 10
 _KEYS = ("adapter", "inputs", "outputs", "window", "sensor", "normalisation")
 _INPUT_KEYS = ("statistic", "channel")
+
+
+@dataclass(frozen=True)
+class BankController:
+    """A controller of a filter bank that a rule file can bind (not a per-sensor policy)."""
+
+    name: str
+    role: str
+    extra_roles: tuple = ()
+
+
+#: bank controllers by name: ``beta-sharing`` sets the locals' information shares
+BANK_CONTROLLERS = {c.name: c for c in (BankController("beta-sharing", "beta"),)}
 
 
 class _Where:
@@ -164,6 +179,7 @@ def _adapter(w: _Where, name):
     name = w.name(name, "adapter", "a fuzzy adaptation policy")
     fuzzy = {k: cls for k, cls in adaptation.ADAPTERS.load().items()
              if getattr(cls, "role", "")}
+    fuzzy.update(BANK_CONTROLLERS)
     if name not in fuzzy:
         raise w.error("adapter", f"unknown fuzzy adapter {brief(name)}; known: "
                                  f"{', '.join(sorted(fuzzy))}")
