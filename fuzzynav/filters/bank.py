@@ -48,8 +48,13 @@ Equivalences (tested in ``tests/filters/test_bank.py``)
 
 The shares may be set at run time by a fuzzy controller (:mod:`fuzzynav.filters.bank_beta`).
 
-The banks need the phi error model (``error_model = "st"`` is refused with more than one
-local: its reset of ``P`` depends on the feedback and is not defined for a shifted local).
+With the ST error model (``error_model = "st"``, :mod:`fuzzynav.filters.error_st`) the locals
+carry ST states about the one ``nav``; fusion is linear in them (one ``A`` for all locals), so
+the master fuses them as they are, feeds back their phi form and re-expresses ``P_g`` about
+the corrected velocity (``error_st.st_fused``); a no-reset bank re-expresses every local the
+same way after its shift (``x_i <- G (x_i - x_g)``, ``P_i <- G P_i G^T``,
+``error_st.st_regauge``).  Reset mode fused after every update is then the centralized ST
+filter (tested in ``tests/filters/test_bank_st.py``).
 """
 from __future__ import annotations
 

@@ -89,10 +89,14 @@ def split_systems(items, sensors: dict, floor: float = DEFAULT_FLOOR):
 
 
 def bank_rule_files(paths, ctx: FilterContext):
-    """:func:`split_systems` of rule files (the ``beta_floor`` option sets the floor)."""
+    """:func:`split_systems` of rule files, or of the option ``systems`` (``(fuzzy system,
+    source)`` pairs, e.g. a study's candidates) when given; the ``beta_floor`` option sets
+    the floor."""
     from fuzzynav.fuzzy import load_fis
 
-    items = [(load_fis(p), str(p)) for p in map(find_rule_file, paths)]
+    items = ctx.options.get("systems")
+    if items is None:
+        items = [(load_fis(p), str(p)) for p in map(find_rule_file, paths)]
     return split_systems(items, ctx.sensors, float(ctx.options.get("beta_floor", DEFAULT_FLOOR)))
 
 

@@ -25,8 +25,8 @@ from fuzzynav.filters import kalman
 from fuzzynav.filters.bank_beta import ShareControl, push_innovation, update_shares
 from fuzzynav.filters.bank_fusion import FUSED_NOW, SHARED, STALE, after_propagation, fuse, \
     fusion_work, local_residual, master_covariance, propagate_locals, share
-from fuzzynav.filters.error_st import EM_ST, st_measurement, st_reset, st_to_phi, \
-    st_velocity_variance
+from fuzzynav.filters.error_st import EM_ST, st_fused, st_measurement, st_regauge, st_reset, \
+    st_to_phi, st_velocity_variance
 from fuzzynav.filters.feedback import bias_totals, feedback
 from fuzzynav.filters.layout import AUX_FORCE, AUX_RATE, AUX_XS, X_VEL
 from fuzzynav.nav.layout import NAV_SIZE, PREV_SIZE
@@ -242,6 +242,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
     fwork = fusion_work(n)
     Pf = np.zeros((n, n))
     xf = np.zeros(n)
+    xphi = np.zeros(n)
     fstate = SHARED  # every local starts from P0 / beta_i
     t_fused = -math.inf
     tau = 0.0
@@ -340,8 +341,13 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
                     update_shares(ctl, beta, QD)
                 ok = fuse(P3, X, Pg, xg, fwork)
                 if ok:
+                    fb = xg  # the ST model fuses ST states, feeds back their phi form
+                    if em == EM_ST:
+                        fb = st_fused(xg, Pg, nav, xphi)
                     share(P3, X, Qacc3, Pg, xg, beta, reset)
-                    feedback(nav, prev, xs, xg)
+                    if em == EM_ST and not reset:
+                        st_regauge(P3, X, fb)
+                    feedback(nav, prev, xs, fb)
                     t_fused = t_meas
                     fstate = FUSED_NOW
                     ok = kalman.covariance_ok(Pg)

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import chi2
 
-from fuzzynav.errors import FuzzynavError, InputFileError
+from fuzzynav.errors import FuzzynavError
 from fuzzynav.filters import adaptation, measurements
 from fuzzynav.filters.adaptation import N_DIAG, NoAdaptation
 from fuzzynav.filters.bank_beta import share_control
@@ -161,9 +161,6 @@ def _bank(config: FilterConfig, names, init: InitialState, em: int):
         reset, period = spec.mode_code(), float(spec.fusion_period_s)
         ctl = share_control(spec.n_local) if spec.controller is None else \
             spec.controller.share_control(spec.n_local)
-        if em == EM_ST and spec.n_local > 1:
-            raise InputFileError(None, "error_model", "a bank of several local filters needs "
-                                 "the phi error model, got 'st'")
     P0 = st_covariance(config.P0(), init.vel_n) if em == EM_ST else config.P0()
     b = np.asarray(beta, float)
     n = P0.shape[0]

@@ -120,3 +120,23 @@ def test_the_share_controller_lowers_the_disturbed_magnetometers_share(log, resu
     assert abs(np.median(beta[before, 2]) - 1 / 3) < 0.05
     assert np.median(beta[inside, 2]) < 0.15
     assert np.median(beta[inside, 1]) > 0.4
+
+
+def test_a_studys_candidates_run_in_the_bank(log):
+    # tuning hands a candidate's rule sets to the study's [objective] filter (the systems
+    # option): the share controller goes to the bank, the R-scaling to the magnetometer
+    from fuzzynav.errors import FuzzynavError
+    from fuzzynav.fuzzy import load_fis
+    from fuzzynav.tuning.objective import setup_with_systems
+
+    from pathlib import Path
+
+    rules = Path(__file__).resolve().parents[2] / "rules"
+    systems = {"beta": load_fis(rules / "paper001_beta.json"),
+               "mag": load_fis(rules / "paper001_mag.json")}
+    setup = setup_with_systems(log, systems, "federated-fuzzy-beta")
+    assert setup.config.bank.controller.source == "<candidate beta>"
+    assert setup.adapters["mag"].source == "<candidate mag>"
+    # a rule-taking filter that would ignore them (its own default rules) is refused
+    with pytest.raises(FuzzynavError, match="does not take a study's candidate"):
+        setup_with_systems(log, systems, "federated-fuzzy")
