@@ -179,10 +179,10 @@ def _adapter(w: _Where, name):
     name = w.name(name, "adapter", "a fuzzy adaptation policy")
     fuzzy = {k: cls for k, cls in adaptation.ADAPTERS.load().items()
              if getattr(cls, "role", "")}
+    known = ", ".join(sorted(fuzzy) + [f"{c} (a filter bank's)" for c in BANK_CONTROLLERS])
     fuzzy.update(BANK_CONTROLLERS)
     if name not in fuzzy:
-        raise w.error("adapter", f"unknown fuzzy adapter {brief(name)}; known: "
-                                 f"{', '.join(sorted(fuzzy))}")
+        raise w.error("adapter", f"unknown fuzzy adapter {brief(name)}; known: {known}")
     return fuzzy[name]
 
 
