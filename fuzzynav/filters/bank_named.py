@@ -97,7 +97,7 @@ def bank_rule_files(paths, ctx: FilterContext):
     items = ctx.options.get("systems")
     if items is None:
         items = [(load_fis(p), str(p)) for p in map(find_rule_file, paths)]
-    return split_systems(items, ctx.sensors, float(ctx.options.get("beta_floor", DEFAULT_FLOOR)))
+    return split_systems(items, ctx.sensors, ctx.options.get("beta_floor", DEFAULT_FLOOR))
 
 
 def _by_kind(ctx: FilterContext) -> list:

@@ -136,6 +136,8 @@ def test_bad_controllers_give_one_clear_error():
     with pytest.raises(InputFileError, match="bank.controller.floor"):
         BankSpec((("a",), ("b",)), None, "no-reset", controller=ShareController(
             from_dict(beta_doc()), "beta.json", floor=0.5))
+    with pytest.raises(InputFileError, match="beta_floor"):
+        ShareController(from_dict(beta_doc()), "beta.json", floor="0.1")
     with pytest.raises(InputFileError, match="reset mode fused after every update"):
         BankSpec((("a",), ("b",)), None, "reset", controller=ctl)
     # a share controller is no per-sensor policy
