@@ -46,8 +46,15 @@ Equivalences (tested in ``tests/filters/test_bank.py``)
   ``1 / beta_i``-inflated noise, up to second-order terms in ``x_i`` (``F`` and ``H`` taken at
   ``nav`` rather than at ``nav - x_i``).
 
-The banks need the phi error model (``error_model = "st"`` is refused with more than one
-local: its reset of ``P`` depends on the feedback and is not defined for a shifted local).
+The shares may be set at run time by a fuzzy controller (:mod:`fuzzynav.filters.bank_beta`).
+
+With the ST error model (``error_model = "st"``, :mod:`fuzzynav.filters.error_st`) the locals
+carry ST states about the one ``nav``; fusion is linear in them (one ``A`` for all locals), so
+the master fuses them as they are, feeds back their phi form and re-expresses ``P_g`` about
+the corrected velocity (``error_st.st_fused``); a no-reset bank re-expresses every local the
+same way after its shift (``x_i <- G (x_i - x_g)``, ``P_i <- G P_i G^T``,
+``error_st.st_regauge``).  Reset mode fused after every update is then the centralized ST
+filter (tested in ``tests/filters/test_bank_st.py``).
 """
 from __future__ import annotations
 
@@ -80,12 +87,17 @@ class BankSpec:
     fusion_period_s : float
         Fuse (and feed back) at the first accepted update whose measurement time is at
         least this long after the last fusion's [s]; 0 fuses after every accepted update.
+    controller : ShareController or None
+        Sets the shares at run time from the locals' innovations
+        (:mod:`fuzzynav.filters.bank_beta`; ``beta`` is then the initial shares); None
+        keeps ``beta`` fixed.
     """
 
     locals: tuple
     beta: tuple | None = None
     mode: str = "no-reset"
     fusion_period_s: float = 0.0
+    controller: object = None
 
     def __post_init__(self):
         groups = tuple(tuple(str(s) for s in g) for g in self.locals)
@@ -116,6 +128,19 @@ class BankSpec:
         if not (math.isfinite(self.fusion_period_s) and self.fusion_period_s >= 0.0):
             raise InputFileError(None, f"{_WHERE}.fusion_period_s",
                                  f"must be >= 0 s, got {self.fusion_period_s!r}")
+        if self.controller is not None:
+            self._check_controller()
+
+    def _check_controller(self):
+        if self.mode == "reset" and self.fusion_period_s <= 0.0:
+            raise InputFileError(None, f"{_WHERE}.controller", "a share controller cannot act "
+                                 "in reset mode fused after every update (the shares cancel "
+                                 "there): use no-reset mode or a fusion_period_s > 0")
+        floor = self.controller.floor
+        if not 0.0 < floor * self.n_local < 1.0:
+            raise InputFileError(None, f"{_WHERE}.controller.floor", f"must lie in (0, 1/"
+                                 f"{self.n_local}) for {self.n_local} local filters, got "
+                                 f"{floor!r}")
 
     @property
     def n_local(self) -> int:

@@ -9,11 +9,17 @@ filters is one call of it inside a registered filter, e.g. (paper 001's layout):
                           beta=(0.5, 0.5))
 
 Options read here (from the Python API's filter options): ``fusion_period_s`` (default 0:
-fuse after every accepted update).
+fuse after every accepted update), ``beta_floor`` (the smallest share a share controller
+gives, default :data:`~fuzzynav.filters.bank_beta.DEFAULT_FLOOR`).
 """
 from __future__ import annotations
 
+from fuzzynav.errors import FuzzynavError
+from fuzzynav.filters.adaptation.binding import Binding
 from fuzzynav.filters.bank import BankSpec
+from fuzzynav.filters.bank_beta import DEFAULT_FLOOR
+from fuzzynav.filters.beta_controller import ShareController, is_share_controller
+from fuzzynav.filters.catalog import bind_systems, find_rule_file
 from fuzzynav.filters.named import FilterContext, FilterSetup, config_from_imu, \
     config_overrides, register_filter
 
@@ -35,7 +41,8 @@ def sensor_groups(ctx: FilterContext, groups) -> tuple:
 
 
 def bank_setup(ctx: FilterContext, groups, mode: str = "no-reset", beta=None,
-               fusion_period_s: float | None = None, adapters=None) -> FilterSetup:
+               fusion_period_s: float | None = None, adapters=None,
+               controller=None) -> FilterSetup:
     """A filter bank with one local filter per group of sensors.
 
     Parameters
@@ -50,6 +57,8 @@ def bank_setup(ctx: FilterContext, groups, mode: str = "no-reset", beta=None,
         Default: the context's ``fusion_period_s`` option, else 0 (after every update).
     adapters : dict, optional
         Adaptation policy per sensor name (each runs in its sensor's local filter).
+    controller : ShareController, optional
+        Sets the shares at run time (``beta`` is then the initial shares).
 
     Returns
     -------
@@ -57,9 +66,38 @@ def bank_setup(ctx: FilterContext, groups, mode: str = "no-reset", beta=None,
     """
     period = ctx.options.get("fusion_period_s", 0.0) if fusion_period_s is None \
         else fusion_period_s
-    spec = BankSpec(sensor_groups(ctx, groups), beta, mode, float(period))
+    spec = BankSpec(sensor_groups(ctx, groups), beta, mode, float(period), controller)
     config = config_from_imu(ctx.imu_noise, **config_overrides(ctx.options)).with_(bank=spec)
     return FilterSetup(config, dict(adapters or {}))
+
+
+def split_systems(items, sensors: dict, floor: float = DEFAULT_FLOOR):
+    """``(share controller or None, adapters by sensor)`` of ``(fuzzy system, source)`` pairs:
+    a ``beta-sharing`` system is the bank's controller (at most one), the others bind to
+    the run's sensors as in :func:`~fuzzynav.filters.catalog.bind_systems`."""
+    controller, rest = None, []
+    for fis, source in items:
+        binding = Binding.of(fis, source)
+        if not is_share_controller(binding):
+            rest.append((fis, source))
+        elif controller is not None:
+            raise FuzzynavError(f"{source}: a second share controller (the first: "
+                                f"{controller.source}); give one beta-sharing rule file")
+        else:
+            controller = ShareController(fis, source, floor, binding)
+    return controller, bind_systems(rest, sensors, required=True)
+
+
+def bank_rule_files(paths, ctx: FilterContext):
+    """:func:`split_systems` of rule files, or of the option ``systems`` (``(fuzzy system,
+    source)`` pairs, e.g. a study's candidates) when given; the ``beta_floor`` option sets
+    the floor."""
+    from fuzzynav.fuzzy import load_fis
+
+    items = ctx.options.get("systems")
+    if items is None:
+        items = [(load_fis(p), str(p)) for p in map(find_rule_file, paths)]
+    return split_systems(items, ctx.sensors, ctx.options.get("beta_floor", DEFAULT_FLOOR))
 
 
 def _by_kind(ctx: FilterContext) -> list:

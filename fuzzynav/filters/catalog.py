@@ -16,7 +16,7 @@ from fuzzynav.errors import DataMissingError, FuzzynavError, InputFileError
 from fuzzynav.filters import adaptation, measurements
 from fuzzynav.filters.adaptation.classical import (ConstantScale, FadingMemory, Huber, SageHusa,
                                                    VariationalBayes)
-from fuzzynav.filters.adaptation.binding import Binding
+from fuzzynav.filters.adaptation.binding import BANK_CONTROLLERS, Binding
 from fuzzynav.filters.named import FilterContext, FilterSetup, config_from_imu, \
     config_overrides, register_alias, register_filter
 
@@ -73,6 +73,9 @@ def bind_systems(items, sensors: dict, required: bool = True) -> dict:
     out = {}
     for fis, source in items:
         binding = Binding.of(fis, source)
+        if binding.adapter in BANK_CONTROLLERS:
+            raise FuzzynavError(f"{source}: {binding.adapter!r} controls a filter bank, not a "
+                                "sensor: give it to a bank that takes one (federated-fuzzy-beta)")
         policy = adaptation.get(binding.adapter)(fis, source, binding)
         target = binding.sensor
         chans = set(binding.channels)

@@ -194,3 +194,40 @@ def st_covariance(P, vel_n) -> np.ndarray:
     A[X_VEL:X_VEL + 3, X_ATT:X_ATT + 3] = -np.array([[0.0, -vu, vn], [vu, 0.0, -ve],
                                                       [-vn, ve, 0.0]])
     return A @ P @ A.T
+
+
+@nb.njit(cache=True)
+def st_fused(xg, Pg, nav, xphi):
+    """The master's fused ST estimate as the phi-model correction ``xphi`` it feeds back, and
+    ``Pg`` re-expressed about the corrected velocity (:func:`st_reset`); returns ``xphi``.
+
+    Fusion is linear in the ST states (every local's ``x_i = A x_i,phi`` with the one ``A`` of
+    the shared ``nav``, so ``sum P_i^-1 x_i`` is ``A^-T`` times the phi-model sum): the bank
+    fuses ST states as they are and converts only what it feeds back, as the single filter
+    does with its own estimate.
+    """
+    for i in range(xg.size):
+        xphi[i] = xg[i]
+    st_to_phi(xphi, nav)
+    st_reset(Pg, xphi)
+    return xphi
+
+
+@nb.njit(cache=True)
+def st_regauge(P3, X, xphi):
+    """Re-express every local of a no-reset bank about the corrected velocity.
+
+    After the feedback of ``xphi`` (the fused correction) and the shift ``x_i -= x_g``, a
+    local's velocity state ``u_i = dv_i - [v x] phi_i`` is still defined with the old
+    velocity; with the new one (``v - dv_g``) it is ``u_i + [dv_g x] (phi_i - phi_g)``, i.e.
+    ``x_i <- G x_i`` and ``P_i <- G P_i G^T`` with ``G = I + [dv_g x]`` in the
+    velocity-attitude block, as :func:`st_reset` does for the single filter's ``P``.
+    """
+    d0, d1, d2 = xphi[X_VEL], xphi[X_VEL + 1], xphi[X_VEL + 2]
+    for k in range(X.shape[0]):
+        x = X[k]
+        p0, p1, p2 = x[X_ATT], x[X_ATT + 1], x[X_ATT + 2]
+        x[X_VEL] += -d2 * p1 + d1 * p2
+        x[X_VEL + 1] += d2 * p0 - d0 * p2
+        x[X_VEL + 2] += -d1 * p0 + d0 * p1
+        st_reset(P3[k], xphi)

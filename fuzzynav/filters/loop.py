@@ -23,10 +23,11 @@ import numpy as np
 
 from fuzzynav.filters import kalman
 from fuzzynav.filters.adaptation import context
+from fuzzynav.filters.bank_beta import ShareControl, push_innovation, update_shares
 from fuzzynav.filters.bank_fusion import FUSED_NOW, SHARED, STALE, after_propagation, fuse, \
     fusion_work, local_residual, master_covariance, propagate_locals, share
-from fuzzynav.filters.error_st import EM_ST, st_measurement, st_reset, st_to_phi, \
-    st_velocity_variance
+from fuzzynav.filters.error_st import EM_ST, st_fused, st_measurement, st_regauge, st_reset, \
+    st_to_phi, st_velocity_variance
 from fuzzynav.filters.feedback import bias_totals, feedback
 from fuzzynav.filters.layout import AUX_FORCE, AUX_RATE, AUX_XS, X_VEL
 from fuzzynav.nav.layout import NAV_SIZE, PREV_SIZE
@@ -50,13 +51,15 @@ class Start(NamedTuple):
 
 
 class Bank(NamedTuple):
-    """The bank: local filter of each sensor, information shares ``beta`` (per local), reset
-    mode (1) or not (0), fusion period [s] (0 = after every accepted update)."""
+    """The bank: local filter of each sensor, information shares ``beta`` (per local;
+    written when ``ctl`` sets them), reset mode (1) or not (0), fusion period [s] (0 = after
+    every accepted update), the share controller (:mod:`fuzzynav.filters.bank_beta`)."""
 
     local: np.ndarray
     beta: np.ndarray
     reset: int
     period: float
+    ctl: ShareControl
 
 
 class BankState(NamedTuple):
@@ -114,7 +117,8 @@ class Settings(NamedTuple):
 
 class Outputs(NamedTuple):
     """Recorded solution (every ``out_stride`` samples): time, nav, sensor states, the
-    fused sigma, and per local filter its error state ``xl`` and sigma ``sigl`` (K, L, n)."""
+    fused sigma, per local filter its error state ``xl`` and sigma ``sigl`` (K, L, n), and
+    the information shares ``beta`` (K, L)."""
 
     t: np.ndarray
     nav: np.ndarray
@@ -122,6 +126,7 @@ class Outputs(NamedTuple):
     sig: np.ndarray
     xl: np.ndarray
     sigl: np.ndarray
+    beta: np.ndarray
 
 
 class EventOutputs(NamedTuple):
@@ -150,10 +155,10 @@ def _sigma_into(row, P, nav, em):
 
 
 @nb.njit(cache=True)
-def _record(j, t, nav, xs, st, P_master, out, em):
+def _record(j, t, nav, xs, st, P_master, beta, out, em):
     """Record output ``j``; ``P_master`` is the master's covariance (see
     :func:`~fuzzynav.filters.bank_fusion.master_covariance`)."""
-    out_t, out_nav, out_xs, out_sig, out_xl, out_sigl = out
+    out_t, out_nav, out_xs, out_sig, out_xl, out_sigl, out_beta = out
     out_t[j] = t
     for i in range(NAV_SIZE):
         out_nav[j, i] = nav[i]
@@ -161,6 +166,7 @@ def _record(j, t, nav, xs, st, P_master, out, em):
         out_xs[j, i] = xs[i]
     P3, X = st.P, st.x
     for k in range(X.shape[0]):
+        out_beta[j, k] = beta[k]
         _sigma_into(out_sigl[j, k], P3[k], nav, em)
         for i in range(X.shape[1]):
             out_xl[j, k, i] = X[k, i]
@@ -186,7 +192,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
     blk_start, blk_kind, blk_inv_tau, em = model
     ev_t, ev_s, ev_data = events
     s_meas, s_mpar, s_adapt, afp, afp_off, aip, aip_off, ast, ast_off, s_gate = sensors
-    s_local, beta, reset, period = bank
+    s_local, beta, reset, period, ctl = bank
     P3, X, QD, Pg, xg = state
     max_prop_dt, out_stride = settings
     ev_r, ev_S, ev_nis, ev_flag, ev_diag = evout
@@ -239,6 +245,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
     fwork = fusion_work(n)
     Pf = np.zeros((n, n))
     xf = np.zeros(n)
+    xphi = np.zeros(n)
     fstate = SHARED  # every local starts from P0 / beta_i
     t_fused = -math.inf
     tau = 0.0
@@ -248,7 +255,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
         e += 1
     _record(0, time_s[0], nav, xs, state,
             P3[0] if NL == 1 else master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork),
-            out, em)
+            beta, out, em)
     for k in range(N):
         dt = time_s[k + 1] - time_s[k]
         bias_totals(xs, blk_start, blk_kind, bg, ba)
@@ -303,6 +310,8 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
                 ev_flag[e] = EV_BAD_S
                 e += 1
                 continue
+            if ctl.on:  # the share controller reads every formed innovation, gated or not
+                push_innovation(ctl.stat[s_local[s]], ev_nis[e], m, z, S)
             thr = s_gate[s, m]
             if thr > 0.0 and ev_nis[e] > thr:
                 ev_flag[e] = EV_GATED
@@ -333,10 +342,17 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
                 x[:] = 0.0
                 ok = kalman.covariance_ok(P)
             elif period <= 0.0 or t_meas - t_fused >= period - 1e-9:
+                if ctl.on:  # new shares first: a reset shares P_g by them
+                    update_shares(ctl, beta, QD)
                 ok = fuse(P3, X, Pg, xg, fwork)
                 if ok:
+                    fb = xg  # the ST model fuses ST states, feeds back their phi form
+                    if em == EM_ST:
+                        fb = st_fused(xg, Pg, nav, xphi)
                     share(P3, X, Qacc3, Pg, xg, beta, reset)
-                    feedback(nav, prev, xs, xg)
+                    if em == EM_ST and not reset:
+                        st_regauge(P3, X, fb)
+                    feedback(nav, prev, xs, fb)
                     t_fused = t_meas
                     fstate = FUSED_NOW
                     ok = kalman.covariance_ok(Pg)
@@ -352,7 +368,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
             fstate = after_propagation(fstate, reset)
         if (k + 1) % out_stride == 0:
             _record((k + 1) // out_stride, t, nav, xs, state, P3[0] if NL == 1 else
-                    master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork), out, em)
+                    master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork), beta, out, em)
     return ST_OK, N
 
 

@@ -6,23 +6,34 @@ they are equal here (1/3 each).  ``federated-p001-reset`` is the same bank in Ca
 mode (with equal shares and fusion after every update it equals ``centralized``), and
 ``federated-fuzzy`` gives the magnetometer's local filter the fuzzy R-scaling of
 ``rules/paper001_mag.json`` (or the ``--rules`` given), the defence against the disturbance.
+``federated-fuzzy-beta`` sets the shares at run time instead, from each local's innovations
+(the share controller ``rules/paper001_beta.json``, :mod:`fuzzynav.filters.bank_beta`).
 """
 from __future__ import annotations
 
 from pathlib import Path
 
-from fuzzynav.filters.bank_named import bank_setup
+from fuzzynav.errors import FuzzynavError
+from fuzzynav.filters.bank_named import bank_rule_files, bank_setup
 from fuzzynav.filters.catalog import bind_rule_files
 from fuzzynav.filters.named import FilterContext, FilterSetup, register_filter
 from fuzzynav.filters.subsets import LOCAL_GROUPS, PAPER001_MAG_RULES
 
 #: the paper's shares are not stated (only beta_m = 0 and sum beta_i = 1): equal
 PAPER001_BETA = (1 / 3, 1 / 3, 1 / 3)
+#: the share controller ``federated-fuzzy-beta`` uses without ``--rules``
+PAPER001_BETA_RULES = "paper001_beta.json"
 
 
-def p001_bank(ctx: FilterContext, mode: str, adapters=None) -> FilterSetup:
+def p001_bank(ctx: FilterContext, mode: str, adapters=None, controller=None) -> FilterSetup:
     """Paper 001's bank of three locals (BDS, polarization, magnetometer) in ``mode``."""
-    return bank_setup(ctx, LOCAL_GROUPS, mode, beta=PAPER001_BETA, adapters=adapters)
+    return bank_setup(ctx, LOCAL_GROUPS, mode, beta=PAPER001_BETA, adapters=adapters,
+                      controller=controller)
+
+
+def _rule_paths(ctx: FilterContext, default: str) -> list:
+    given = ctx.options.get("rules") or [default]
+    return [given] if isinstance(given, (str, Path)) else list(given)
 
 
 @register_filter("federated-p001", "paper 001's federated filter: locals SINS/BDS, "
@@ -42,6 +53,17 @@ def _federated_p001_reset(ctx: FilterContext) -> FilterSetup:
                                     f"local filter (default rules/{PAPER001_MAG_RULES})",
                  takes_rules=True)
 def _federated_fuzzy(ctx: FilterContext) -> FilterSetup:
-    given = ctx.options.get("rules") or [PAPER001_MAG_RULES]
-    paths = [given] if isinstance(given, (str, Path)) else given
+    paths = _rule_paths(ctx, PAPER001_MAG_RULES)
     return p001_bank(ctx, "no-reset", bind_rule_files(paths, ctx.sensors, required=True))
+
+
+@register_filter("federated-fuzzy-beta", "federated-p001 with the shares set at run time by a "
+                                         "fuzzy controller of each local's innovations "
+                                         f"(default rules/{PAPER001_BETA_RULES}; more --rules "
+                                         "bind to the locals' sensors)", takes_rules=True)
+def _federated_fuzzy_beta(ctx: FilterContext) -> FilterSetup:
+    controller, adapters = bank_rule_files(_rule_paths(ctx, PAPER001_BETA_RULES), ctx)
+    if controller is None:
+        raise FuzzynavError("federated-fuzzy-beta: no rule file given is a share controller "
+                            "(binding.adapter 'beta-sharing')")
+    return p001_bank(ctx, "no-reset", adapters, controller)

@@ -56,12 +56,15 @@ class LocalStates:
     P_end : (L, n, n) each local's covariance at the end of the run.
     P_fused : (n, n) the master's covariance at the last fusion (a bank of one never fuses:
         there it is the initial covariance).
+    beta : (K, L) each local's information share (constant unless a share controller sets
+        them, :mod:`fuzzynav.filters.bank_beta`).
     """
 
     x: np.ndarray
     sigma: np.ndarray
     P_end: np.ndarray
     P_fused: np.ndarray
+    beta: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

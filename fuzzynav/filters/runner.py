@@ -6,9 +6,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import chi2
 
-from fuzzynav.errors import FuzzynavError, InputFileError
+from fuzzynav.errors import FuzzynavError
 from fuzzynav.filters import adaptation, measurements
 from fuzzynav.filters.adaptation import N_DIAG, NoAdaptation
+from fuzzynav.filters.bank_beta import share_control
 from fuzzynav.filters.config import FilterConfig
 from fuzzynav.filters.error_st import EM_ST, error_model_code, st_covariance
 from fuzzynav.filters.layout import N_CORE
@@ -130,7 +131,8 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
     E, M = tb["ev_t"].size, tb["M"]
     out = dict(t=np.full(K, np.nan), nav=np.full((K, NAV_SIZE), np.nan),
                xs=np.full((K, n - N_CORE), np.nan), sig=np.full((K, n), np.nan),
-               xl=np.full((K, NL, n), np.nan), sigl=np.full((K, NL, n), np.nan))
+               xl=np.full((K, NL, n), np.nan), sigl=np.full((K, NL, n), np.nan),
+               beta=np.full((K, NL), np.nan))
     ev = dict(r=np.full((E, M), np.nan), S=np.full((E, M), np.nan), nis=np.full(E, np.nan),
               flag=np.zeros(E, np.int64), diag=np.full((E, N_DIAG), np.nan))
     nav0 = strapdown.make_nav(init.lla, init.vel_n, init.q_bn)
@@ -154,12 +156,12 @@ def _bank(config: FilterConfig, names, init: InitialState, em: int):
     spec = config.bank
     if spec is None:
         local, beta, reset, period = np.zeros(max(len(names), 1), np.int64), (1.0,), 1, 0.0
+        ctl = share_control(1)
     else:
         local, beta = spec.sensor_locals(names), spec.beta
         reset, period = spec.mode_code(), float(spec.fusion_period_s)
-        if em == EM_ST and spec.n_local > 1:
-            raise InputFileError(None, "error_model", "a bank of several local filters needs "
-                                 "the phi error model, got 'st'")
+        ctl = share_control(spec.n_local) if spec.controller is None else \
+            spec.controller.share_control(spec.n_local)
     P0 = st_covariance(config.P0(), init.vel_n) if em == EM_ST else config.P0()
     b = np.asarray(beta, float)
     n = P0.shape[0]
@@ -168,7 +170,7 @@ def _bank(config: FilterConfig, names, init: InitialState, em: int):
                            x=np.zeros((b.size, n)),
                            qd=np.ascontiguousarray(config.q_diag()[None] / b[:, None]),
                            Pg=P0.copy(), xg=np.zeros(n))
-    return loop.Bank(local, b, int(reset), period), state
+    return loop.Bank(local, b.copy(), int(reset), period, ctl), state
 
 
 def _bundle(out, ev, tb, config, status, done, time_s, state) -> FilterResult:
@@ -189,4 +191,4 @@ def _bundle(out, ev, tb, config, status, done, time_s, state) -> FilterResult:
                         sigma=out["sig"][keep], state_labels=layout.labels(), events=events,
                         status=msg, layout=layout,
                         locals=LocalStates(out["xl"][keep], out["sigl"][keep], state.P,
-                                           state.Pg))
+                                           state.Pg, out["beta"][keep]))

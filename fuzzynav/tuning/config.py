@@ -6,7 +6,8 @@ Layout (every key in ``docs/studies.md``)::
     description = "..."
     [study]          sampler, seed, trials, pruner, objective (single|multi), storage, ...
     [study.pso]      particles, iterations, inertia = w | [start, end], c1, c2  (sampler "pso")
-    [objective]      weights = {pos, vel, att}, baseline = "ekf", t_start_s
+    [objective]      weights = {pos, vel, att}, baseline = "ekf", t_start_s, filter = "fakf"
+                     (the filter the candidate rule sets run in: one that takes rule files)
     [train]          scenarios = [...], seeds = [...]  (built-in names, or TOML files
                      relative to this file, like templates)
     [test]           scenarios, seeds, compare = [filters shown beside the tuned rules]
@@ -96,6 +97,7 @@ class StudyConfig:
     test: tuple
     compare: tuple
     controllers: tuple
+    filter: str = "fakf"
 
     @property
     def storage_url(self) -> str:
@@ -164,6 +166,17 @@ def _filter_name(t: Table, key: str, name) -> str:
         get_filter(parse_filter_spec(name)[0])  # NAME@FILE: a tuned baseline's parameters
     except FuzzynavError as exc:
         raise t.error(key, str(exc)) from None
+    return name
+
+
+def _candidate_filter(t: Table) -> str:
+    """``[objective] filter``: a named filter that takes rule files (default ``fakf``)."""
+    from fuzzynav.filters.named import get_filter
+
+    name = _filter_name(t, "filter", t.string("filter", "fakf"))
+    if not get_filter(name).takes_rules:
+        raise t.error("filter", f"the candidates' rule sets need a filter that takes rule "
+                                f"files; {name!r} does not")
     return name
 
 
@@ -333,6 +346,7 @@ def study_config_from_dict(doc: dict, path: Path | None = None,
             raise wt.error("", "at least one weight must be positive")
     baseline = _filter_name(ob, "baseline", ob.string("baseline", "ekf"))
     t_start = ob.number("t_start_s", 0.0, lo=0.0)
+    candidate = _candidate_filter(ob)
     ob.finish()
     tr = top.table("train")
     train, shortest = _runs(tr, here)
@@ -357,4 +371,4 @@ def study_config_from_dict(doc: dict, path: Path | None = None,
         raise InputFileError(None, "study.sampler", why_not)
     return StudyConfig(name=name, description=desc, path=path, pso=pso, weights=weights,
                        baseline=baseline, t_start_s=t_start, train=train, test=test,
-                       compare=compare, controllers=ctrls, **study)
+                       compare=compare, controllers=ctrls, filter=candidate, **study)

@@ -115,14 +115,15 @@ def export_rules(cfg, study, out, trial_number=None, pareto_index=None, cache_di
 
 
 def _write_expected(cfg, paths: dict, ev: Evaluator) -> None:
-    """Run fakf with the files as written and record what it gives on the first test run."""
+    """Run the study's filter (``fakf`` unless ``[objective] filter``) with the files as
+    written and record what it gives on the first test run."""
     scenario, seed = cfg.test[0]
     files = [str(p) for p in paths.values()]
-    out = run_on_log(ev.log(scenario, seed), "fakf", {"rules": files},
+    out = run_on_log(ev.log(scenario, seed), cfg.filter, {"rules": files},
                      t_start_s=cfg.t_start_s)
     metrics = {k: out.metrics[k] for k in EXPECTED_METRICS}
     for name, path in paths.items():
         others = [p.name for n, p in paths.items() if n != name]
-        expected = {"scenario": scenario, "seed": seed, "filter": "fakf",
+        expected = {"scenario": scenario, "seed": seed, "filter": cfg.filter,
                     "with_rules": others, "t_start_s": cfg.t_start_s, "metrics": metrics}
         save_fis(_with(load_fis(path), expected=expected), path)

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fuzzynav.errors import FuzzynavError
 from fuzzynav.experiment import run_on_log, setup_for
 from fuzzynav.filters.catalog import bind_systems
 from fuzzynav.filters.named import FilterSetup
@@ -78,10 +79,22 @@ def score_metrics(metrics: dict, baseline: dict, weights: dict) -> RunScore:
     return RunScore(metrics, ratios, weighted_score(ratios, weights))
 
 
-def setup_with_systems(log, systems: dict) -> FilterSetup:
-    """The EKF configuration of a log with the given fuzzy systems bound to its sensors."""
-    base = setup_for(log, "ekf")
+def setup_with_systems(log, systems: dict, filter_name: str = "fakf") -> FilterSetup:
+    """The configuration of a log with the given fuzzy systems: bound to its sensors in the
+    EKF (``fakf``, ``fuzzy``), or handed to another filter that takes rule files as its
+    ``systems`` option (a filter bank that takes a share controller)."""
     items = [(fis, f"<candidate {name}>") for name, fis in systems.items()]
+    if filter_name not in ("fakf", "fuzzy"):
+        setup = setup_for(log, filter_name, {"systems": items})
+        bank = setup.config.bank
+        used = {getattr(a, "source", None) for a in setup.adapters.values()}
+        used.add(getattr(getattr(bank, "controller", None), "source", None))
+        if not {src for _, src in items} <= used:  # a filter that ignored the option
+            raise FuzzynavError(f"filter {filter_name!r} does not take a study's candidate "
+                                "rule sets (its systems option); use fakf or a bank such "
+                                "as federated-fuzzy-beta")
+        return setup
+    base = setup_for(log, "ekf")
     return FilterSetup(base.config, bind_systems(items, log.sensors, required=True),
                        base.sensor_options, base.sigma_override)
 
@@ -133,7 +146,7 @@ class Evaluator:
         :class:`~fuzzynav.experiment.RunOutcome` named :data:`CANDIDATE`."""
         log = self.log(scenario, seed)
         return run_on_log(log, CANDIDATE, t_start_s=self.config.t_start_s,
-                          setup=setup_with_systems(log, systems))
+                          setup=setup_with_systems(log, systems, self.config.filter))
 
     def judge(self, metrics: dict, scenario: str, seed: int) -> RunScore:
         """Score a filter's metrics on a run against the baseline on that run."""

@@ -157,8 +157,6 @@ def test_a_bank_must_name_the_runs_sensors(data):
         run(data, bank=BankSpec((("gnss",), ("nhc", "dvl"))))
     with pytest.raises(InputFileError, match="sensor 'nhc' of the run is in no local"):
         run(data, bank=BankSpec((("gnss",),)))
-    with pytest.raises(InputFileError, match="needs the phi error model"):
-        run(data, bank=BankSpec((("gnss",), ("nhc",))), error_model="st")
 
 
 def test_named_banks(data):

@@ -19,7 +19,8 @@ def log():
 
 @pytest.fixture(scope="module")
 def results(log):
-    names = ("centralized", "federated-p001", "federated-p001-reset", "federated-fuzzy")
+    names = ("centralized", "federated-p001", "federated-p001-reset", "federated-fuzzy",
+             "federated-fuzzy-beta")
     return {n: run_on_log(log, n).result for n in names}
 
 
@@ -105,3 +106,37 @@ def test_in_reset_mode_fused_every_update_the_shares_do_not_matter(log, results)
             assert np.all(np.abs(enu) <= bound * sig)
         else:
             assert np.max(np.abs(enu) / sig) > 1.0
+
+
+def test_the_share_controller_lowers_the_disturbed_magnetometers_share(log, results):
+    setup = setup_for(log, "federated-fuzzy-beta")
+    assert setup.config.bank.mode == "no-reset" and setup.config.bank.controller is not None
+    res = results["federated-fuzzy-beta"]
+    t, beta = res.time_s, res.locals.beta  # locals: bds, pol, mag
+    inside = (t >= ZONE[0]) & (t < ZONE[1])
+    before = (t >= 50.0) & (t < ZONE[0])
+    # consistent before the zone: about the equal shares; inside, the magnetometer's local
+    # has NIS far above 1 for most of the zone and its share sits at or near the floor
+    assert abs(np.median(beta[before, 2]) - 1 / 3) < 0.05
+    assert np.median(beta[inside, 2]) < 0.15
+    assert np.median(beta[inside, 1]) > 0.4
+
+
+def test_a_studys_candidates_run_in_the_bank(log):
+    # tuning hands a candidate's rule sets to the study's [objective] filter (the systems
+    # option): the share controller goes to the bank, the R-scaling to the magnetometer
+    from fuzzynav.errors import FuzzynavError
+    from fuzzynav.fuzzy import load_fis
+    from fuzzynav.tuning.objective import setup_with_systems
+
+    from pathlib import Path
+
+    rules = Path(__file__).resolve().parents[2] / "rules"
+    systems = {"beta": load_fis(rules / "paper001_beta.json"),
+               "mag": load_fis(rules / "paper001_mag.json")}
+    setup = setup_with_systems(log, systems, "federated-fuzzy-beta")
+    assert setup.config.bank.controller.source == "<candidate beta>"
+    assert setup.adapters["mag"].source == "<candidate mag>"
+    # a rule-taking filter that would ignore them (its own default rules) is refused
+    with pytest.raises(FuzzynavError, match="does not take a study's candidate"):
+        setup_with_systems(log, systems, "federated-fuzzy")

@@ -56,6 +56,7 @@ def test_defaults_and_derived_values(tmp_path):
     assert cfg.pruner == "wilcoxon" and cfg.stale_after_s == 300.0
     assert cfg.weights == {"pos": 1.0, "vel": 1.0, "att": 1.0} and cfg.baseline == "ekf"
     assert cfg.compare == ("ekf", "fakf") and cfg.directions == ["minimize"]
+    assert cfg.filter == "fakf"  # the candidates run in the fuzzy EKF unless told otherwise
     assert cfg.train == ((str(TINY), 0), (str(TINY), 1))
     multi = load_study_config(write_study(tmp_path, study_doc(study={"objective": "multi"})))
     assert multi.directions == ["minimize"] * 3
@@ -124,6 +125,8 @@ BAD = [
      "true or false"),
     (dict(controllers=[dict(_ctrl()[0], bindng={})]), "controllers[0].bindng", "unknown key"),
     (dict(name="../escape"), "name", "names the journal file"),
+    (dict(objective={"filter": "ekf"}), "objective.filter", "does not"),
+    (dict(objective={"filter": "fakf2"}), "objective.filter", "unknown filter"),
 ]
 
 

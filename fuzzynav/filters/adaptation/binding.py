@@ -15,6 +15,8 @@ drives), ``window`` (epochs, default 10), ``sensor`` (a sensor name or kind, opt
 Statistics: the innovation ones of :mod:`~fuzzynav.filters.adaptation.window` and the
 epoch-context ones of :mod:`~fuzzynav.filters.adaptation.context` (motion state, the
 sensor's reported sigma, receiver quality columns).
+Besides the per-sensor policies, ``adapter`` may name a filter-bank controller
+(:data:`BANK_CONTROLLERS`: ``beta-sharing``, :mod:`fuzzynav.filters.beta_controller`).
 """
 from __future__ import annotations
 
@@ -32,6 +34,19 @@ WINDOW_RANGE = (1, 10000)
 DEFAULT_WINDOW = 10
 _KEYS = ("adapter", "inputs", "outputs", "window", "sensor", "normalisation")
 _INPUT_KEYS = ("statistic", "channel")
+
+
+@dataclass(frozen=True)
+class BankController:
+    """A controller of a filter bank that a rule file can bind (not a per-sensor policy)."""
+
+    name: str
+    role: str
+    extra_roles: tuple = ()
+
+
+#: bank controllers by name: ``beta-sharing`` sets the locals' information shares
+BANK_CONTROLLERS = {c.name: c for c in (BankController("beta-sharing", "beta"),)}
 
 
 class _Where:
@@ -192,9 +207,10 @@ def _adapter(w: _Where, name):
     name = w.name(name, "adapter", "a fuzzy adaptation policy")
     fuzzy = {k: cls for k, cls in adaptation.ADAPTERS.load().items()
              if getattr(cls, "role", "")}
+    known = ", ".join(sorted(fuzzy) + [f"{c} (a filter bank's)" for c in BANK_CONTROLLERS])
+    fuzzy.update(BANK_CONTROLLERS)
     if name not in fuzzy:
-        raise w.error("adapter", f"unknown fuzzy adapter {brief(name)}; known: "
-                                 f"{', '.join(sorted(fuzzy))}")
+        raise w.error("adapter", f"unknown fuzzy adapter {brief(name)}; known: {known}")
     return fuzzy[name]
 
 
