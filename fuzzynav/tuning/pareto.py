@@ -81,13 +81,11 @@ def front_table(cfg, front) -> list:
     return lines
 
 
-def front_section(study, cfg) -> list:
-    """The report's Pareto section (empty for a single-objective study)."""
-    from fuzzynav.tuning.study import best_trials
-
+def front_section(study, cfg, front) -> list:
+    """The report's Pareto section (empty for a single-objective study); ``front``: the
+    Pareto-optimal trials (:func:`fuzzynav.tuning.study.best_trials`)."""
     if not cfg.multi_objective:
         return []
-    front = best_trials(study, cfg)
     lines = ["", "## Pareto front", ""]
     if not front:
         return lines + ["No complete trial has run every training run yet.", ""]
@@ -99,14 +97,12 @@ def front_section(study, cfg) -> list:
     return lines
 
 
-def robust_figure(study, cfg, path):
-    """Accuracy against robustness of every finished trial, the front circled; the path."""
-    from fuzzynav.tuning.study import best_trials
-
+def robust_figure(study, front, path):
+    """Accuracy against robustness of every finished trial, the ``front`` joined; the path."""
     pts = np.array([t.values for t in study.trials if t.values is not None], dtype=float)
     if pts.size == 0:
         return None
-    front = np.array(sorted(tuple(t.values) for t in best_trials(study, cfg)), dtype=float)
+    front = np.array(sorted(tuple(t.values) for t in front), dtype=float)
     fig, ax = plots.plt.subplots(figsize=(5.5, 4))
     ax.plot(pts[:, 0], pts[:, 1], ".", alpha=0.4, label="trial")
     if front.size:

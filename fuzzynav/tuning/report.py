@@ -29,6 +29,7 @@ from fuzzynav.tuning.export import choose_trial, systems_of
 from fuzzynav.tuning.config import GROUP_METRICS
 from fuzzynav.tuning import pareto
 from fuzzynav.tuning.objective import Evaluator, weighted_score
+from fuzzynav.tuning.study import best_trials
 
 plt = plots.plt
 
@@ -103,12 +104,10 @@ def _importances(study, cfg, path):
 
 
 def _pareto(study, cfg, path):
-    from fuzzynav.tuning.study import best_trials
-
     if not cfg.multi_objective:
         return None
     if cfg.robust:
-        return pareto.robust_figure(study, cfg, path)
+        return pareto.robust_figure(study, best_trials(study, cfg), path)
     pts = np.array([t.values for t in study.trials if t.values is not None])
     front = np.array([t.values for t in best_trials(study, cfg)])
     if pts.size == 0:
@@ -170,7 +169,8 @@ def _write_files(cfg, study, out: Path, cache_dir, evaluate: bool) -> None:
              f"{'multi' if cfg.multi_objective else 'single'}-objective; trials: "
              + (", ".join(f"{k} {v}" for k, v in states.items()) or "none") + ".", ""]
     lines += [f"![{p.stem}]({p.name})" for p in figs if p is not None]
-    lines += pareto.front_section(study, cfg)
+    lines += pareto.front_section(study, cfg, best_trials(study, cfg)
+                                  if cfg.multi_objective else [])
     try:
         trial = choose_trial(study, cfg)
     except FuzzynavError as exc:  # only pruned, failed or running trials so far
