@@ -151,7 +151,10 @@ def _window(imu, gnss, t_ref, window_s, min_speed_mps):
     k0 = int(np.searchsorted(imu.time_s, t_ref))
     sel = ((gnss.time_s > imu.time_s[k0]) & (gnss.time_s <= t_ref + window_s)
            & (gnss.time_s < imu.time_s[-1]))
-    if not np.any(sel & (_speed(gnss) >= min_speed_mps)):
+    if not sel.any():
+        raise InputFileError(None, "initialisation", f"no GNSS fix within {window_s:g} s "
+                             f"after rest (option window)")
+    if min_speed_mps is not None and not np.any(sel & (_speed(gnss) >= min_speed_mps)):
         raise InputFileError(None, "initialisation", f"the vehicle does not reach "
                              f"{min_speed_mps:g} m/s within {window_s:g} s after rest "
                              f"(options min_speed, window; a slow platform: e.g. "
@@ -194,7 +197,7 @@ def heading_from_track(imu, gnss, t_ref, c_level, rate_bias, window_s=30.0,
     differences is the heading.  The position noise turns a chord by about
     ``sigma / baseline`` rad: choose the baseline well above the fixes' noise.
     """
-    k0, k1, idx = _window(imu, gnss, t_ref, window_s, 0.0)
+    k0, k1, idx = _window(imu, gnss, t_ref, window_s, None)  # no velocity needed
     lla = gnss.z[idx, :3]
     enu = earth.delta_lla_to_enu(lla[:, 0] - lla[0, 0], lla[:, 1] - lla[0, 1], 0.0,
                                  lla[0, 0], lla[0, 2])

@@ -50,3 +50,23 @@ def test_lever_arm_option_replaces_the_mountings(tmp_path):
     rec = load_rtklib(tmp_path, start=StartOptions(lever_arm_b_m=(0.0, 0.5, 1.0)))
     np.testing.assert_allclose(rec.gnss.meta["lever_arm_b"], (0.0, 0.5, 1.0))
     np.testing.assert_allclose(load_rtklib(tmp_path).gnss.meta["lever_arm_b"], 0.0)
+
+
+def test_track_heading_needs_no_receiver_velocity():
+    """A receiver without velocities (NaN, as a .pos without the velocity block reads): the
+    track still gives the heading of a platform walking north-east at 1.4 m/s."""
+    from types import SimpleNamespace
+
+    from fuzzynav.sim.coarse_align import heading_from_track
+
+    t = np.arange(0.0, 40.0, 0.01)
+    imu = SimpleNamespace(time_s=t, dtheta_b=np.zeros((t.size - 1, 3)),
+                          dv_b=np.zeros((t.size - 1, 3)))
+    tg = np.arange(0.0, 40.0, 0.25)
+    lat0, r = 0.7, 6.378e6
+    d = 1.4 * np.maximum(tg - 5.0, 0.0) / np.sqrt(2.0)   # metres east and north
+    z = np.column_stack([lat0 + d / r, d / (r * np.cos(lat0)), np.zeros(tg.size),
+                         np.full((tg.size, 3), np.nan)])
+    gnss = SimpleNamespace(time_s=tg, z=z)
+    heading = heading_from_track(imu, gnss, 5.0, np.eye(3), np.zeros(3), 30.0, 10.0)
+    assert abs(np.degrees(heading) - 45.0) < 0.5  # radius of the earth model vs 6378 km
