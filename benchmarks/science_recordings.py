@@ -130,11 +130,12 @@ def car_section(directory: Path, params: Path, systems: dict, car_rules, seeds) 
     order = [*fuzzies, *CAR_FILTERS]
     return [
         "### The car drive (`rtklib-drive`, consumer MEMS IMU, real)", "",
-        f"Protocol of docs/validation.md (2 m noise per axis added to the fixes, 60-s outages "
-        f"every 180 s, shipped mounting), {len(seeds)} noise seeds; every filter is run with "
-        "what it learned on the *simulated* training runs. Score: the mean of the "
-        "horizontal-position and velocity RMS ratios with GNSS throughout; the CI is over "
-        "noise seeds of this one recording.", "", *note,
+        f"Protocol of docs/validation.md (2 m noise per axis added to the fixes, 60-s "
+        f"outages every 180 s, shipped mounting), noise seeds 0–{len(seeds) - 1}; every "
+        "filter is run with what it learned on the *simulated* training runs. Score: the "
+        "mean of the horizontal-position and velocity RMS ratios with GNSS throughout; the "
+        "CI is over noise seeds of this one recording. There is no oracle on a recording "
+        "(its true noise is unknown).", "", *note,
         "| filter | score vs `ekf-tuned` |", "|---|---|",
         *[f"| {f} | {sr.cell(scores[scores['filter'] == f]['score'])} |" for f in order], "",
         *_drift_lines(df, order), "", *_paired_lines(scores, "rtklib-drive", fuzzies, sr.REF),

@@ -80,7 +80,7 @@ def tune_fuzzy(trials: int, workers: int, work: Path, cache: str):
     storage = f"journal:{work / 'fair.journal'}"
     study = run_study(cfg, trials, workers, storage, cache)
     trial = choose_trial(study, cfg)
-    return cfg, systems_of(cfg, trial), trial
+    return cfg, systems_of(cfg, trial), len(study.trials)
 
 
 # -- evaluation --------------------------------------------------------------------------------
@@ -135,6 +135,10 @@ def paired(scores: pd.DataFrame, scenario: str, a: str, b: str):
 
 
 def verdict(est) -> str:
+    """``wins against`` / ``draws with`` / ``loses to`` by the 95 % CI of a paired difference
+    (negative favours the first filter); with one pair there is no CI to tell."""
+    if est.n < 2:
+        return "is not told apart (one seed) from"
     if est.hi < 0:
         return "wins against"
     if est.lo > 0:
@@ -156,7 +160,7 @@ def comparison_lines(scores: pd.DataFrame, scenarios) -> tuple:
     for s in scenarios:
         best = best_classical(scores, s)
         vs_best, vs_ref = paired(scores, s, FUZZY, best), paired(scores, s, FUZZY, REF)
-        tally[verdict(vs_best)] += 1
+        tally[verdict(vs_best)] = tally.get(verdict(vs_best), 0) + 1
         rows.append(f"| `{s}` | {best} | {vs_best.mean:+.3f} [{vs_best.lo:+.3f}, "
                     f"{vs_best.hi:+.3f}] | {verdict(vs_best)} | {vs_ref.mean:+.3f} "
                     f"[{vs_ref.lo:+.3f}, {vs_ref.hi:+.3f}] | {verdict(vs_ref)} |")
@@ -205,10 +209,11 @@ def write_page(ctx: dict, scores_ref, scores_oracle, scenarios) -> None:
             if ctx["quick"] else ""),
         "", "## What was run", "",
         f"- **Budget:** {ctx['trials']} TPE trials for the fuzzy controller "
-        f"(`studies/paper000_fair.toml`, {ctx['workers']} workers) and {ctx['trials']} for "
-        "*each* tuned baseline (`studies/paper000_baselines.toml`, one Optuna study each, "
-        "same sampler, pruner and objective); ALS is estimated, not searched. The study "
-        "files ask for 300; this page uses a modest budget that fits a loaded 2-core machine.",
+        f"(`studies/paper000_fair.toml`, {ctx['workers']} workers) and "
+        f"{ctx['baseline_trials']} for *each* tuned baseline "
+        "(`studies/paper000_baselines.toml`, one Optuna study each, same sampler, pruner "
+        "and objective); ALS is estimated, not searched. The study files ask for 300; this "
+        "page uses a modest budget that fits a loaded 2-core machine.",
         f"- **Training runs:** {ctx['train']}.",
         f"- **Held-out runs:** {len(scenarios)} scenarios × {ctx['n_seeds']} seeds "
         "(seeds 100+, never trained on); three are on the training trajectory with other "
@@ -270,6 +275,14 @@ def closing_lines(scores: pd.DataFrame, scenarios, params: Path) -> list:
     return lines
 
 
+def baseline_trials(params: Path) -> str:
+    """The trial count of the tuned baselines as the parameter file records it."""
+    import json
+
+    counts = sorted({n for n in json.loads(params.read_text())["trials"].values() if n})
+    return " to ".join(str(n) for n in counts[:: max(1, len(counts) - 1)]) or "0"
+
+
 def cpu_minutes() -> float:
     """CPU time of this process and its finished children (study workers) [min]."""
     import resource
@@ -307,7 +320,7 @@ def main(argv=None) -> int:
         work.mkdir(parents=True, exist_ok=True)
         resumed = (work / "fair.journal").is_file()
         bcfg = tune_baselines(args.trials, work, args.cache)
-        cfg, systems, _ = tune_fuzzy(args.trials, args.workers, work, args.cache)
+        cfg, systems, n_fuzzy = tune_fuzzy(args.trials, args.workers, work, args.cache)
         if args.seeds:
             keep = sorted({d for _, d in cfg.test})[:args.seeds]
             cfg = replace(cfg, test=tuple(r for r in cfg.test if r[1] in keep))
@@ -316,7 +329,8 @@ def main(argv=None) -> int:
                              ""], None) if args.no_recordings else \
         recordings_section(args, bcfg.out, systems)
     scenarios = list(dict.fromkeys(s for s, _ in cfg.test))
-    ctx = dict(date=_dt.date.today().isoformat(), machine=machine(), trials=args.trials,
+    ctx = dict(date=_dt.date.today().isoformat(), machine=machine(), trials=n_fuzzy,
+               baseline_trials=baseline_trials(bcfg.out),
                workers=args.workers, minutes=(time.time() - t0) / 60.0, params=bcfg.out,
                train=", ".join(f"`{s}` seed {d}" for s, d in cfg.train),
                n_seeds=len({d for _, d in cfg.test}),
