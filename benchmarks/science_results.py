@@ -14,7 +14,14 @@ Run from the repository root (``[studies]`` extras installed)::
    (``ekf-tuned``) and to the oracle (``ekf-true``), and the paired difference of the tuned
    fuzzy controller against the best classical baseline of that scenario, with 95 % CIs.
 
-Journals go to ``--work`` (default: a temporary directory), simulations to ``--cache``.
+4. runs the held-out recordings (``benchmarks/science_recordings.py``): the real car drive
+   with every filter as tuned on simulation, and the AUV trajectories when DVL rules tuned
+   on recordings exist; each part missing its data or rules is one sentence on the page.
+
+Journals go to ``--work`` (default: a temporary directory; an existing journal is resumed,
+not re-tuned), simulations to ``--cache``. ``--quick`` is a smoke run (4 trials, 2 seeds,
+1 noise seed on the drive); ``--mc N`` held-out seeds per scenario, ``--mc-recordings N``
+noise seeds on the drive, ``--data DIR`` where the recordings are.
 """
 from __future__ import annotations
 
@@ -37,11 +44,13 @@ from fuzzynav.metrics import mean_ci
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 from _report import machine  # noqa: E402
+from science_recordings import AUV_RULES, CAR_RULES, recordings_section  # noqa: E402
 
 FAIR = ROOT / "studies" / "paper000_fair.toml"
 BASELINES = ROOT / "studies" / "paper000_baselines.toml"
 DOC = ROOT / "docs" / "science.md"
 RUNS = ROOT / "docs" / "science_runs.csv"
+REC_RUNS = ROOT / "docs" / "science_recordings.csv"
 FUZZY = "fuzzy-tuned"
 REF, ORACLE = "ekf-tuned", "ekf-true"
 #: filters that are neither fuzzy nor told the truth: the "best classical baseline" pool
@@ -71,7 +80,7 @@ def tune_fuzzy(trials: int, workers: int, work: Path, cache: str):
     storage = f"journal:{work / 'fair.journal'}"
     study = run_study(cfg, trials, workers, storage, cache)
     trial = choose_trial(study, cfg)
-    return cfg, systems_of(cfg, trial), trial
+    return cfg, systems_of(cfg, trial), len(study.trials)
 
 
 # -- evaluation --------------------------------------------------------------------------------
@@ -85,12 +94,13 @@ def held_out_table(cfg, systems, params: Path, cache: str) -> pd.DataFrame:
     return df.replace({"filter": {**specs, "tuned": FUZZY}})
 
 
-def scores_to(df: pd.DataFrame, ref: str) -> pd.DataFrame:
-    """Per run and filter: mean over pos/vel/att of the RMS ratio to filter ``ref``."""
+def scores_to(df: pd.DataFrame, ref: str, metrics=METRICS) -> pd.DataFrame:
+    """Per run and filter: mean over ``metrics`` (pos/vel/att) of the RMS ratio to ``ref``."""
     key = ["scenario", "seed"]
-    base = df[df["filter"] == ref][[*key, *METRICS]]
-    out = df[[*key, "filter", *METRICS]].merge(base, on=key, suffixes=("", "_ref"))
-    ratios = [out[m] / out[m + "_ref"] for m in METRICS]
+    metrics = list(metrics)
+    base = df[df["filter"] == ref][[*key, *metrics]]
+    out = df[[*key, "filter", *metrics]].merge(base, on=key, suffixes=("", "_ref"))
+    ratios = [out[m] / out[m + "_ref"] for m in metrics]
     out["score"] = sum(ratios) / len(ratios)
     return out[["scenario", "seed", "filter", "score"]]
 
@@ -125,6 +135,10 @@ def paired(scores: pd.DataFrame, scenario: str, a: str, b: str):
 
 
 def verdict(est) -> str:
+    """``wins against`` / ``draws with`` / ``loses to`` by the 95 % CI of a paired difference
+    (negative favours the first filter); with one pair there is no CI to tell."""
+    if est.n < 2:
+        return "is not told apart (one seed) from"
     if est.hi < 0:
         return "wins against"
     if est.lo > 0:
@@ -146,7 +160,7 @@ def comparison_lines(scores: pd.DataFrame, scenarios) -> tuple:
     for s in scenarios:
         best = best_classical(scores, s)
         vs_best, vs_ref = paired(scores, s, FUZZY, best), paired(scores, s, FUZZY, REF)
-        tally[verdict(vs_best)] += 1
+        tally[verdict(vs_best)] = tally.get(verdict(vs_best), 0) + 1
         rows.append(f"| `{s}` | {best} | {vs_best.mean:+.3f} [{vs_best.lo:+.3f}, "
                     f"{vs_best.hi:+.3f}] | {verdict(vs_best)} | {vs_ref.mean:+.3f} "
                     f"[{vs_ref.lo:+.3f}, {vs_ref.hi:+.3f}] | {verdict(vs_ref)} |")
@@ -190,13 +204,16 @@ def write_page(ctx: dict, scores_ref, scores_oracle, scenarios) -> None:
         "shared)" + ("; the studies were resumed from finished journals, so this covers "
                      "the ALS estimate and the evaluation only, not the tuning"
                      if ctx["resumed"] else "") +
-        ". Rerun it to refresh every number on this page.",
+        ". Rerun it to refresh every number on this page." + (
+            " **A --quick smoke run: too few trials and seeds to conclude anything.**"
+            if ctx["quick"] else ""),
         "", "## What was run", "",
         f"- **Budget:** {ctx['trials']} TPE trials for the fuzzy controller "
-        f"(`studies/paper000_fair.toml`, {ctx['workers']} workers) and {ctx['trials']} for "
-        "*each* tuned baseline (`studies/paper000_baselines.toml`, one Optuna study each, "
-        "same sampler, pruner and objective); ALS is estimated, not searched. The study "
-        "files ask for 300; this page uses a modest budget that fits a loaded 2-core machine.",
+        f"(`studies/paper000_fair.toml`, {ctx['workers']} workers) and "
+        f"{ctx['baseline_trials']} for *each* tuned baseline "
+        "(`studies/paper000_baselines.toml`, one Optuna study each, same sampler, pruner "
+        "and objective); ALS is estimated, not searched. The study files ask for 300; this "
+        "page uses a modest budget that fits a loaded 2-core machine.",
         f"- **Training runs:** {ctx['train']}.",
         f"- **Held-out runs:** {len(scenarios)} scenarios × {ctx['n_seeds']} seeds "
         "(seeds 100+, never trained on); three are on the training trajectory with other "
@@ -219,7 +236,10 @@ def write_page(ctx: dict, scores_ref, scores_oracle, scenarios) -> None:
         "controller. Differences are in the score relative to `ekf-tuned`.", "",
         *rows, "", *text, "", "## In short", "", summary_text(tally, len(scenarios)), "",
         *closing_lines(scores_ref, scenarios, ctx["params"]), "",
-        "Every run's metrics: [science_runs.csv](science_runs.csv).",
+        *ctx["recordings"],
+        "Every run's metrics: [science_runs.csv](science_runs.csv)"
+        + (", on the recordings [science_recordings.csv](science_recordings.csv)."
+           if ctx["recording_rows"] else "."),
     ]
     page = "\n".join(lines) + "\n"
     write_atomic(DOC, lambda tmp: Path(tmp).write_text(page), what="page")
@@ -255,6 +275,14 @@ def closing_lines(scores: pd.DataFrame, scenarios, params: Path) -> list:
     return lines
 
 
+def baseline_trials(params: Path) -> str:
+    """The trial count of the tuned baselines as the parameter file records it."""
+    import json
+
+    counts = sorted({n for n in json.loads(params.read_text())["trials"].values() if n})
+    return " to ".join(str(n) for n in counts[:: max(1, len(counts) - 1)]) or "0"
+
+
 def cpu_minutes() -> float:
     """CPU time of this process and its finished children (study workers) [min]."""
     import resource
@@ -268,27 +296,49 @@ def main(argv=None) -> int:
     p.add_argument("--trials", type=int, default=40, help="trials per study (default 40)")
     p.add_argument("--workers", type=int, default=2, help="fuzzy study workers")
     p.add_argument("--work", help="directory for the study journals (default: temporary)")
-    p.add_argument("--seeds", type=int, help="held-out seeds per scenario (default: all)")
+    p.add_argument("--mc", "--seeds", dest="seeds", type=int,
+                   help="held-out seeds per simulated scenario (default: all of the study)")
+    p.add_argument("--mc-recordings", type=int, default=5,
+                   help="noise seeds on the car drive (default 5)")
+    p.add_argument("--quick", action="store_true",
+                   help="a smoke run: 4 trials, 2 seeds per scenario, 1 seed on the drive "
+                        "(the page says so; do not publish it)")
+    p.add_argument("--data", help="directory of the recordings (default $FUZZYNAV_DATA, "
+                                  "else ../shared/datasets)")
+    p.add_argument("--car-rules", help=f"rules tuned on the drive (default "
+                                       f"{CAR_RULES.relative_to(ROOT)} if present)")
+    p.add_argument("--auv-rules", help=f"DVL rules tuned on recordings (default "
+                                       f"{AUV_RULES.relative_to(ROOT)} if present)")
+    p.add_argument("--no-recordings", action="store_true", help="skip the recordings section")
     p.add_argument("--cache", default=str(default_cache_dir()), help="simulation cache")
     args = p.parse_args(argv)
+    if args.quick:
+        args.trials, args.seeds, args.mc_recordings = min(args.trials, 4), 2, 1
     t0 = time.time()
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(args.work or tmp)
         work.mkdir(parents=True, exist_ok=True)
         resumed = (work / "fair.journal").is_file()
         bcfg = tune_baselines(args.trials, work, args.cache)
-        cfg, systems, _ = tune_fuzzy(args.trials, args.workers, work, args.cache)
+        cfg, systems, n_fuzzy = tune_fuzzy(args.trials, args.workers, work, args.cache)
         if args.seeds:
             keep = sorted({d for _, d in cfg.test})[:args.seeds]
             cfg = replace(cfg, test=tuple(r for r in cfg.test if r[1] in keep))
         df = held_out_table(cfg, systems, bcfg.out, args.cache)
+    recordings, rec_rows = (["## Held-out recordings", "", "*Skipped (--no-recordings).*",
+                             ""], None) if args.no_recordings else \
+        recordings_section(args, bcfg.out, systems)
     scenarios = list(dict.fromkeys(s for s, _ in cfg.test))
-    ctx = dict(date=_dt.date.today().isoformat(), machine=machine(), trials=args.trials,
+    ctx = dict(date=_dt.date.today().isoformat(), machine=machine(), trials=n_fuzzy,
+               baseline_trials=baseline_trials(bcfg.out),
                workers=args.workers, minutes=(time.time() - t0) / 60.0, params=bcfg.out,
                train=", ".join(f"`{s}` seed {d}" for s, d in cfg.train),
                n_seeds=len({d for _, d in cfg.test}),
-               filters=list(dict.fromkeys(df["filter"])), cpu=cpu_minutes(), resumed=resumed)
+               filters=list(dict.fromkeys(df["filter"])), cpu=cpu_minutes(), resumed=resumed,
+               recordings=recordings, recording_rows=rec_rows is not None, quick=args.quick)
     write_atomic(RUNS, lambda tmp: df.to_csv(tmp, index=False), suffix=".csv")
+    if rec_rows is not None:
+        write_atomic(REC_RUNS, lambda tmp: rec_rows.to_csv(tmp, index=False), suffix=".csv")
     write_page(ctx, scores_to(df, REF), scores_to(df, ORACLE), scenarios)
     print(f"wrote {DOC}, {RUNS} and {bcfg.out}")
     return 0

@@ -88,13 +88,15 @@ def _span(text):
 
 def load_recording(spec, args):
     """Parse ``--data`` and load the recording with the loader options of ``args``."""
-    from fuzzynav.realdata.sources import parse_data_spec, resolve_mounting
+    from fuzzynav.realdata.sources import data_options, parse_data_spec, resolve_mounting
 
     source, directory, session = parse_data_spec(spec)
+    options = data_options(spec)
     mounting = resolve_mounting(getattr(args, "mounting", "auto"))
+    kw = {} if options is None else {"options": options}  # loaders without options still load
     return source.load(directory, mounting=mounting,
                        imu_delay_s=getattr(args, "imu_delay", None),
-                       span_s=_span(getattr(args, "span", None)), session=session)
+                       span_s=_span(getattr(args, "span", None)), session=session, **kw)
 
 
 def run_recording(spec, filter_name, options, args) -> int:
@@ -213,6 +215,8 @@ def json_summary(spec, rec, vals, df) -> dict:
         "start": {"time_s": v0.start.init.time_s, "rest_s": list(st.rest_s),
                   "pitch_deg": math.degrees(st.att[0]), "roll_deg": math.degrees(st.att[1]),
                   "heading_deg": math.degrees(st.att[2]), "heading_method": st.method,
-                  "gyro_bias_dps": [math.degrees(x) for x in st.gyro_bias_rps]},
+                  "gyro_bias_dps": [math.degrees(x) for x in st.gyro_bias_rps],
+                  "options": asdict(rec.start_options) if hasattr(rec, "start_options")
+                  else None},
         "outages": outages, "feeds": feeds,
         "status": {FEEDS[f]: [v.runs[f].result.status for v in vals] for f in FEEDS}})

@@ -45,15 +45,17 @@ class Start:
     coarse: object
 
 
-def start_from(imu, fixes, mounting_known: bool, lever_arm_b=(0.0, 0.0, 0.0)) -> Start:
-    """Initial state from the data (``fixes``: the stream the filter will be fed).
+def start_from(imu, fixes, mounting_known: bool, lever_arm_b=(0.0, 0.0, 0.0),
+               options=None) -> Start:
+    """Initial state from the data (``fixes``: the stream the filter will be fed; ``options``:
+    :class:`~fuzzynav.sim.start_options.StartOptions`, default the car drive's).
 
     Raises
     ------
     InputFileError
         When the recording has no opening rest or no motion to find the heading.
     """
-    s = coarse_align.initial_state(imu, fixes, forward_known=mounting_known)
+    s = coarse_align.initial_state(imu, fixes, forward_known=mounting_known, options=options)
     k = int(np.searchsorted(imu.time_s, s.time_s - 1e-9))
     if k >= imu.time_s.size - 2:
         raise InputFileError(None, "initialisation", f"the opening rest ends at "

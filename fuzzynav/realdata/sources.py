@@ -27,9 +27,10 @@ class DataSource:
     description : str
         One line for ``fuzzynav scenarios``.
     load : callable
-        ``load(directory, mounting="auto", imu_delay_s=None, span_s=None, session=None)
-        -> Recording``; ``None`` leaves a loader's own default (``session``: which
-        recording of a directory that holds several).
+        ``load(directory, mounting="auto", imu_delay_s=None, span_s=None, session=None,
+        options=None) -> Recording``; ``None`` leaves a loader's own default (``session``:
+        which recording of a directory that holds several; ``options``: the
+        :class:`~fuzzynav.sim.start_options.StartOptions` of a ``?key=value`` suffix).
     """
 
     kind: str
@@ -52,22 +53,28 @@ def register_source(kind: str, description: str):
 
 @register_source("rtklib", "RTKLIB car recording: imu_<id>.csv + .tag + gnss_<id>*.pos "
                            "(e.g. ../shared/datasets/rtklib-drive)")
-def _load_rtklib(directory, mounting="auto", imu_delay_s=None, span_s=None, session=None):
+def _load_rtklib(directory, mounting="auto", imu_delay_s=None, span_s=None, session=None,
+                 options=None):
     from fuzzynav.sim.loaders.rtklib import load_rtklib
 
     kw = {} if imu_delay_s is None else {"imu_delay_s": float(imu_delay_s)}
     # velocities are loaded as recorded; the protocol decides what to do with their lag
-    return load_rtklib(directory, mounting=mounting, span_s=span_s, session=session, **kw)
+    return load_rtklib(directory, mounting=mounting, span_s=span_s, session=session,
+                       start=options, **kw)
 
 
 @register_source("akit", "A-KIT AUV recordings: IMU/DVL/GT_trajectoryN.csv + corrected/ "
                          "(akit:DIR:N, N = 3, 1-8 or 1,4; e.g. ../shared/datasets/akit)")
-def _load_akit(directory, mounting="auto", imu_delay_s=None, span_s=None, session=None):
+def _load_akit(directory, mounting="auto", imu_delay_s=None, span_s=None, session=None,
+               options=None):
     from fuzzynav.sim.loaders.akit import load_akit
 
     if mounting not in ("auto", None) or imu_delay_s is not None or span_s is not None:
         raise FuzzynavError("--data akit: --mounting, --imu-delay and --span do not apply "
                             "(the loader establishes the frames and lags from the data)")
+    if options is not None:
+        raise FuzzynavError("--data akit: ?options do not apply (the filter starts from the "
+                            "reference, not from a rest and a GNSS course)")
     return load_akit(directory, session)
 
 
@@ -107,8 +114,29 @@ def _is_dir(path: Path) -> bool:
         return False
 
 
+def split_options(spec: str) -> tuple[str, str | None]:
+    """``KIND:DIR[:SESSION][?OPTIONS]`` -> (the spec without options, the options or None).
+
+    A ``?`` that belongs to an existing directory's name is kept in it.
+    """
+    head, mark, query = str(spec).rpartition("?")
+    if not mark or _is_dir(Path(str(spec).partition(":")[2]).expanduser()):
+        return str(spec), None
+    return head, query
+
+
+def data_options(spec: str):
+    """The :class:`~fuzzynav.sim.start_options.StartOptions` of a data spec's ``?key=value``
+    suffix, or ``None`` without one (the loader's defaults)."""
+    from fuzzynav.sim.start_options import parse_start_options
+
+    bare, query = split_options(spec)
+    return None if query is None else parse_start_options(query, bare)
+
+
 def parse_data_spec(spec: str) -> tuple[DataSource, Path, str | None]:
-    """Split ``KIND:DIR[:SESSION]`` and check the parts.
+    """Split ``KIND:DIR[:SESSION][?OPTIONS]`` and check the parts (the options are read by
+    :func:`data_options`).
 
     ``SESSION`` chooses one recording of a directory that holds several (for ``rtklib``
     the ``<id>`` of ``imu_<id>.csv``).  A directory whose own name has a colon is taken
@@ -129,7 +157,8 @@ def parse_data_spec(spec: str) -> tuple[DataSource, Path, str | None]:
     DataMissingError
         When the directory does not exist.
     """
-    kind, sep, rest = str(spec).partition(":")
+    spec = split_options(spec)[0]
+    kind, sep, rest = spec.partition(":")
     directory, session = rest, None
     head, colon, tail = rest.rpartition(":")
     if colon and not _is_dir(Path(rest).expanduser()):

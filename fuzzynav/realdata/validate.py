@@ -59,7 +59,7 @@ class Validation:
 
 def _start(rec, fixes, known, lever):
     try:
-        return start_from(rec.imu, fixes, known, lever)
+        return start_from(rec.imu, fixes, known, lever, getattr(rec, "start_options", None))
     except InputFileError as exc:  # name the recording (no rest, no motion in a --span)
         raise InputFileError(getattr(rec, "directory", None), exc.where, exc.what) from None
 
@@ -76,6 +76,14 @@ def _for_alignment(fixes):
     z = fixes.z.copy()
     z[:, 3:6] -= added
     return replace(fixes, z=z)
+
+
+def _with_heading_sigma(mems: MemsModel, options) -> MemsModel:
+    """The IMU model with the initial heading sigma of the start options, if they set one."""
+    if options is None or options.heading_sigma_deg is None:
+        return mems
+    east, north, _ = mems.init_att_sigma_deg
+    return replace(mems, init_att_sigma_deg=(east, north, float(options.heading_sigma_deg)))
 
 
 def validate(rec, filter_name: str, settings: ProtocolSettings = ProtocolSettings(),
@@ -96,6 +104,7 @@ def validate(rec, filter_name: str, settings: ProtocolSettings = ProtocolSetting
     mems : MemsModel
     """
     seed = check_seed(seed)  # numpy would refuse a negative one with a bare ValueError
+    mems = _with_heading_sigma(mems, getattr(rec, "start_options", None))
     lever = np.asarray(rec.gnss.meta.get("lever_arm_b", np.zeros(3)), float)
     noisy = protocol.degraded_fixes(rec.gnss, settings, np.random.default_rng(seed))
     known = rec.mounting is not None

@@ -4,7 +4,8 @@
   (or, without GNSS velocity, the IMU's rate and specific force stay steady).
 * **Level.**  Pitch and roll from the mean specific force ``f`` at rest, which points up:
   ``f_b = |f| (-cos p sin r, sin p, cos p cos r)`` (RFU body, :mod:`fuzzynav.nav.attitude`).
-* **Heading**, three ways:
+* **Heading**, four ways (:mod:`fuzzynav.sim.start_options` chooses, with every speed,
+  window and threshold below):
 
   - given by the caller;
   - ``course``: when the body's forward axis is the vehicle's (a mounting is known), the
@@ -12,6 +13,8 @@
     first ``window_s`` of motion with speed above ``min_speed_mps`` gives
     ``heading_0 = course - azimuth of the forward axis`` propagated back to the end of
     rest with the gyros, and their circular mean is used;
+  - ``track``: the same with the course read from chords of the GNSS track at least
+    ``baseline`` metres long, for a platform too slow for its velocity to give a course;
   - ``specific-force``: when the forward axis is unknown (IMU frame = body frame), the
     specific force, levelled and carried by the gyros into the rest frame and integrated
     over short intervals between GNSS epochs, ``a_j = L sum C_b0_b dv_b``, must equal the
@@ -36,6 +39,7 @@ import numpy as np
 from fuzzynav.errors import InputFileError
 from fuzzynav.nav import attitude, earth
 from fuzzynav.nav.strapdown import quat_mul, rv2q
+from fuzzynav.sim.start_options import StartOptions
 
 
 @dataclass(frozen=True)
@@ -59,7 +63,7 @@ class InitialState:
     rest_s : tuple of float
         The rest period used for levelling [s].
     method : str
-        ``given``, ``course`` or ``specific-force``.
+        ``given``, ``course``, ``track`` or ``specific-force``.
     """
 
     time_s: float
@@ -103,7 +107,8 @@ def opening_rest(imu, gnss, rest_speed_mps=0.2, min_rest_s=2.0, block_s=0.5,
         t_move = float(edges[out[0]]) if out.size else float(edges[-1])
     if t_move - t0 < min_rest_s:
         raise InputFileError(None, "initialisation", f"no rest of {min_rest_s:g} s at the "
-                             f"start (moving {t_move - t0:.1f} s after the first IMU sample)")
+                             f"start (moving {t_move - t0:.1f} s after the first IMU sample; "
+                             f"options min_rest, rest_speed)")
     return t0, t_move
 
 
@@ -146,9 +151,14 @@ def _window(imu, gnss, t_ref, window_s, min_speed_mps):
     k0 = int(np.searchsorted(imu.time_s, t_ref))
     sel = ((gnss.time_s > imu.time_s[k0]) & (gnss.time_s <= t_ref + window_s)
            & (gnss.time_s < imu.time_s[-1]))
-    if not np.any(sel & (_speed(gnss) >= min_speed_mps)):
+    if not sel.any():
+        raise InputFileError(None, "initialisation", f"no GNSS fix within {window_s:g} s "
+                             f"after rest (option window)")
+    if min_speed_mps is not None and not np.any(sel & (_speed(gnss) >= min_speed_mps)):
         raise InputFileError(None, "initialisation", f"the vehicle does not reach "
-                             f"{min_speed_mps:g} m/s within {window_s:g} s after rest")
+                             f"{min_speed_mps:g} m/s within {window_s:g} s after rest "
+                             f"(options min_speed, window; a slow platform: e.g. "
+                             f"?min_speed=0.5 or ?heading=track, docs/data.md)")
     k1 = int(np.searchsorted(imu.time_s, gnss.time_s[sel][-1])) + 1
     return k0, k1, np.flatnonzero(sel)
 
@@ -158,13 +168,54 @@ def heading_from_course(imu, gnss, t_ref, c_level, rate_bias, window_s=30.0,
     """Heading [rad] at ``t_ref`` of a body whose y axis is the direction of travel."""
     k0, k1, idx = _window(imu, gnss, t_ref, window_s, min_speed_mps)
     idx = idx[_speed(gnss)[idx] >= min_speed_mps]
+    course = np.arctan2(gnss.z[idx, 3], gnss.z[idx, 4])
+    return _circular_mean(course - _forward_azimuth(imu, k0, k1, c_level, rate_bias,
+                                                    gnss.time_s[idx]))
+
+
+def _forward_azimuth(imu, k0, k1, c_level, rate_bias, t):
+    """Azimuth [rad] at the instants ``t`` of the body y axis, relative to the rest frame."""
     C = relative_attitude(imu, k0, k1, rate_bias)
     t_imu = imu.time_s[k0:k1 + 1]
-    k = np.clip(np.searchsorted(t_imu, gnss.time_s[idx]), 0, len(t_imu) - 1)
+    k = np.clip(np.searchsorted(t_imu, t), 0, len(t_imu) - 1)
     fwd = np.einsum("ij,kjl,l->ki", c_level, C[k], np.array([0.0, 1.0, 0.0]))
-    course = np.arctan2(gnss.z[idx, 3], gnss.z[idx, 4])
-    d = course - np.arctan2(fwd[:, 0], fwd[:, 1])
+    return np.arctan2(fwd[:, 0], fwd[:, 1])
+
+
+def _circular_mean(d) -> float:
     return float(attitude.wrap_2pi(np.arctan2(np.sin(d).mean(), np.cos(d).mean())))
+
+
+def heading_from_track(imu, gnss, t_ref, c_level, rate_bias, window_s=30.0,
+                       baseline_m=10.0) -> float:
+    """Heading [rad] at ``t_ref`` of a body whose y axis is the direction of travel, from the
+    GNSS track: for a slow platform, whose velocity is too small for its course to be read.
+
+    Each fix in the window is paired with the first later fix at least ``baseline_m`` away
+    (horizontally); the chord's azimuth is the course at its middle instant, where the
+    gyro-propagated azimuth of the forward axis is subtracted; the circular mean of the
+    differences is the heading.  The position noise turns a chord by about
+    ``sigma / baseline`` rad: choose the baseline well above the fixes' noise.
+    """
+    k0, k1, idx = _window(imu, gnss, t_ref, window_s, None)  # no velocity needed
+    lla = gnss.z[idx, :3]
+    enu = earth.delta_lla_to_enu(lla[:, 0] - lla[0, 0], lla[:, 1] - lla[0, 1], 0.0,
+                                 lla[0, 0], lla[0, 2])
+    pairs = []
+    for i in range(idx.size - 1):
+        far = np.flatnonzero(np.hypot(*(enu[i + 1:, :2] - enu[i, :2]).T) >= baseline_m)
+        if far.size:
+            pairs.append((i, i + 1 + far[0]))
+    if not pairs:
+        raise InputFileError(None, "initialisation", f"the platform does not move "
+                             f"{baseline_m:g} m within {window_s:g} s after rest (options "
+                             f"baseline, window)")
+    i, j = np.array(pairs).T
+    chord = enu[j, :2] - enu[i, :2]
+    t_mid = 0.5 * (gnss.time_s[idx[i]] + gnss.time_s[idx[j]])
+    d = np.arctan2(chord[:, 0], chord[:, 1]) - _forward_azimuth(imu, k0, k1, c_level,
+                                                                  rate_bias, t_mid)
+    return _circular_mean(d)
 
 
 def heading_from_specific_force(imu, gnss, t_ref, c_level, rate_bias, window_s=60.0,
@@ -197,7 +248,19 @@ def heading_from_specific_force(imu, gnss, t_ref, c_level, rate_bias, window_s=6
     return float(attitude.wrap_2pi(np.arctan2(num, den)))
 
 
-def initial_state(imu, gnss, heading_rad=None, forward_known=False, **kw) -> InitialState:
+def _heading(imu, gnss, t1, c_level, w, method, options, kw) -> float:
+    """Heading [rad] at ``t1`` by ``method`` (``course``, ``track``, ``specific-force``)."""
+    window = {"window_s": options.window_for(method)}
+    if method == "track":
+        return heading_from_track(imu, gnss, t1, c_level, w, baseline_m=options.
+                                  track_baseline_m, **{**window, **kw})
+    fn = heading_from_course if method == "course" else heading_from_specific_force
+    return fn(imu, gnss, t1, c_level, w, **{**window, "min_speed_mps": options.min_speed_mps,
+                                            **kw})
+
+
+def initial_state(imu, gnss, heading_rad=None, forward_known=False, options=None,
+                  **kw) -> InitialState:
     """Initial state at the end of the opening rest.
 
     Parameters
@@ -210,19 +273,23 @@ def initial_state(imu, gnss, heading_rad=None, forward_known=False, **kw) -> Ini
     forward_known : bool
         Whether body y is the vehicle's forward axis (a mounting is given): then the
         heading comes from the GNSS course, else from specific-force matching.
+    options : StartOptions, optional
+        Rest detection, heading method, speeds and windows
+        (:mod:`fuzzynav.sim.start_options`; default: the car drive's).
     **kw
-        ``window_s``, ``min_speed_mps`` for the heading estimators.
+        ``window_s``, ``min_speed_mps`` for the heading estimators (override ``options``).
     """
-    t0, t1 = opening_rest(imu, gnss)
+    options = StartOptions() if options is None else options
+    t0, t1 = opening_rest(imu, gnss, options.rest_speed_mps, options.min_rest_s)
     pitch, roll, f, w = level(imu, t0, t1)
     c_level = attitude.euler_to_dcm(np.array([pitch, roll, 0.0]))
+    if heading_rad is None and options.heading_deg is not None:
+        heading_rad = np.radians(options.heading_deg)
     if heading_rad is not None:
         heading, method = float(attitude.wrap_2pi(heading_rad)), "given"
-    elif forward_known:
-        heading, method = heading_from_course(imu, gnss, t1, c_level, w, **kw), "course"
     else:
-        heading = heading_from_specific_force(imu, gnss, t1, c_level, w, **kw)
-        method = "specific-force"
+        method = options.method(forward_known)
+        heading = _heading(imu, gnss, t1, c_level, w, method, options, kw)
     att = np.array([pitch, roll, heading])
     g = _gnss_at(gnss, t1)
     w_ie_b = attitude.euler_to_dcm(att).T @ earth.omega_ie_n(g[0])

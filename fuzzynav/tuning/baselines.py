@@ -209,5 +209,5 @@ def run_baselines(bcfg: BaselineConfig, trials=None, storage=None, cache_dir=Non
 
 def _train_score(ev, name: str, params: dict) -> float:
     runs = ev.config.train
-    return float(np.mean([ev.score(ev.ratios(run_params(ev, name, params, sc, sd), sc, sd))
+    return float(np.mean([ev.judge(run_params(ev, name, params, sc, sd), sc, sd).score
                           for sc, sd in runs]))

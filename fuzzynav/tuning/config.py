@@ -4,7 +4,7 @@ Layout (every key in ``docs/studies.md``)::
 
     name = "paper000_tune"
     description = "..."
-    [study]          sampler, seed, trials, pruner, objective (single|multi), storage, ...
+    [study]          sampler, seed, trials, pruner, objective (single|multi|robust), ...
     [study.pso]      particles, iterations, inertia = w | [start, end], c1, c2  (sampler "pso")
     [objective]      weights = {pos, vel, att}, baseline = "ekf", t_start_s, filter = "fakf"
                      (the filter the candidate rule sets run in: one that takes rule files)
@@ -98,6 +98,8 @@ class StudyConfig:
     compare: tuple
     controllers: tuple
     filter: str = "fakf"
+    #: objective "robust": (mean training score, worst training scenario's mean score)
+    robust: bool = False
 
     @property
     def storage_url(self) -> str:
@@ -109,7 +111,9 @@ class StudyConfig:
 
     @property
     def directions(self) -> list:
-        return ["minimize"] * (3 if self.multi_objective else 1)
+        if not self.multi_objective:
+            return ["minimize"]
+        return ["minimize"] * (2 if self.robust else 3)
 
 
 def _looks_like_path(name: str) -> bool:
@@ -331,11 +335,13 @@ def study_config_from_dict(doc: dict, path: Path | None = None,
     study = dict(sampler=st.string("sampler", "tpe", choices=optimiser_names()),
                  seed=st.integer("seed", 0, lo=0), trials=st.integer("trials", 100, lo=1),
                  pruner=st.string("pruner", "wilcoxon", choices=PRUNERS),
-                 multi_objective=st.string("objective", "single", choices=("single", "multi"))
-                 == "multi",
+                 objective=st.string("objective", "single",
+                                     choices=("single", "multi", "robust")),
                  storage=st.string("storage", ""),
                  stale_after_s=st.number("stale_after_s", 300.0, lo=0.0, lo_open=True))
     st.finish()
+    kind = study.pop("objective")
+    study.update(multi_objective=kind != "single", robust=kind == "robust")
     ob = top.table("objective", required=False) or Table({}, "objective")
     wt = ob.table("weights", required=False)
     weights = {"pos": 1.0, "vel": 1.0, "att": 1.0}

@@ -25,6 +25,7 @@ from fuzzynav.filters.named import FilterSetup
 from fuzzynav.sim.log import simulate
 from fuzzynav.sim.scenario import load_scenario
 from fuzzynav.tuning.config import GROUP_METRICS
+from fuzzynav.tuning.pareto import accuracy_and_worst
 from fuzzynav.tuning.space import ControllerSpace, build_all
 
 #: ratio given to a metric when the candidate's run failed or is not finite
@@ -163,7 +164,8 @@ class Objective:
     Single objective: the mean score over the training runs, each run's score reported with
     a stable step id in a per-trial shuffled order so that a pruner may stop the trial; a
     pruned trial returns the mean of the runs done so far and records ``n_runs``.
-    Multi-objective: the three mean group ratios.
+    Multi-objective: the three mean group ratios; ``robust``: the mean score and the worst
+    training scenario's mean score (:func:`fuzzynav.tuning.pareto.accuracy_and_worst`).
     """
 
     def __init__(self, cfg, cache_dir=None, worker: int = 0, evaluator=None):
@@ -211,6 +213,9 @@ class Objective:
         means = {g: float(np.mean([s.ratios[g] for s in scored])) for g in GROUP_METRICS}
         trial.set_user_attr("n_runs", len(scored))
         trial.set_user_attr("ratios", means)
+        if self.cfg.robust:
+            return accuracy_and_worst(trial, [scenario for _, (scenario, _) in runs],
+                                      [s.score for s in scored])
         if self.cfg.multi_objective:
             return tuple(means[g] for g in GROUP_METRICS)
         return float(np.mean([s.score for s in scored]))

@@ -3,7 +3,8 @@
 Writes into a directory: ``trials.csv`` (pandas table of every trial), ``history.png``
 (optimisation history), ``importances.png`` (PED-ANOVA importances -- Optuna's default;
 its fANOVA needs scikit-learn -- of the structural
-parameters), ``pareto.png`` (multi-objective studies), ``mf_<controller>.png`` (the tuned
+parameters), ``pareto.png`` and a table of the Pareto front (multi-objective studies,
+:mod:`fuzzynav.tuning.pareto`), ``mf_<controller>.png`` (the tuned
 membership functions), ``report.md`` (summary, rule tables, the train/test table beside the
 EKF, the paper's rules and the compared baselines).  All files are written complete into a
 temporary directory and then moved into place together: a read-only directory, a full disk
@@ -26,7 +27,9 @@ from fuzzynav.fileio import staged, write_atomic
 from fuzzynav.tuning.evaluate import format_summary, run_table
 from fuzzynav.tuning.export import choose_trial, systems_of
 from fuzzynav.tuning.config import GROUP_METRICS
+from fuzzynav.tuning import pareto
 from fuzzynav.tuning.objective import Evaluator, weighted_score
+from fuzzynav.tuning.study import best_trials
 
 plt = plots.plt
 
@@ -57,6 +60,8 @@ def _score(cfg, t) -> float:
     """A finished trial's single score (multi-objective: the weighted mean of its ratios)."""
     if not cfg.multi_objective:
         return t.value
+    if cfg.robust:  # the mean score over the training runs
+        return t.values[0]
     return weighted_score(dict(zip(GROUP_METRICS, t.values)), cfg.weights)
 
 
@@ -99,10 +104,10 @@ def _importances(study, cfg, path):
 
 
 def _pareto(study, cfg, path):
-    from fuzzynav.tuning.study import best_trials
-
     if not cfg.multi_objective:
         return None
+    if cfg.robust:
+        return pareto.robust_figure(study, best_trials(study, cfg), path)
     pts = np.array([t.values for t in study.trials if t.values is not None])
     front = np.array([t.values for t in best_trials(study, cfg)])
     if pts.size == 0:
@@ -164,6 +169,8 @@ def _write_files(cfg, study, out: Path, cache_dir, evaluate: bool) -> None:
              f"{'multi' if cfg.multi_objective else 'single'}-objective; trials: "
              + (", ".join(f"{k} {v}" for k, v in states.items()) or "none") + ".", ""]
     lines += [f"![{p.stem}]({p.name})" for p in figs if p is not None]
+    lines += pareto.front_section(study, cfg, best_trials(study, cfg)
+                                  if cfg.multi_objective else [])
     try:
         trial = choose_trial(study, cfg)
     except FuzzynavError as exc:  # only pruned, failed or running trials so far

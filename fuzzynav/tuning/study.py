@@ -139,7 +139,8 @@ def open_study(cfg, storage_url=None, worker: int = 0, create: bool = False):
         if cfg.multi_objective:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
-                study.set_metric_names([f"{g}_ratio" for g in GROUP_METRICS])
+                study.set_metric_names(["accuracy", "worst_scenario"] if cfg.robust else
+                                       [f"{g}_ratio" for g in GROUP_METRICS])
         return study
     try:
         study = optuna.load_study(**kw)

@@ -88,29 +88,39 @@ DRIVE_SEGMENTS = (Segment("static", 20.0), Segment("accelerate", 8.0, speed_chan
                   Segment("turn", 10.0, turn_deg=90.0), Segment("cruise", 8.0),
                   Segment("turn", 10.0, turn_deg=-120.0), Segment("cruise", 8.0))
 DRIVE_RATE_HZ = 100.0
+DRIVE_HEADING_DEG = 30.0
+#: a walk at 1.4 m/s with a stop: a recording the car defaults refuse (never 2 m/s)
+WALK_SEGMENTS = (Segment("static", 20.0), Segment("accelerate", 2.0, speed_change_mps=1.4),
+                 Segment("cruise", 20.0), Segment("turn", 10.0, turn_deg=90.0),
+                 Segment("cruise", 15.0), Segment("accelerate", 2.0, speed_change_mps=-1.4),
+                 Segment("static", 8.0), Segment("accelerate", 2.0, speed_change_mps=1.4),
+                 Segment("cruise", 15.0), Segment("turn", 10.0, turn_deg=-90.0),
+                 Segment("cruise", 30.0))
 
 
-def drive_samples():
+def drive_samples(segments=DRIVE_SEGMENTS):
     """Truth trajectory of the drive and its rate samples: ``traj, acc_g, gyro_dps``.
 
     The rates of each sample interval (increment / dt), placed at the interval's end;
     the body frame (RFU) is the IMU frame.
     """
     traj = generate(np.array([np.radians(40.0), np.radians(-105.0), 1600.0]),
-                    list(DRIVE_SEGMENTS), DRIVE_RATE_HZ, initial_heading_rad=np.radians(30.0))
+                    list(segments), DRIVE_RATE_HZ,
+                    initial_heading_rad=np.radians(DRIVE_HEADING_DEG))
     dt = np.diff(traj.time_s)[:, None]
     acc_g = np.vstack([traj.dv_b[:1], traj.dv_b]) / np.vstack([dt[:1], dt]) / G0
     gyro = np.degrees(np.vstack([traj.dtheta_b[:1], traj.dtheta_b]) / np.vstack([dt[:1], dt]))
     return traj, acc_g, gyro
 
 
-def write_drive(directory, sid="1", tick0=5000):
-    """Write the drive into ``directory``; return the truth trajectory.
+def write_drive(directory, sid="1", tick0=5000, segments=DRIVE_SEGMENTS):
+    """Write the drive (or another motion, ``segments``) into ``directory``; return the truth
+    trajectory.
 
     100-Hz IMU (ticks in ms, no jitter), lines arriving :data:`DRIVE_LATENCY_MS` after
     their sample, 4-Hz RTK-fixed solution from the truth at the same GPST instants.
     """
-    traj, acc_g, gyro = drive_samples()
+    traj, acc_g, gyro = drive_samples(segments)
     t_ms = traj.time_s * 1000.0
     write_imu(directory, csv_lines(acc_g, gyro, tick0 + np.rint(t_ms)),
               DRIVE_LATENCY_MS + t_ms, sid=sid)

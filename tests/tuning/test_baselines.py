@@ -66,6 +66,19 @@ def test_a_tiny_baseline_study_writes_parameters_the_filters_read(tmp_path):
     assert not list(tmp_path.glob(".tuned*"))  # no temporary file left
 
 
+def test_als_in_a_baseline_study_gets_its_training_score(tmp_path):
+    """ALS is estimated, not searched: its training score is judged like a trial's (mean
+    ratio to the EKF over the training runs: positive and finite, near 1 for a constant-R
+    EKF on one run)."""
+    pytest.importorskip("cvxpy")
+    p = tmp_path / "b.toml"
+    p.write_text(TINY.format(tune='["als"]'))
+    doc = json.loads(run_baselines(load_baseline_config(p),
+                                   cache_dir=tmp_path / "cache").read_text())
+    assert doc["trials"] == {"als": 0} and set(doc["filters"]["als"]) >= {"r_pos", "r_vel"}
+    assert 0.3 < doc["train_score"]["als"] < 3.0
+
+
 @pytest.mark.slow
 def test_als_recovers_the_unreported_gnss_noise_of_a_training_run(tmp_path):
     # paper000-steps: GNSS noise x3 for 150 s and x10 for 80 s of a 755-s run, unreported;

@@ -45,6 +45,7 @@ from fuzzynav.sim.loaders.mounting import Mounting
 from fuzzynav.sim.loaders.recording_files import find_files
 from fuzzynav.sim.loaders.rtkpos import read_pos
 from fuzzynav.sim.sensors import SensorData
+from fuzzynav.sim.start_options import StartOptions
 
 #: sample-to-fitted-arrival delay of the rtklib-drive IMU [s] (see the module docstring)
 DEFAULT_IMU_DELAY_S = 0.21
@@ -104,6 +105,9 @@ class Recording:
         The untouched RTK-fixed (Q = 1) epochs, for scoring.
     mounting : Mounting or None
     timing : TimeAlignment
+    start_options : StartOptions
+        How the initial state is found (rest, heading method, speeds, windows; the lever
+        arm, if given, is already in ``gnss.meta``).
     """
 
     directory: Path
@@ -114,6 +118,7 @@ class Recording:
     reference: SensorData
     mounting: Mounting | None
     timing: TimeAlignment
+    start_options: StartOptions = StartOptions()
 
     def initial_state(self, heading_rad=None, **kw):
         """Initial state from the data (:func:`fuzzynav.sim.coarse_align.initial_state`).
@@ -124,7 +129,8 @@ class Recording:
         from fuzzynav.sim.coarse_align import initial_state
 
         return initial_state(self.imu, self.gnss, heading_rad=heading_rad,
-                             forward_known=self.mounting is not None, **kw)
+                             forward_known=self.mounting is not None,
+                             options=self.start_options, **kw)
 
 
 def _data_lines(lines, first: int, last: int) -> np.ndarray:
@@ -274,7 +280,7 @@ def _fixes(pos, epoch: int, t_lo: float, t_hi: float, lever_arm_b, fixed_only: b
 
 def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
                 resample_hz="nominal", span_s=None, session=None,
-                gnss_velocity_lag_s=0.0, limits=None) -> Recording:
+                gnss_velocity_lag_s=0.0, limits=None, start=None) -> Recording:
     """Load an RTKLIB-logged IMU + GNSS recording.
 
     Parameters
@@ -300,6 +306,9 @@ def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
         (:func:`fuzzynav.sim.loaders.sync.velocity_lag`).
     limits : checks.Limits, optional
         Thresholds of the plausibility checks (:mod:`.checks`; default: its constants).
+    start : StartOptions, optional
+        How the initial state is found (:mod:`fuzzynav.sim.start_options`; default: the
+        car drive's); its ``lever_arm_b_m``, if set, replaces the mounting's.
 
     Returns
     -------
@@ -338,10 +347,13 @@ def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
     pos = read_pos(files["pos"])
     checks.gnss_overlap(files["pos"], pos.time_int_s + pos.time_frac_s, pos.columns["q"],
                         (epoch + imu.time_s[0], epoch + imu.time_s[-1]), limits)
+    start = StartOptions() if start is None else start
     lever = np.zeros(3) if mount is None else mount.gnss_lever_arm_b_m
+    lever = lever if start.lever_arm_b_m is None else np.asarray(start.lever_arm_b_m, float)
     t_lo, t_hi = imu.time_s[0], imu.time_s[-1]
     reference = _fixes(pos, epoch, t_lo, t_hi, lever, True)
     checks.gyro_scale(files["imu"], imu, reference, limits)
     return Recording(directory=directory, files=files, epoch_gpst_s=int(epoch), imu=imu,
                      gnss=_fixes(pos, epoch, t_lo, t_hi, lever, False, gnss_velocity_lag_s),
-                     reference=reference, mounting=mount, timing=timing)
+                     reference=reference, mounting=mount, timing=timing,
+                     start_options=start)

@@ -1,0 +1,190 @@
+"""The held-out recordings of ``docs/science.md``: the car drive and the AUV trajectories.
+
+Called by ``benchmarks/science_results.py`` (the section "Held-out recordings"); every part
+that lacks its data or its rules is skipped with a sentence on the page saying so.
+
+* **Car drive** (``$FUZZYNAV_DATA/rtklib-drive``, ``--data`` of the script): the protocol of
+  ``docs/validation.md`` (fixes with 2 m white noise per axis, 60-s outages every 180 s,
+  the shipped mounting) on ``--mc`` noise seeds, each filter on the same noisy fixes of a
+  seed.  Compared: the classical filters with the parameters tuned on the *simulated*
+  training runs (``studies/paper000_baselines.json``), the paper's fuzzy rules (``fakf``),
+  the fuzzy controller tuned on the same simulated runs (``fuzzy-tuned``: trained on
+  simulation, judged on a real drive), and, when it exists, a controller tuned on the
+  first part of the drive (``--car-rules``, default :data:`CAR_RULES`).  Score per seed:
+  the mean of the horizontal-position and velocity RMS ratios to ``ekf-tuned`` with GNSS
+  throughout (a recording has no attitude truth); the outage drift is tabulated apart.
+  The CI is over noise seeds of one recording, not over recordings.
+* **AUV** (``$FUZZYNAV_DATA/akit``): only with recording-trained DVL rules (``--auv-rules``,
+  default :data:`AUV_RULES`); the eight trajectories are the pairs, score the mean of the
+  horizontal-position and velocity RMS ratios to the EKF with DVL.
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import pandas as pd
+
+ROOT = Path(__file__).resolve().parents[1]
+#: rules tuned on a recording, looked for when no path is given
+CAR_RULES = ROOT / "rules" / "rtklib_drive_tuned.json"
+AUV_RULES = ROOT / "rules" / "akit_tuned_dvl.json"
+CAR_FILTERS = ("ekf", "ekf-tuned", "als", "sage-husa", "sage-husa-tuned", "vb", "vb-tuned",
+               "huber-tuned", "strong-tracking-tuned", "fakf")
+AUV_FILTERS = ("ekf", "sage-husa", "vb", "huber")
+CAR_METRICS = ("rms_pos_h_m", "rms_vel_mps")
+SIM_FUZZY, CAR_FUZZY, AUV_FUZZY = "fuzzy-tuned", "fuzzy-drive", "fuzzy-auv"
+
+
+def data_root(given=None) -> Path:
+    """Where the recordings lie: ``given``, ``$FUZZYNAV_DATA`` or ``../shared/datasets``."""
+    if given:
+        return Path(given)
+    return Path(os.environ.get("FUZZYNAV_DATA", ROOT.parent / "shared" / "datasets"))
+
+
+def _car_specs(params: Path, sim_rules: Path, car_rules) -> dict:
+    """Label -> (named filter, options) of the filters run on the drive."""
+    from fuzzynav.filters.baselines import TUNED
+
+    specs = {n: (n, {"params": str(params)} if n in TUNED else {}) for n in CAR_FILTERS}
+    specs[SIM_FUZZY] = ("fakf", {"rules": [str(sim_rules)]})
+    if car_rules is not None:
+        specs[CAR_FUZZY] = ("fakf", {"rules": [str(car_rules)]})
+    return specs
+
+
+def car_table(directory: Path, specs: dict, seeds) -> pd.DataFrame:
+    """One row per filter and seed: the protocol's metrics of both feeds."""
+    from fuzzynav.realdata.protocol import ProtocolSettings
+    from fuzzynav.realdata.sources import SOURCES, resolve_mounting
+    from fuzzynav.realdata.validate import validate
+
+    rec = SOURCES["rtklib"].load(directory, mounting=resolve_mounting("rtklib-drive"))
+    rows = []
+    for label, (name, options) in specs.items():
+        for seed in seeds:
+            v = validate(rec, name, ProtocolSettings(), seed, options)
+            m, out = v.runs["gnss"].metrics, v.runs["outages"].metrics
+            rows.append({"scenario": "rtklib-drive", "seed": seed, "filter": label,
+                         **{k: m[k] for k in CAR_METRICS},
+                         "drift_h_rms_m": out["drift_h_rms_m"], "completed":
+                         min(m["completed"], out["completed"])})
+    return pd.DataFrame(rows)
+
+
+def _save_systems(systems: dict, directory: Path) -> Path:
+    """The tuned fuzzy controller as a rule file (one controller: the GNSS R-scaling)."""
+    from fuzzynav.fuzzy.io import save_fis
+
+    if len(systems) != 1:
+        raise ValueError(f"expected one tuned controller, got {sorted(systems)}")
+    path = directory / "fuzzy_tuned.json"
+    save_fis(next(iter(systems.values())), path)
+    return path
+
+
+def _drift_lines(df: pd.DataFrame, order) -> list:
+    import science_results as sr
+
+    lines = ["| filter | horizontal RMS, GNSS throughout (m) | velocity RMS (m/s) | "
+             "drift RMS over the outages (m) | runs completed |", "|---|---|---|---|---|"]
+    for f in order:
+        sub = df[df["filter"] == f]
+        lines.append(f"| {f} | {sr.cell(sub['rms_pos_h_m'])} | {sr.cell(sub['rms_vel_mps'])} "
+                     f"| {sr.cell(sub['drift_h_rms_m'])} | {int(sub['completed'].sum())}/"
+                     f"{len(sub)} |")
+    return lines
+
+
+def _paired_lines(scores, scenario, fuzzies, ref) -> list:
+    """A sentence per fuzzy controller against the best classical filter and ``ref``."""
+    import science_results as sr
+
+    pool = scores[~scores["filter"].isin([*fuzzies, *sr.NOT_CLASSICAL])]
+    best = pool.groupby("filter")["score"].mean().idxmin()
+    out = []
+    for f in fuzzies:
+        for other in dict.fromkeys((best, ref)):
+            out.append("- " + sr.sentence(scenario, f"`{f}`", f"`{other}`",
+                                          sr.paired(scores, scenario, f, other)))
+    return out
+
+
+def car_section(directory: Path, params: Path, systems: dict, car_rules, seeds) -> tuple:
+    """Markdown lines of the car drive and its rows."""
+    import science_results as sr
+
+    rules = Path(car_rules) if car_rules else CAR_RULES
+    note = [] if rules.is_file() else [
+        f"No controller tuned on the drive itself (`{rules.name}` absent: the time-split "
+        "study of the drive writes it), so only the controller tuned on simulation is "
+        "judged here.", ""]
+    with tempfile.TemporaryDirectory() as tmp:
+        specs = _car_specs(params, _save_systems(systems, Path(tmp)), rules if rules.is_file()
+                           else None)
+        df = car_table(directory, specs, seeds)
+    scores = sr.scores_to(df, sr.REF, CAR_METRICS)
+    fuzzies = [f for f in (SIM_FUZZY, CAR_FUZZY) if f in specs]
+    order = [*fuzzies, *CAR_FILTERS]
+    return [
+        "### The car drive (`rtklib-drive`, consumer MEMS IMU, real)", "",
+        f"Protocol of docs/validation.md (2 m noise per axis added to the fixes, 60-s "
+        f"outages every 180 s, shipped mounting), noise seeds 0–{len(seeds) - 1}; every "
+        "filter is run with what it learned on the *simulated* training runs. Score: the "
+        "mean of the horizontal-position and velocity RMS ratios with GNSS throughout; the "
+        "CI is over noise seeds of this one recording. There is no oracle on a recording "
+        "(its true noise is unknown).", "", *note,
+        "| filter | score vs `ekf-tuned` |", "|---|---|",
+        *[f"| {f} | {sr.cell(scores[scores['filter'] == f]['score'])} |" for f in order], "",
+        *_drift_lines(df, order), "", *_paired_lines(scores, "rtklib-drive", fuzzies, sr.REF),
+        ""], df
+
+
+def auv_section(directory: Path, auv_rules) -> tuple:
+    """Markdown lines of the AUV runs (or the note why they are skipped), and their rows."""
+    import science_results as sr
+
+    rules = Path(auv_rules) if auv_rules else AUV_RULES
+    if not directory.is_dir():
+        return [f"*The AUV recordings are not here ({directory}): section skipped.*", ""], None
+    if not rules.is_file():
+        return [f"*The AUV trajectories are not judged: no DVL controller tuned on "
+                f"recordings (`{rules.name}` absent; paper 004's leave-trajectories-out study "
+                "writes it). The classical filters on them: docs/paper004.md.*", ""], None
+    from fuzzynav.realdata.akit import run_all
+    from fuzzynav.sim.loaders.akit import load_akit
+
+    recs = load_akit(directory, "1-8")
+    frames = []
+    for label, name, opts in [*[(f, f, None) for f in AUV_FILTERS],
+                              (AUV_FUZZY, "fakf", {"rules": [str(rules)]})]:
+        df, _ = run_all(recs, name, opts)
+        frames.append(df.assign(filter=label, scenario="akit"))
+    df = pd.concat(frames)
+    scores = sr.scores_to(df, "ekf", CAR_METRICS)
+    return ["### The AUV trajectories (A-KIT, 8 runs, DVL-aided)", "",
+            "Pairs are the eight trajectories; score: mean of horizontal-position and "
+            "velocity RMS ratios to the EKF with DVL.", "",
+            "| filter | score vs `ekf` |", "|---|---|",
+            *[f"| {f} | {sr.cell(scores[scores['filter'] == f]['score'])} |"
+              for f in (AUV_FUZZY, *AUV_FILTERS)], "",
+            *_paired_lines(scores, "akit", [AUV_FUZZY], "ekf"), ""], df
+
+
+def recordings_section(args, params: Path, systems: dict) -> tuple:
+    """The page's "Held-out recordings" section and the rows it scored (or None)."""
+    root = data_root(args.data)
+    seeds = list(range(args.mc_recordings))
+    lines = ["## Held-out recordings", "",
+             "Real data, never seen in training (the controllers and the tuned constants "
+             "were learned on simulated runs; a controller learned on recordings is judged "
+             "when its rule file exists).", ""]
+    car, car_df = car_section(root / "rtklib-drive", params, systems, args.car_rules, seeds) \
+        if (root / "rtklib-drive").is_dir() else \
+        ([f"*The car drive is not here ({root / 'rtklib-drive'}): section skipped. Set "
+          "`FUZZYNAV_DATA` or pass `--data`.*", ""], None)
+    auv, auv_df = auv_section(root / "akit", args.auv_rules)
+    frames = [d for d in (car_df, auv_df) if d is not None]
+    return lines + car + auv, (pd.concat(frames) if frames else None)
