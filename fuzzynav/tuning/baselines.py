@@ -26,11 +26,10 @@ import numpy as np
 from optuna.trial import TrialState
 
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.experiment import run_on_log
+from fuzzynav.experiment import filter_context, run_on_log
 from fuzzynav.fileio import write_atomic
 from fuzzynav.filters import measurements
 from fuzzynav.filters.baselines import PARAMS_FORMAT, Q_FIELDS, TUNED
-from fuzzynav.filters.named import FilterContext
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
 from fuzzynav.tuning.config import study_config_from_dict
 from fuzzynav.tuning.objective import Evaluator
@@ -116,8 +115,7 @@ def suggest(trial, space: dict) -> dict:
 def run_params(evaluator, name: str, params: dict, scenario: str, seed: int) -> dict:
     """Metrics of tuned filter ``name`` with ``params`` on one run."""
     log = evaluator.log(scenario, seed)
-    ctx = FilterContext(imu_noise=log.scenario.imu.noise_si(), sensors=dict(log.sensors))
-    setup = TUNED[name][1](ctx, params)
+    setup = TUNED[name][1](filter_context(log), params)
     return run_on_log(log, name, setup=setup, t_start_s=evaluator.config.t_start_s).metrics
 
 

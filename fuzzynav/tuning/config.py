@@ -8,8 +8,10 @@ Layout (every key in ``docs/studies.md``)::
     [study.pso]      particles, iterations, inertia = w | [start, end], c1, c2  (sampler "pso")
     [objective]      weights = {pos, vel, att}, baseline = "ekf", t_start_s
     [train]          scenarios = [...], seeds = [...]  (built-in names, or TOML files
-                     relative to this file, like templates)
-    [test]           scenarios, seeds, compare = [filters shown beside the tuned rules]
+                     relative to this file, like templates); and/or recordings =
+                     ["KIND:DIR[:SESSION][@A-B[%]]", ...], recording_seeds = [0]
+                     (:mod:`fuzzynav.realdata.dataspec`)
+    [test]           the same, and compare = [filters shown beside the tuned rules]
     [[controllers]]  name, template (rule file), tune, partitions, free_triangles,
                      rule_weights, window = [lo, hi] (epochs), output_range = [lo, hi]
                      (bounds of the output's upper end), output_low = [lo, hi] (bounds of
@@ -137,19 +139,57 @@ def _scenario(t: Table, i: int, name: str, here: Path) -> tuple:
         raise t.error(f"scenarios[{i}]", str(exc)) from None
 
 
-def _runs(t: Table, here: Path) -> tuple:
-    scenarios = t.data.get("scenarios")
-    seeds = t.data.get("seeds")
-    t._used.update({"scenarios", "seeds"})
-    if not isinstance(scenarios, list) or not scenarios or \
-            not all(isinstance(s, str) for s in scenarios):
-        raise t.error("scenarios", "must be a non-empty array of scenario names or files")
+def _seed_list(t: Table, key: str, default=None) -> list:
+    seeds = t.data.get(key, default)
+    t._used.add(key)
     if not isinstance(seeds, list) or not seeds or \
             not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in seeds):
-        raise t.error("seeds", "must be a non-empty array of non-negative integers")
-    loaded = [_scenario(t, i, sc, here) for i, sc in enumerate(scenarios)]
-    return tuple((sc, int(sd)) for sc, _ in loaded for sd in seeds), \
-        min(d for _, d in loaded)
+        raise t.error(key, "must be a non-empty array of non-negative integers")
+    return seeds
+
+
+def _recordings(t: Table) -> list:
+    """``recordings`` (``KIND:DIR[:SESSION][@A-B[%]]``, one run per session) x
+    ``recording_seeds``; each spec parsed and its directory found (docs/studies.md)."""
+    from fuzzynav.realdata.dataspec import expand, parse_recording_spec, resolve
+
+    specs = t.data.get("recordings")
+    t._used.add("recordings")
+    if not isinstance(specs, list) or not specs:
+        raise t.error("recordings", "must be a non-empty array of recording specs "
+                                    "KIND:DIR[:SESSION][@A-B[%]]")
+    singles = []
+    for i, text in enumerate(specs):
+        try:
+            spec = parse_recording_spec(text)
+            resolve(spec)
+            singles += [str(s) for s in expand(spec)]
+        except FuzzynavError as exc:
+            raise t.error(f"recordings[{i}]", str(exc)) from None
+    seeds = _seed_list(t, "recording_seeds", [0])
+    return [(name, int(sd)) for name in dict.fromkeys(singles) for sd in seeds]
+
+
+def _runs(t: Table, here: Path) -> tuple:
+    """The runs of ``[train]`` / ``[test]`` (scenarios x seeds, recordings x recording
+    seeds) and the shortest simulated run's duration (inf without one: a recording is
+    scored in its own window)."""
+    scenarios = t.data.get("scenarios")
+    t._used.add("scenarios")
+    has_recordings = "recordings" in t.data
+    runs, shortest = [], float("inf")
+    if scenarios is not None or not has_recordings:
+        if not isinstance(scenarios, list) or not scenarios or \
+                not all(isinstance(s, str) for s in scenarios):
+            raise t.error("scenarios", "must be a non-empty array of scenario names or files"
+                                       " (or give recordings)")
+        seeds = _seed_list(t, "seeds")
+        loaded = [_scenario(t, i, sc, here) for i, sc in enumerate(scenarios)]
+        runs += [(sc, int(sd)) for sc, _ in loaded for sd in seeds]
+        shortest = min(d for _, d in loaded)
+    if has_recordings:
+        runs += _recordings(t)
+    return tuple(runs), shortest
 
 
 def _filter_name(t: Table, key: str, name) -> str:
@@ -248,16 +288,36 @@ def _controller(t: Table, here: Path) -> ControllerConfig:
 
 
 def _check_held_out(tt: Table, train: tuple, test: tuple) -> None:
-    """Refuse a test run that is also a training run (its score would not be held out)."""
+    """Refuse a test run that is also a training run (its score would not be held out):
+    the same scenario and seed, or the same recording session in overlapping windows (any
+    seed: the data are the same)."""
+    from fuzzynav.realdata.dataspec import is_recording_name, overlaps, parse_recording_spec
+
     def key(run):
         name, seed = run
         return (str(Path(name).resolve()) if _looks_like_path(name) else name, seed)
 
-    seen = {key(r) for r in train}
+    seen = {key(r) for r in train if not is_recording_name(r[0])}
+    recorded = [parse_recording_spec(n) for n, _ in train if is_recording_name(n)]
     for run in test:
-        if key(run) in seen:
+        if is_recording_name(run[0]):
+            spec = parse_recording_spec(run[0])
+            if any(overlaps(spec, r) for r in recorded):
+                raise tt.error("recordings", f"recording {run[0]} is also (or overlaps) a "
+                                             "training recording; held-out recordings must "
+                                             "be other sessions or other time windows")
+        elif key(run) in seen:
             raise tt.error("seeds", f"run ({run[0]}, seed {run[1]}) is also a training run; "
                                     "test runs must be held out (other seeds or scenarios)")
+
+
+def _check_weights(ob: Table, runs: tuple, weights: dict) -> None:
+    """Recordings score no attitude: a study on them must not weigh it."""
+    from fuzzynav.realdata.dataspec import is_recording_name
+
+    if weights["att"] > 0 and any(is_recording_name(n) for n, _ in runs):
+        raise ob.error("weights.att", "recordings have no attitude truth: set "
+                                      "weights = { pos = ..., vel = ..., att = 0.0 }")
 
 
 def _inertia(t: Table) -> tuple:
@@ -328,6 +388,7 @@ def study_config_from_dict(doc: dict, path: Path | None = None,
     compare = _compare(tt)
     tt.finish()
     _check_held_out(tt, train, test)
+    _check_weights(ob, train + test, weights)
     if t_start >= min(shortest, shortest_test):
         raise ob.error("t_start_s", f"{t_start:g} s is at or after the end of the shortest "
                                     f"run ({min(shortest, shortest_test):g} s): nothing "

@@ -115,8 +115,15 @@ def export_rules(cfg, study, out, trial_number=None, pareto_index=None, cache_di
 
 
 def _write_expected(cfg, paths: dict, ev: Evaluator) -> None:
-    """Run fakf with the files as written and record what it gives on the first test run."""
-    scenario, seed = cfg.test[0]
+    """Run fakf with the files as written and record what it gives on the first simulated
+    test run (else training run): the regression test then needs no recording.  A study
+    on recordings alone writes no ``expected`` block."""
+    from fuzzynav.realdata.dataspec import is_recording_name
+
+    simulated = [r for r in cfg.test + cfg.train if not is_recording_name(r[0])]
+    if not simulated:
+        return
+    scenario, seed = simulated[0]
     files = [str(p) for p in paths.values()]
     out = run_on_log(ev.log(scenario, seed), "fakf", {"rules": files},
                      t_start_s=cfg.t_start_s)
