@@ -9,6 +9,7 @@ from disk) gives on the first test run — the regression tests re-run it.
 from __future__ import annotations
 
 import datetime as _dt
+import math
 from pathlib import Path
 
 import optuna
@@ -101,17 +102,24 @@ def export_rules(cfg, study, out, trial_number=None, pareto_index=None, cache_di
                 "template": str(next(c.template for c in cfg.controllers if c.name == name)),
                 "objective": {"value": list(trial.values) if cfg.multi_objective
                               else trial.value,
-                              "ratios_to_" + cfg.baseline: trial.user_attrs.get("ratios"),
+                              "ratios_to_" + cfg.baseline: _finite(trial.user_attrs.get(
+                                  "ratios")),
                               "weights": cfg.weights},
                 "train": [list(r) for r in cfg.train], "test": [list(r) for r in cfg.test],
                 "held_out_ratios_to_" + cfg.baseline: {
                     k: float(v) for k, v in held_out.items()
-                    if k.endswith("ratio") or k == "score"},
+                    if (k.endswith("ratio") or k == "score") and math.isfinite(v)},
                 "package_version": __version__, "created": created,
             }
             save_fis(_with(fis, provenance=prov), files[name])
         _write_expected(cfg, files, ev)
     return list(paths.values())
+
+
+def _finite(ratios):
+    """The ratios that are numbers (a study on recordings has no attitude ratio: NaN,
+    which JSON cannot hold)."""
+    return None if ratios is None else {k: v for k, v in ratios.items() if math.isfinite(v)}
 
 
 def _write_expected(cfg, paths: dict, ev: Evaluator) -> None:
