@@ -95,6 +95,10 @@ class StudyConfig:
     test: tuple
     compare: tuple
     controllers: tuple
+    #: a baseline study's searched parameters, ``((name, lo, hi, kind), ...)`` with kind
+    #: ``"log"``, ``"linear"`` or ``"int"`` (:mod:`fuzzynav.tuning.baselines`); a PSO swarm
+    #: moves over these when there are no controllers
+    space: tuple = ()
 
     @property
     def storage_url(self) -> str:
