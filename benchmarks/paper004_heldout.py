@@ -24,8 +24,10 @@ from fuzzynav.report import render  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 FOLDS = ("studies/paper004_fuzzy.toml", "studies/paper004_fuzzy_rev.toml")
+APSO_FOLDS = ("studies/paper004_apso.toml", "studies/paper004_apso_rev.toml")
 COMPARE = ("ekf", "huber")
 TUNED_LABEL = "fuzzy R-scaling (tuned on the other four)"
+APSO_LABEL = "APSO Q/R (tuned on the other four)"
 
 
 def fuzzy_fold(path) -> pd.DataFrame:
@@ -42,6 +44,18 @@ def fuzzy_fold(path) -> pd.DataFrame:
     df = run_table(Evaluator(cfg), systems_of(cfg, trial), runs, COMPARE)
     df["filter"] = df["filter"].replace({"tuned": TUNED_LABEL})
     return _with_trajectory(df, cfg)
+
+
+def apso_fold(path) -> pd.DataFrame:
+    """One row per held-out trajectory of an APSO baseline study's tuned multipliers."""
+    from fuzzynav.tuning.baselines import load_baseline_config
+    from fuzzynav.tuning.evaluate import run_table
+    from fuzzynav.tuning.objective import Evaluator
+
+    bcfg = load_baseline_config(ROOT / path)
+    spec = f"apso@{bcfg.out}"
+    df = run_table(Evaluator(bcfg.study), {}, bcfg.study.test, (spec,))
+    return _with_trajectory(df.replace({"filter": {spec: APSO_LABEL}}), bcfg.study)
 
 
 def _with_trajectory(df, cfg) -> pd.DataFrame:
@@ -88,20 +102,23 @@ def fold_table(df: pd.DataFrame, key: str = "rms_pos_h_m") -> str:
     return render(["fold", "held out", "filter", "vs EKF"], rows, markdown=True)
 
 
-def heldout_frame(folds=FOLDS) -> pd.DataFrame:
-    """Both folds' held-out rows."""
-    return pd.concat([fuzzy_fold(p) for p in folds], ignore_index=True)
+def heldout_frame(folds=FOLDS, apso_folds=APSO_FOLDS) -> pd.DataFrame:
+    """Both folds' held-out rows of the fuzzy and the APSO studies."""
+    return pd.concat([fuzzy_fold(p) for p in folds] + [apso_fold(p) for p in apso_folds],
+                     ignore_index=True)
 
 
 def section(df: pd.DataFrame) -> list:
     """The markdown lines of the held-out section."""
-    filters = ["ekf", "huber", TUNED_LABEL]
+    filters = ["ekf", "huber", TUNED_LABEL, APSO_LABEL]
     return ["### Trained on four A-KIT trajectories, judged on the other four", "",
             "The fuzzy DVL R-scaling study (`studies/paper004_fuzzy.toml`, trained on "
             "trajectories 1–4; `paper004_fuzzy_rev.toml`, trained on 5–8; 150 TPE trials "
-            "each) run with its best rules on the trajectories it did not see. Horizontal "
-            "RMS (m) per held-out trajectory; pooled over the eight (each held out once); "
-            "paired change vs the EKF, positive = smaller error:", "",
+            "each) and the APSO of the Q/R multipliers (`studies/paper004_apso.toml` / "
+            "`_rev`: 8 particles × 8 iterations, inertia 0.9 → 0.4) run with what they "
+            "found on the trajectories they did not see. Horizontal RMS (m) per held-out "
+            "trajectory; pooled over the eight (each held out once); paired change vs the "
+            "EKF, positive = smaller error:", "",
             heldout_table(df, filters=filters), "",
             "End error as % of the distance travelled:", "",
             heldout_table(df, "end_pos_h_pct", filters), "",
