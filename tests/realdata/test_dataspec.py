@@ -74,3 +74,29 @@ def test_until_cuts_samples_increments_and_meta():
     assert kept.time_s.tolist() == [2.0, 3.0, 4.0, 5.0]
     assert kept.meta["q"].tolist() == [2, 3, 4, 5]
     assert kept.meta["lever_arm_b"].shape == (3,)   # a constant, not a per-epoch array
+
+
+def test_car_drive_halves_use_and_score_their_own_time(rtklib_drive, monkeypatch):
+    """On the real drive (skipped when absent): the first half is cut at the middle, the
+    second runs through the whole drive; both complete with finite position scores."""
+    from fuzzynav.experiment import run_on_log
+    from fuzzynav.realdata.studyruns import recording_run
+
+    monkeypatch.setenv(DATA_DIR_ENV, str(rtklib_drive.parent))
+    name = rtklib_drive.name
+    first = recording_run(f"rtklib:{name}@0-50%", 1)
+    second = recording_run(f"rtklib:{name}@50-100%", 1)
+    from fuzzynav.realdata.sources import SOURCES
+
+    imu_t = SOURCES["rtklib"].load(rtklib_drive).imu.time_s
+    mid = 0.5 * (imu_t[0] + imu_t[-1])
+    t_first = first.sensors["gnss"].time_s
+    t_second = second.sensors["gnss"].time_s
+    assert mid - 1.0 < t_first[-1] <= mid               # fixes at 4 Hz up to the middle
+    assert t_second[-1] > mid + 200.0                   # the drive is 549 s long
+    # the second half is scored from the middle to the end
+    assert second.duration_s == pytest.approx(imu_t[-1] - mid, abs=1e-6)
+    for run in (first, second):
+        m = run_on_log(run, "ekf").metrics
+        assert m["completed"] == 1.0 and np.isfinite(m["rms_pos_h_m"])
+        assert "rms_att_deg" not in m
