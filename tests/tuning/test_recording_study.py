@@ -130,3 +130,27 @@ def test_missing_metric_group_with_zero_weight_does_not_count():
                       {"rms_pos_m": 4.0, "rms_vel_mps": 1.0},
                       {"pos": 1.0, "vel": 1.0, "att": 0.0})
     assert s.score == pytest.approx(0.75) and np.isnan(s.ratios["att"])
+
+
+@pytest.mark.slow  # a 1 050-s simulated run with the exported rules (~35 s here)
+def test_export_of_a_recording_study_records_expected_on_the_simulated_run(
+        tmp_path, with_data, sim_cache):
+    """Trained on a recording, the exported rules' ``expected`` block is taken on the test
+    set's simulated run, so the regression test of the file needs no recording."""
+    import json
+
+    from fuzzynav.tuning.export import export_rules
+    from fuzzynav.tuning.run import run_study
+    from fuzzynav.tuning.study import open_study
+
+    doc = _doc(["akit:auv:1"], ["akit:auv:2"])
+    doc["study"].update(trials=2)
+    doc["test"].update(scenarios=["paper004"], seeds=[100])
+    cfg = load_study_config(write_study(tmp_path, doc))
+    run_study(cfg, cache_dir=sim_cache, progress=False)
+    out = tmp_path / "dvl.json"
+    export_rules(cfg, open_study(cfg), out, cache_dir=sim_cache)
+    saved = json.loads(out.read_text())
+    assert (saved["expected"]["scenario"], saved["expected"]["seed"]) == ("paper004", 100)
+    assert saved["provenance"]["train"] == [["akit:auv:1", 0]]
+    assert "att" not in saved["provenance"]["objective"]["ratios_to_ekf"]   # NaN left out
