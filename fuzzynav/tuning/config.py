@@ -29,6 +29,8 @@ from fuzzynav.errors import FuzzynavError, InputFileError
 from fuzzynav.filters.adaptation.binding import WINDOW_RANGE
 from fuzzynav.fuzzy.io import brief
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
+from fuzzynav.tuning.recording_config import (check_no_attitude, check_recordings_held_out,
+                                              recording_runs)
 from fuzzynav.tuning.samplers import get_optimiser, optimiser_names
 
 PRUNERS = ("none", "median", "wilcoxon")
@@ -152,28 +154,6 @@ def _seed_list(t: Table, key: str, default=None) -> list:
     return seeds
 
 
-def _recordings(t: Table) -> list:
-    """``recordings`` (``KIND:DIR[:SESSION][@A-B[%]]``, one run per session) x
-    ``recording_seeds``; each spec parsed and its directory found (docs/studies.md)."""
-    from fuzzynav.realdata.dataspec import expand, parse_recording_spec, resolve
-
-    specs = t.data.get("recordings")
-    t._used.add("recordings")
-    if not isinstance(specs, list) or not specs:
-        raise t.error("recordings", "must be a non-empty array of recording specs "
-                                    "KIND:DIR[:SESSION][@A-B[%]]")
-    singles = []
-    for i, text in enumerate(specs):
-        try:
-            spec = parse_recording_spec(text)
-            resolve(spec)
-            singles += [str(s) for s in expand(spec)]
-        except FuzzynavError as exc:
-            raise t.error(f"recordings[{i}]", str(exc)) from None
-    seeds = _seed_list(t, "recording_seeds", [0])
-    return [(name, int(sd)) for name in dict.fromkeys(singles) for sd in seeds]
-
-
 def _runs(t: Table, here: Path) -> tuple:
     """The runs of ``[train]`` / ``[test]`` (scenarios x seeds, recordings x recording
     seeds) and the shortest simulated run's duration (inf without one: a recording is
@@ -192,7 +172,7 @@ def _runs(t: Table, here: Path) -> tuple:
         runs += [(sc, int(sd)) for sc, _ in loaded for sd in seeds]
         shortest = min(d for _, d in loaded)
     if has_recordings:
-        runs += _recordings(t)
+        runs += recording_runs(t, _seed_list(t, "recording_seeds", [0]))
     return tuple(runs), shortest
 
 
@@ -293,35 +273,17 @@ def _controller(t: Table, here: Path) -> ControllerConfig:
 
 def _check_held_out(tt: Table, train: tuple, test: tuple) -> None:
     """Refuse a test run that is also a training run (its score would not be held out):
-    the same scenario and seed, or the same recording session in overlapping windows (any
-    seed: the data are the same)."""
-    from fuzzynav.realdata.dataspec import is_recording_name, overlaps, parse_recording_spec
-
+    the same scenario and seed, or an overlapping recording (:mod:`.recording_config`)."""
     def key(run):
         name, seed = run
         return (str(Path(name).resolve()) if _looks_like_path(name) else name, seed)
 
-    seen = {key(r) for r in train if not is_recording_name(r[0])}
-    recorded = [parse_recording_spec(n) for n, _ in train if is_recording_name(n)]
+    check_recordings_held_out(tt, train, test)
+    seen = {key(r) for r in train}
     for run in test:
-        if is_recording_name(run[0]):
-            spec = parse_recording_spec(run[0])
-            if any(overlaps(spec, r) for r in recorded):
-                raise tt.error("recordings", f"recording {run[0]} is also (or overlaps) a "
-                                             "training recording; held-out recordings must "
-                                             "be other sessions or other time windows")
-        elif key(run) in seen:
+        if key(run) in seen:
             raise tt.error("seeds", f"run ({run[0]}, seed {run[1]}) is also a training run; "
                                     "test runs must be held out (other seeds or scenarios)")
-
-
-def _check_weights(ob: Table, runs: tuple, weights: dict) -> None:
-    """Recordings score no attitude: a study on them must not weigh it."""
-    from fuzzynav.realdata.dataspec import is_recording_name
-
-    if weights["att"] > 0 and any(is_recording_name(n) for n, _ in runs):
-        raise ob.error("weights.att", "recordings have no attitude truth: set "
-                                      "weights = { pos = ..., vel = ..., att = 0.0 }")
 
 
 def _inertia(t: Table) -> tuple:
@@ -392,7 +354,7 @@ def study_config_from_dict(doc: dict, path: Path | None = None,
     compare = _compare(tt)
     tt.finish()
     _check_held_out(tt, train, test)
-    _check_weights(ob, train + test, weights)
+    check_no_attitude(ob, train + test, weights)
     if t_start >= min(shortest, shortest_test):
         raise ob.error("t_start_s", f"{t_start:g} s is at or after the end of the shortest "
                                     f"run ({min(shortest, shortest_test):g} s): nothing "
