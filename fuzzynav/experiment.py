@@ -43,18 +43,34 @@ def perturbed_initial_state(log: SensorLog, setup: FilterSetup) -> InitialState:
                         truth.vel_n[0] + x0[3:6], attitude.dcm_to_quat(C0))
 
 
+def filter_context(log, options=None) -> FilterContext:
+    """What named filters configure themselves from on a log: a simulated
+    :class:`SensorLog`, or a recording run (``log.context``, e.g.
+    :class:`fuzzynav.realdata.studyruns.RecordingRun`)."""
+    if not isinstance(log, SensorLog):
+        return log.context(options)
+    return FilterContext(imu_noise=log.scenario.imu.noise_si(), sensors=dict(log.sensors),
+                         options=dict(options or {}))
+
+
 def setup_for(log: SensorLog, filter_name: str, options=None) -> FilterSetup:
-    """Configuration and adapters of a named filter for a simulated log."""
-    ctx = FilterContext(imu_noise=log.scenario.imu.noise_si(), sensors=dict(log.sensors),
-                        options=dict(options or {}))
+    """Configuration and adapters of a named filter for a log (:func:`filter_context`)."""
+    ctx = filter_context(log, options)
     return with_sensor_states(get_filter(filter_name).make(ctx), ctx.sensors,
                               ctx.options)
 
 
 def run_on_log(log: SensorLog, filter_name: str, options=None, t_start_s: float = 0.0,
                setup: FilterSetup | None = None) -> RunOutcome:
-    """Run one named filter (or an explicit ``setup``) on a simulated log and score it."""
+    """Run one named filter (or an explicit ``setup``) on a log and score it.
+
+    A recording run (not a :class:`SensorLog`) runs and scores itself (``log.run(setup)``:
+    against its reference, in its own time window; ``t_start_s`` does not apply).
+    """
     setup = setup or setup_for(log, filter_name, options)
+    if not isinstance(log, SensorLog):
+        res, metrics = log.run(setup)
+        return RunOutcome(filter_name, log.name, log.seed, res, metrics)
     init = perturbed_initial_state(log, setup)
     res = run_filter(log.imu, setup.sensors_for(log.sensors), init, setup.config, setup.adapters,
                      setup.sensor_options)

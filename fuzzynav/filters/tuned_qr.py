@@ -11,10 +11,11 @@ multipliers it finds are constants, so the filter itself is an EKF with
 * ``r_scale``: factor on every measurement variance (all channels), or ``r_scale_<channel>``
   per channel (``r_scale_vel_b`` for the DVL).
 
-Give them as filter options, or as an APSO result file — a JSON file written by
-``python -m fuzzynav.tuning.apso`` whose ``multipliers`` object holds the same keys — given
-as the filter's rule file (``--filter apso@studies/paper004_apso.result.json``, ``--rules
-FILE`` or the option ``apso_file``).  Without any the filter is the plain EKF.
+Give them as filter options, or as an APSO result file given as the filter's rule file
+(``--filter apso@studies/paper004_apso.json``, ``--rules FILE`` or the option ``apso_file``):
+the parameter file of a baseline study (``studies/paper004_apso.toml``, ``fuzzynav study run``),
+whose ``filters.apso`` object holds the same keys, or an older file with a ``multipliers``
+object.  Without any the filter is the plain EKF.
 """
 from __future__ import annotations
 
@@ -40,6 +41,12 @@ def read_multipliers(path) -> dict:
         raise InputFileError(path, "", f"cannot be read ({exc.__class__.__name__}: {exc})")
     except json.JSONDecodeError as exc:
         raise InputFileError(path, "", f"is not JSON ({exc.msg} at line {exc.lineno})")
+    if isinstance(doc, dict) and "multipliers" not in doc and "filters" in doc:
+        # a baseline study's parameter file (studies/paper004_apso.toml): its "apso" entry
+        mult = doc["filters"].get("apso") if isinstance(doc["filters"], dict) else None
+        if not isinstance(mult, dict):
+            raise InputFileError(path, "$.filters.apso", "missing or not an object")
+        return check_multipliers(mult, path, "$.filters.apso.")
     mult = doc.get("multipliers") if isinstance(doc, dict) else None
     if not isinstance(mult, dict):
         raise InputFileError(path, "$.multipliers", "missing or not an object")

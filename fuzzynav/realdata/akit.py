@@ -46,22 +46,38 @@ ROWS = (("horizontal position RMS (m)", "rms_pos_h_m"),
         ("velocity RMS (m/s)", "rms_vel_mps"))
 
 
+def context(rec, options=None) -> FilterContext:
+    """What named filters configure themselves from on an A-KIT trajectory: the Phins IMU
+    model, the DVL and :data:`INIT_OPTIONS` under ``options``."""
+    opts = {**INIT_OPTIONS, **dict(options or {})}
+    return FilterContext(imu_noise=PHINS.noise_si(), sensors={"dvl": rec.dvl}, options=opts)
+
+
+def initial_state(rec) -> InitialState:
+    """The reference at the first IMU sample, moved from the reference point to the IMU."""
+    ref = rec.reference
+    lla0 = _moved(ref.lla[0], ref.q_bn[0], -rec.reference_offset_b)
+    return InitialState(float(rec.imu.time_s[0]), lla0, ref.vel_n[0], ref.q_bn[0])
+
+
+def run_setup(rec, setup, reference=None):
+    """Run a filter configuration on a trajectory; ``(FilterResult, metrics)`` scored on
+    ``reference`` (default: the whole reference of ``rec``)."""
+    sensors = {"dvl": rec.dvl}
+    res = run_filter(rec.imu, setup.sensors_for(sensors), initial_state(rec), setup.config,
+                     setup.adapters, setup.sensor_options)
+    ref = rec.reference if reference is None else reference
+    return res, score(antenna_track(res, rec.reference_offset_b), ref)
+
+
 def run_trajectory(rec, filter_name: str, options=None):
     """Run one named filter on one :class:`~fuzzynav.sim.loaders.akit.AkitRecording`.
 
     Returns ``(FilterResult, metrics dict)``.
     """
-    opts = {**INIT_OPTIONS, **dict(options or {})}
-    sensors = {"dvl": rec.dvl}
-    ctx = FilterContext(imu_noise=PHINS.noise_si(), sensors=sensors, options=opts)
-    setup = with_sensor_states(get_filter(filter_name).make(ctx), sensors, opts)
-    ref = rec.reference
-    # start at the IMU: the reference point sits at ``reference_offset_b`` from it
-    lla0 = _moved(ref.lla[0], ref.q_bn[0], -rec.reference_offset_b)
-    init = InitialState(float(rec.imu.time_s[0]), lla0, ref.vel_n[0], ref.q_bn[0])
-    res = run_filter(rec.imu, setup.sensors_for(sensors), init, setup.config, setup.adapters,
-                     setup.sensor_options)
-    return res, score(antenna_track(res, rec.reference_offset_b), ref)
+    ctx = context(rec, options)
+    setup = with_sensor_states(get_filter(filter_name).make(ctx), ctx.sensors, ctx.options)
+    return run_setup(rec, setup)
 
 
 def _moved(lla, q_bn, offset_b):

@@ -106,13 +106,25 @@ def run_named(start: Start, fixes, filter_name: str, use_velocity: bool = True,
     -------
     FilterResult
     """
+    ctx = context_for(fixes, options, mems, init_pos_sigma_m, constraints)
+    return run_setup(start, ctx.sensors, get_filter(filter_name).make(ctx), use_velocity)
+
+
+def context_for(fixes, options=None, mems: MemsModel = CONSUMER_MEMS,
+                init_pos_sigma_m: float = 2.0, constraints=None) -> FilterContext:
+    """What a named filter configures itself from on a recording (:func:`run_named`'s
+    parameters): the MEMS model, its initial sigmas under ``options``, the fed sensors."""
     sensors = {GNSS_SENSOR: fixes}
     if constraints is not None:
         sensors["nhc"] = constraints
     opts = dict(mems.filter_options(init_pos_sigma_m))
     opts.update(options or {})
-    ctx = FilterContext(imu_noise=mems.imu_noise(), sensors=sensors, options=opts)
-    setup = get_filter(filter_name).make(ctx)
+    return FilterContext(imu_noise=mems.imu_noise(), sensors=sensors, options=opts)
+
+
+def run_setup(start: Start, sensors: dict, setup, use_velocity: bool = True):
+    """Run a filter configuration from ``start`` on ``sensors`` (GNSS velocities used or
+    not); the :class:`~fuzzynav.filters.runner.FilterResult`."""
     sensor_opts = {k: dict(v) for k, v in setup.sensor_options.items()}
     sensor_opts.setdefault(GNSS_SENSOR, {})["use_velocity"] = bool(use_velocity)
     return run_filter(start.imu, setup.sensors_for(sensors), start.init, setup.config,

@@ -31,21 +31,26 @@ class DataSource:
         options=None) -> Recording``; ``None`` leaves a loader's own default (``session``:
         which recording of a directory that holds several; ``options``: the
         :class:`~fuzzynav.sim.start_options.StartOptions` of a ``?key=value`` suffix).
+    split : callable or None
+        ``split(session) -> [session, ...]`` for a kind whose ``SESSION`` may name several
+        recordings (A-KIT ``1-4``); a study runs each separately.
     """
 
     kind: str
     description: str
     load: Callable
+    split: Callable | None = None
 
 
 SOURCES: dict[str, DataSource] = {}
 
 
-def register_source(kind: str, description: str):
-    """Decorator registering a loader function under ``kind``."""
+def register_source(kind: str, description: str, split: Callable | None = None):
+    """Decorator registering a loader function under ``kind`` (``split``: see
+    :class:`DataSource`)."""
 
     def deco(fn):
-        SOURCES[kind] = DataSource(kind, description, fn)
+        SOURCES[kind] = DataSource(kind, description, fn, split)
         return fn
 
     return deco
@@ -63,8 +68,15 @@ def _load_rtklib(directory, mounting="auto", imu_delay_s=None, span_s=None, sess
                        start=options, **kw)
 
 
+def _akit_split(session):
+    from fuzzynav.sim.loaders.akit import parse_trajectories
+
+    return parse_trajectories(session)
+
+
 @register_source("akit", "A-KIT AUV recordings: IMU/DVL/GT_trajectoryN.csv + corrected/ "
-                         "(akit:DIR:N, N = 3, 1-8 or 1,4; e.g. ../shared/datasets/akit)")
+                         "(akit:DIR:N, N = 3, 1-8 or 1,4; e.g. ../shared/datasets/akit)",
+                 split=_akit_split)
 def _load_akit(directory, mounting="auto", imu_delay_s=None, span_s=None, session=None,
                options=None):
     from fuzzynav.sim.loaders.akit import load_akit

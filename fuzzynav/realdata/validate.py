@@ -103,18 +103,9 @@ def validate(rec, filter_name: str, settings: ProtocolSettings = ProtocolSetting
         Filter options (e.g. ``rules``).
     mems : MemsModel
     """
-    seed = check_seed(seed)  # numpy would refuse a negative one with a bare ValueError
     mems = _with_heading_sigma(mems, getattr(rec, "start_options", None))
-    lever = np.asarray(rec.gnss.meta.get("lever_arm_b", np.zeros(3)), float)
-    noisy = protocol.degraded_fixes(rec.gnss, settings, np.random.default_rng(seed))
-    known = rec.mounting is not None
-    # the windows follow the start, and the start is found on what the filter is fed
-    first = _start(rec, _for_alignment(noisy), known, lever)
-    t_end = float(rec.imu.time_s[-1])
-    windows = protocol.windows_after(first.init.time_s, t_end, settings)
-    feeds = {"gnss": noisy, "outages": protocol.with_outages(noisy, windows)}
-    start = _start(rec, _for_alignment(feeds["outages"]), known, lever)
-    sigma0 = float(np.hypot(settings.noise_pos_m, np.median(rec.gnss.sigma[:, :2])))
+    feeds, windows, start, lever = prepare_feeds(rec, settings, seed)
+    sigma0 = fed_sigma(rec, settings)
     t0 = max(settings.t_start_s, start.init.time_s)
     runs = {}
     nhc = constraints_for(start, settings.nhc_sigma_mps, settings.nhc_rate_hz)
@@ -127,6 +118,37 @@ def validate(rec, filter_name: str, settings: ProtocolSettings = ProtocolSetting
         runs[name] = FeedRun(fixes, res, err, metrics,
                              outage_drifts(err, res.time_s, windows))
     return Validation(filter_name, int(seed), settings, start, windows, runs)
+
+
+def prepare_feeds(rec, settings: ProtocolSettings, seed: int):
+    """What the filter is fed for one noise seed, and where it starts.
+
+    Returns
+    -------
+    feeds : dict
+        :data:`FEEDS` name -> the degraded fixes (``gnss``) and those with outages.
+    windows : ndarray (K, 2)
+        The outage windows.
+    start : Start
+        The start found on the fixes with outages.
+    lever : ndarray (3,)
+        The antenna lever arm in the body frame [m].
+    """
+    seed = check_seed(seed)  # numpy would refuse a negative one with a bare ValueError
+    lever = np.asarray(rec.gnss.meta.get("lever_arm_b", np.zeros(3)), float)
+    noisy = protocol.degraded_fixes(rec.gnss, settings, np.random.default_rng(seed))
+    known = rec.mounting is not None
+    # the windows follow the start, and the start is found on what the filter is fed
+    first = _start(rec, _for_alignment(noisy), known, lever)
+    windows = protocol.windows_after(first.init.time_s, float(rec.imu.time_s[-1]), settings)
+    feeds = {"gnss": noisy, "outages": protocol.with_outages(noisy, windows)}
+    start = _start(rec, _for_alignment(feeds["outages"]), known, lever)
+    return feeds, windows, start, lever
+
+
+def fed_sigma(rec, settings: ProtocolSettings) -> float:
+    """The fed fixes' horizontal 1-sigma: the recording's and the added noise [m]."""
+    return float(np.hypot(settings.noise_pos_m, np.median(rec.gnss.sigma[:, :2])))
 
 
 def metrics_table(validations) -> pd.DataFrame:

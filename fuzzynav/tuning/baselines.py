@@ -26,17 +26,17 @@ import numpy as np
 from optuna.trial import TrialState
 
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.experiment import run_on_log
+from fuzzynav.experiment import filter_context, run_on_log
 from fuzzynav.fileio import write_atomic
 from fuzzynav.filters import measurements
 from fuzzynav.filters.baselines import PARAMS_FORMAT, Q_FIELDS, TUNED
-from fuzzynav.filters.named import FilterContext
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
 from fuzzynav.tuning.config import study_config_from_dict
 from fuzzynav.tuning.objective import Evaluator
 
-#: filters a baseline study can tune: the searched ones and the ALS estimate
-TUNABLE = tuple(TUNED)
+#: filters a baseline study can tune: the searched ones, the ALS estimate and paper 004's
+#: APSO (the ``apso`` filter's Q/R multipliers, best with ``sampler = "pso"``)
+TUNABLE = tuple(TUNED) + ("apso",)
 #: bounds of the searched parameters: (low, high, log scale)
 Q_BOUNDS = (0.1, 10.0, True)
 R_BOUNDS = (0.1, 100.0, True)
@@ -45,6 +45,10 @@ SPACES = {
                         "cap": (1.0, 1000.0, True)},
     "vb-tuned": {"rho": (0.9, 0.999, False), "iterations": (1, 5, "int")},
     "huber-tuned": {"gamma": (0.5, 10.0, True)},
+    # paper 004 says "Q and R" without listing the entries: the attitude and velocity rows
+    # of Q (ARW/VRW densities) and every measurement's R (factors on the variances)
+    "apso": {"q_scale_att": (0.01, 100.0, True), "q_scale_vel": (0.01, 100.0, True),
+             "r_scale": (0.1, 100.0, True)},
     # the cap is searched too: uncapped (Zhou's form) it diverges on paper000, where the
     # compass's H P- H^T is far below its R and the innovation average alone gives huge factors
     "strong-tracking-tuned": {"rho": (0.5, 0.99, False), "beta": (1.0, 20.0, True),
@@ -116,9 +120,11 @@ def suggest(trial, space: dict) -> dict:
 def run_params(evaluator, name: str, params: dict, scenario: str, seed: int) -> dict:
     """Metrics of tuned filter ``name`` with ``params`` on one run."""
     log = evaluator.log(scenario, seed)
-    ctx = FilterContext(imu_noise=log.scenario.imu.noise_si(), sensors=dict(log.sensors))
-    setup = TUNED[name][1](ctx, params)
-    return run_on_log(log, name, setup=setup, t_start_s=evaluator.config.t_start_s).metrics
+    t0 = evaluator.config.t_start_s
+    if name not in TUNED:  # a named filter that takes its parameters as options (apso)
+        return run_on_log(log, name, options=params, t_start_s=t0).metrics
+    setup = TUNED[name][1](filter_context(log), params)
+    return run_on_log(log, name, setup=setup, t_start_s=t0).metrics
 
 
 class BaselineObjective:
@@ -143,10 +149,13 @@ class BaselineObjective:
         return float(np.mean(scores))
 
 
-def _sub_config(cfg, name: str):
+def _sub_config(cfg, name: str, space=None):
+    """The study of one tuned filter (its parameters as ``space``, for a PSO swarm)."""
     from dataclasses import replace
 
-    return replace(cfg, name=f"{cfg.name}.{name}", multi_objective=False)
+    kinds = {True: "log", False: "linear", "int": "int"}
+    flat = tuple((k, lo, hi, kinds[kind]) for k, (lo, hi, kind) in (space or {}).items())
+    return replace(cfg, name=f"{cfg.name}.{name}", multi_objective=False, space=flat)
 
 
 def tune_one(bcfg: BaselineConfig, name: str, trials=None, storage=None, evaluator=None,
@@ -154,10 +163,10 @@ def tune_one(bcfg: BaselineConfig, name: str, trials=None, storage=None, evaluat
     """Run (or resume) the Optuna study of tuned filter ``name``; returns the study."""
     from fuzzynav.tuning.study import n_finished, open_study
 
-    cfg = _sub_config(bcfg.study, name)
     evaluator = evaluator or Evaluator(bcfg.study)
+    space = space_of(name, training_channels(evaluator, bcfg.study.train))
+    cfg = _sub_config(bcfg.study, name, space)
     study = open_study(cfg, storage, create=True)
-    space = space_of(name, training_channels(evaluator, cfg.train))
     objective = BaselineObjective(evaluator, name, space)
     total = int(trials or cfg.trials)
     while n_finished(study) < total:
@@ -177,12 +186,16 @@ def best_params(bcfg: BaselineConfig, study) -> tuple:
     return dict(best.params), float(best.value)
 
 
-def write_params(bcfg: BaselineConfig, found: dict, scores: dict, trials: dict) -> Path:
-    """Write the tuned-parameter file the named filters read (atomically)."""
+def write_params(bcfg: BaselineConfig, found: dict, scores: dict, trials: dict,
+                 history=None) -> Path:
+    """Write the tuned-parameter file the named filters read (atomically); ``history``:
+    filter -> the PSO swarm's convergence (:func:`fuzzynav.tuning.pso.history`)."""
     doc = {"format": PARAMS_FORMAT, "version": 1, "study": bcfg.study.name,
            "baseline": bcfg.study.baseline,
            "train": [list(r) for r in bcfg.study.train],
            "trials": trials, "train_score": scores, "filters": found}
+    if history:
+        doc.update(sampler=bcfg.study.sampler, history=history)
     text = json.dumps(doc, indent=1) + "\n"
     return write_atomic(bcfg.out, lambda tmp: Path(tmp).write_text(text),
                         what="tuned-parameter file")
@@ -191,8 +204,10 @@ def write_params(bcfg: BaselineConfig, found: dict, scores: dict, trials: dict) 
 def run_baselines(bcfg: BaselineConfig, trials=None, storage=None, cache_dir=None,
                   progress=None) -> Path:
     """Tune every filter of the config (ALS: estimate) and write their parameter file."""
+    from fuzzynav.tuning.pso import history as swarm_history
+
     ev = Evaluator(bcfg.study, cache_dir)
-    found, scores, counts = {}, {}, {}
+    found, scores, counts, hist = {}, {}, {}, {}
     for name in bcfg.tune:
         if name == "als":
             from fuzzynav.tuning.als_fit import als_params
@@ -204,7 +219,9 @@ def run_baselines(bcfg: BaselineConfig, trials=None, storage=None, cache_dir=Non
         study = tune_one(bcfg, name, trials, storage, ev, progress)
         found[name], scores[name] = best_params(bcfg, study)
         counts[name] = len(study.get_trials(deepcopy=False))
-    return write_params(bcfg, found, scores, counts)
+        if bcfg.study.sampler == "pso":
+            hist[name] = swarm_history(study, bcfg.study)
+    return write_params(bcfg, found, scores, counts, hist)
 
 
 def _train_score(ev, name: str, params: dict) -> float:

@@ -9,8 +9,10 @@ Layout (every key in ``docs/studies.md``)::
     [objective]      weights = {pos, vel, att}, baseline = "ekf", t_start_s, filter = "fakf"
                      (the filter the candidate rule sets run in: one that takes rule files)
     [train]          scenarios = [...], seeds = [...]  (built-in names, or TOML files
-                     relative to this file, like templates)
-    [test]           scenarios, seeds, compare = [filters shown beside the tuned rules]
+                     relative to this file, like templates); and/or recordings =
+                     ["KIND:DIR[:SESSION][@A-B[%]]", ...], recording_seeds = [0]
+                     (:mod:`fuzzynav.realdata.dataspec`)
+    [test]           the same, and compare = [filters shown beside the tuned rules]
     [[controllers]]  name, template (rule file), tune, partitions, free_triangles,
                      rule_weights, window = [lo, hi] (epochs), output_range = [lo, hi]
                      (bounds of the output's upper end), output_low = [lo, hi] (bounds of
@@ -29,6 +31,8 @@ from fuzzynav.errors import FuzzynavError, InputFileError
 from fuzzynav.filters.adaptation.binding import WINDOW_RANGE
 from fuzzynav.fuzzy.io import brief
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
+from fuzzynav.tuning.recording_config import (check_no_attitude, check_recordings_held_out,
+                                              recording_runs)
 from fuzzynav.tuning.samplers import get_optimiser, optimiser_names
 
 PRUNERS = ("none", "median", "wilcoxon")
@@ -100,6 +104,10 @@ class StudyConfig:
     filter: str = "fakf"
     #: objective "robust": (mean training score, worst training scenario's mean score)
     robust: bool = False
+    #: a baseline study's searched parameters, ``((name, lo, hi, kind), ...)`` with kind
+    #: ``"log"``, ``"linear"`` or ``"int"`` (:mod:`fuzzynav.tuning.baselines`); a PSO swarm
+    #: moves over these when there are no controllers
+    space: tuple = ()
 
     @property
     def storage_url(self) -> str:
@@ -146,19 +154,35 @@ def _scenario(t: Table, i: int, name: str, here: Path) -> tuple:
         raise t.error(f"scenarios[{i}]", str(exc)) from None
 
 
-def _runs(t: Table, here: Path) -> tuple:
-    scenarios = t.data.get("scenarios")
-    seeds = t.data.get("seeds")
-    t._used.update({"scenarios", "seeds"})
-    if not isinstance(scenarios, list) or not scenarios or \
-            not all(isinstance(s, str) for s in scenarios):
-        raise t.error("scenarios", "must be a non-empty array of scenario names or files")
+def _seed_list(t: Table, key: str, default=None) -> list:
+    seeds = t.data.get(key, default)
+    t._used.add(key)
     if not isinstance(seeds, list) or not seeds or \
             not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in seeds):
-        raise t.error("seeds", "must be a non-empty array of non-negative integers")
-    loaded = [_scenario(t, i, sc, here) for i, sc in enumerate(scenarios)]
-    return tuple((sc, int(sd)) for sc, _ in loaded for sd in seeds), \
-        min(d for _, d in loaded)
+        raise t.error(key, "must be a non-empty array of non-negative integers")
+    return seeds
+
+
+def _runs(t: Table, here: Path) -> tuple:
+    """The runs of ``[train]`` / ``[test]`` (scenarios x seeds, recordings x recording
+    seeds) and the shortest simulated run's duration (inf without one: a recording is
+    scored in its own window)."""
+    scenarios = t.data.get("scenarios")
+    t._used.add("scenarios")
+    has_recordings = "recordings" in t.data
+    runs, shortest = [], float("inf")
+    if scenarios is not None or not has_recordings:
+        if not isinstance(scenarios, list) or not scenarios or \
+                not all(isinstance(s, str) for s in scenarios):
+            raise t.error("scenarios", "must be a non-empty array of scenario names or files"
+                                       " (or give recordings)")
+        seeds = _seed_list(t, "seeds")
+        loaded = [_scenario(t, i, sc, here) for i, sc in enumerate(scenarios)]
+        runs += [(sc, int(sd)) for sc, _ in loaded for sd in seeds]
+        shortest = min(d for _, d in loaded)
+    if has_recordings:
+        runs += recording_runs(t, _seed_list(t, "recording_seeds", [0]))
+    return tuple(runs), shortest
 
 
 def _filter_name(t: Table, key: str, name) -> str:
@@ -279,11 +303,13 @@ def _controller(t: Table, here: Path) -> ControllerConfig:
 
 
 def _check_held_out(tt: Table, train: tuple, test: tuple) -> None:
-    """Refuse a test run that is also a training run (its score would not be held out)."""
+    """Refuse a test run that is also a training run (its score would not be held out):
+    the same scenario and seed, or an overlapping recording (:mod:`.recording_config`)."""
     def key(run):
         name, seed = run
         return (str(Path(name).resolve()) if _looks_like_path(name) else name, seed)
 
+    check_recordings_held_out(tt, train, test)
     seen = {key(r) for r in train}
     for run in test:
         if key(run) in seen:
@@ -362,6 +388,7 @@ def study_config_from_dict(doc: dict, path: Path | None = None,
     compare = _compare(tt)
     tt.finish()
     _check_held_out(tt, train, test)
+    check_no_attitude(ob, train + test, weights)
     if t_start >= min(shortest, shortest_test):
         raise ob.error("t_start_s", f"{t_start:g} s is at or after the end of the shortest "
                                     f"run ({min(shortest, shortest_test):g} s): nothing "

@@ -9,6 +9,7 @@ from disk) gives on the first test run — the regression tests re-run it.
 from __future__ import annotations
 
 import datetime as _dt
+import math
 from pathlib import Path
 
 import optuna
@@ -101,12 +102,13 @@ def export_rules(cfg, study, out, trial_number=None, pareto_index=None, cache_di
                 "template": str(next(c.template for c in cfg.controllers if c.name == name)),
                 "objective": {"value": list(trial.values) if cfg.multi_objective
                               else trial.value,
-                              "ratios_to_" + cfg.baseline: trial.user_attrs.get("ratios"),
+                              "ratios_to_" + cfg.baseline: _finite(trial.user_attrs.get(
+                                  "ratios")),
                               "weights": cfg.weights},
                 "train": [list(r) for r in cfg.train], "test": [list(r) for r in cfg.test],
                 "held_out_ratios_to_" + cfg.baseline: {
                     k: float(v) for k, v in held_out.items()
-                    if k.endswith("ratio") or k == "score"},
+                    if (k.endswith("ratio") or k == "score") and math.isfinite(v)},
                 "package_version": __version__, "created": created,
             }
             save_fis(_with(fis, provenance=prov), files[name])
@@ -114,10 +116,23 @@ def export_rules(cfg, study, out, trial_number=None, pareto_index=None, cache_di
     return list(paths.values())
 
 
+def _finite(ratios):
+    """The ratios that are numbers (a study on recordings has no attitude ratio: NaN,
+    which JSON cannot hold)."""
+    return None if ratios is None else {k: v for k, v in ratios.items() if math.isfinite(v)}
+
+
 def _write_expected(cfg, paths: dict, ev: Evaluator) -> None:
     """Run the study's filter (``fakf`` unless ``[objective] filter``) with the files as
-    written and record what it gives on the first test run."""
-    scenario, seed = cfg.test[0]
+    written and record what it gives on the first simulated test run (else training run):
+    the regression test then needs no recording.  A study on recordings alone writes no
+    ``expected`` block."""
+    from fuzzynav.realdata.dataspec import is_recording_name
+
+    simulated = [r for r in cfg.test + cfg.train if not is_recording_name(r[0])]
+    if not simulated:
+        return
+    scenario, seed = simulated[0]
     files = [str(p) for p in paths.values()]
     out = run_on_log(ev.log(scenario, seed), cfg.filter, {"rules": files},
                      t_start_s=cfg.t_start_s)

@@ -22,6 +22,8 @@ from fuzzynav.errors import FuzzynavError
 from fuzzynav.experiment import run_on_log, setup_for
 from fuzzynav.filters.catalog import bind_systems
 from fuzzynav.filters.named import FilterSetup
+from fuzzynav.realdata.dataspec import is_recording_name
+from fuzzynav.realdata.studyruns import recording_run
 from fuzzynav.sim.log import simulate
 from fuzzynav.sim.scenario import load_scenario
 from fuzzynav.tuning.config import GROUP_METRICS
@@ -57,8 +59,10 @@ class RunScore:
 
 
 def weighted_score(ratios: dict, weights: dict) -> float:
-    """The weighted mean of group ratios (weights: group -> non-negative weight)."""
-    return sum(weights[g] * ratios[g] for g in GROUP_METRICS) / sum(weights.values())
+    """The weighted mean of group ratios (weights: group -> non-negative weight; a group
+    of weight 0 does not count, even when its ratio is NaN)."""
+    return sum(weights[g] * ratios[g] for g in GROUP_METRICS if weights[g]) \
+        / sum(weights.values())
 
 
 def score_metrics(metrics: dict, baseline: dict, weights: dict) -> RunScore:
@@ -75,6 +79,9 @@ def score_metrics(metrics: dict, baseline: dict, weights: dict) -> RunScore:
     ok = metrics.get("completed", 1.0) >= 1.0
     ratios = {}
     for g, key in GROUP_METRICS.items():
+        if key not in baseline:  # a recording scores no attitude (its weight is 0)
+            ratios[g] = math.nan
+            continue
         r = metrics[key] / baseline[key] if baseline[key] > 0 else math.nan
         ratios[g] = r if (ok and math.isfinite(r)) else FAILED_RATIO
     return RunScore(metrics, ratios, weighted_score(ratios, weights))
@@ -119,8 +126,11 @@ class Evaluator:
 
     # -- data -------------------------------------------------------------------------------
     def log(self, scenario: str, seed: int):
-        """The sensor log of a run (simulated once, cached on disk and in memory)."""
+        """The sensor log of a run (simulated once, cached on disk and in memory), or the
+        :class:`~fuzzynav.realdata.studyruns.RecordingRun` of a recording."""
         key = (scenario, seed)
+        if key not in self._logs and is_recording_name(scenario):
+            self._logs[key] = recording_run(scenario, seed)  # loaded once per process
         if key not in self._logs:
             if scenario not in self._scenarios:
                 self._scenarios[scenario] = load_scenario(scenario)

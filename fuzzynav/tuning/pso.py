@@ -71,7 +71,10 @@ class _Recorder:
 
 
 def structure(cfg):
-    """The recorded parameters and the fixed counts of the PSO structure."""
+    """The recorded parameters and the fixed counts of the PSO structure (a baseline
+    study's ``cfg.space`` when it has no controllers)."""
+    if not cfg.controllers:
+        return [(name, kind, (lo, hi)) for name, lo, hi, kind in cfg.space], {}
     spaces = [ControllerSpace.from_config(c) for c in cfg.controllers]
     rec = _Recorder(spaces)
     for sp in spaces:
@@ -87,6 +90,9 @@ def to_params(x, params, fixed) -> dict:
             out[name] = spec[min(int(u * len(spec)), len(spec) - 1)]
         elif kind == "int":
             out[name] = int(round(spec[0] + u * (spec[1] - spec[0])))
+        elif kind == "log":  # a scale factor: uniform in its logarithm
+            v = np.exp(np.log(spec[0]) + u * np.log(spec[1] / spec[0]))
+            out[name] = float(np.clip(v, spec[0], spec[1]))  # exp(log) may round past one
         else:
             out[name] = float(spec[0] + u * (spec[1] - spec[0]))
     return out
@@ -97,6 +103,22 @@ def inertia(cfg, it: int) -> float:
     (constant when both are equal), the end weight after the last one."""
     w0, w1 = cfg.pso.inertia
     return w0 + (w1 - w0) * min(it, cfg.pso.iterations - 1) / max(cfg.pso.iterations - 1, 1)
+
+
+def history(study, cfg) -> list:
+    """Per iteration of a finished swarm: its inertia weight, the best value so far and the
+    swarm's mean (finite values) -- the convergence of the run."""
+    by_slot = slots(study.get_trials(deepcopy=False))
+    n, out, best = cfg.pso.particles, [], np.inf
+    it = 0
+    while any((it, i) in by_slot for i in range(n)):
+        vals = iteration_values(by_slot, it, n)
+        best = min(best, float(vals.min()))
+        fin = vals[np.isfinite(vals)]
+        out.append({"iteration": it, "inertia": inertia(cfg, it), "best": best,
+                    "swarm_mean": float(fin.mean()) if fin.size else float("nan")})
+        it += 1
+    return out
 
 
 def swarm_budget(cfg, total: int) -> int:

@@ -1,68 +1,107 @@
-"""Paper 004's APSO driver: config errors, the inertia schedule, convergence on a known bowl."""
+"""Paper 004's APSO as a baseline study on the PSO sampler: config, swarm, result file, alias."""
+import json
 from dataclasses import replace
 from pathlib import Path
-from types import SimpleNamespace
 
 import numpy as np
+import optuna
 import pytest
 
 from fuzzynav.errors import InputFileError
-from fuzzynav.tuning.apso import ApsoConfig, multipliers, run_apso
+from fuzzynav.experiment import run_on_log
+from fuzzynav.realdata.dataspec import DATA_DIR_ENV
+from fuzzynav.sim.log import simulate
+from fuzzynav.sim.scenario import load_scenario
+from fuzzynav.tuning.apso import main as apso_main
+from fuzzynav.tuning.baselines import SPACES, _sub_config, load_baseline_config
+from fuzzynav.tuning.pso import PsoSampler, history
+from tests.tuning.studies import TINY
 
 ROOT = Path(__file__).resolve().parents[2]
+CONFIGS = (ROOT / "studies" / "paper004_apso.toml", ROOT / "studies" / "paper004_apso_rev.toml")
 
 
-def test_the_shipped_config_parses_with_the_paper_inertia():
-    cfg = ApsoConfig.load(ROOT / "studies" / "paper004_apso.toml")
+@pytest.fixture
+def fake_data(monkeypatch, tmp_path):
+    """A data directory with an (empty) akit/: loading a config only checks it exists."""
+    (tmp_path / "akit").mkdir()
+    monkeypatch.setenv(DATA_DIR_ENV, str(tmp_path))
+
+
+@pytest.mark.parametrize("path", CONFIGS, ids=[p.name for p in CONFIGS])
+def test_shipped_configs_are_pso_studies_held_out_on_other_trajectories(path, fake_data):
+    bcfg = load_baseline_config(path)
+    cfg = bcfg.study
+    assert bcfg.tune == ("apso",) and cfg.sampler == "pso"
     assert tuple(cfg.pso.inertia) == (0.9, 0.4)
-    assert set(cfg.bounds) == {"q_scale_att", "q_scale_vel", "r_scale"}
-    assert not set(cfg.train) & set(cfg.test) or all(s >= 100 for _, s in cfg.test)
+    assert cfg.trials == cfg.pso.particles * cfg.pso.iterations
+    train = {n for n, _ in cfg.train}
+    test = {n for n, _ in cfg.test}
+    assert len(train) == len(test) == 4 and not train & test
+    assert {n.split(":")[0] for n in train | test} == {"akit"}
 
 
-def test_swarm_finds_a_known_minimum_and_follows_the_schedule():
-    cfg = ApsoConfig.load(ROOT / "studies" / "paper004_apso.toml")
+def _bowl_study(iterations=25):
+    """A PSO study over the apso space whose objective is a bowl with a known minimum."""
+    from fuzzynav.tuning.config import PsoConfig, study_config_from_dict
+
+    doc = {"study": {"sampler": "pso", "seed": 3, "trials": 8 * iterations},
+           "objective": {"weights": {"pos": 1.0, "vel": 0.0, "att": 0.0}},
+           "train": {"scenarios": [str(TINY)], "seeds": [0]},
+           "test": {"scenarios": [str(TINY)], "seeds": [1], "compare": ["ekf"]}}
+    cfg = study_config_from_dict(doc, need_controllers=False)
+    cfg = replace(cfg, pso=PsoConfig(particles=8, iterations=iterations, inertia=(0.9, 0.4)))
+    return _sub_config(cfg, "apso", SPACES["apso"])
+
+
+def test_swarm_over_the_apso_space_finds_a_known_minimum_on_the_schedule():
+    cfg = _bowl_study()
     target = {"q_scale_att": 10.0, "q_scale_vel": 0.1, "r_scale": 3.0}
+    space = SPACES["apso"]
 
-    def bowl(m):  # squared log10 distance to the target multipliers
-        return sum((np.log10(m[k]) - np.log10(v)) ** 2 for k, v in target.items())
+    def bowl(trial):  # squared log10 distance to the target multipliers
+        p = {k: trial.suggest_float(k, lo, hi, log=True) for k, (lo, hi, _) in space.items()}
+        return sum((np.log10(p[k]) - np.log10(v)) ** 2 for k, v in target.items())
 
-    cfg = replace(cfg, pso=SimpleNamespace(**{**vars(cfg.pso), "iterations": 30}))
-    found = run_apso(cfg, bowl, progress=lambda s: None)
-    w = [h["inertia"] for h in found["history"]]
+    study = optuna.create_study(sampler=PsoSampler(cfg, cfg.seed))
+    study.optimize(bowl, n_trials=cfg.trials)
+    hist = history(study, cfg)
+    w = [h["inertia"] for h in hist]
     np.testing.assert_allclose([w[0], w[-1]], [0.9, 0.4])
-    assert np.all(np.diff(w) < 0)
-    assert found["best_fitness"] < 0.01
+    assert len(w) == cfg.pso.iterations and np.all(np.diff(w) < 0)
+    assert np.all(np.diff([h["best"] for h in hist]) <= 0)      # best so far never worsens
+    assert study.best_value < 0.01
     for k, v in target.items():
-        assert abs(np.log10(found["best"][k] / v)) < 0.1
+        assert abs(np.log10(study.best_params[k] / v)) < 0.1
+        lo, hi, _ = space[k]
+        assert all(lo <= t.params[k] <= hi for t in study.trials)   # inside the bounds
 
 
-@pytest.mark.parametrize("edit,where", [
-    (("inertia = [0.9, 0.4]", "inertia = [0.3, 0.6]"), "inertia"),
-    (("q_scale_att = [-2.0, 2.0]", "q_att = [-2.0, 2.0]"), "q_att"),
-    (("r_scale = [-1.0, 2.0]", "r_scale = [2.0, -1.0]"), "r_scale"),
-    (("seeds = [0, 1]", "seeds = [\"a\"]"), "seeds"),
-])
-def test_bad_configs_name_the_key(tmp_path, edit, where):
-    text = (ROOT / "studies" / "paper004_apso.toml").read_text().replace(*edit)
-    p = tmp_path / "bad.toml"
-    p.write_text(text)
-    with pytest.raises(InputFileError, match=where) as exc:
-        ApsoConfig.load(p)
-    assert "bad.toml" in str(exc.value)
+def test_apso_reads_its_parameter_file_like_the_options(tmp_path, sim_cache):
+    mult = {"q_scale_att": 4.0, "q_scale_vel": 0.5, "r_scale": 2.5}
+    path = tmp_path / "apso.json"
+    path.write_text(json.dumps({"format": "x", "filters": {"apso": mult}}))
+    log = simulate(load_scenario(str(TINY)), 0, sim_cache)
+    from_file = run_on_log(log, "apso", {"rules": [str(path)]}).metrics
+    from_options = run_on_log(log, "apso", mult).metrics
+    plain = run_on_log(log, "ekf").metrics
+    assert from_file["rms_pos_m"] == pytest.approx(from_options["rms_pos_m"], rel=1e-12)
+    # the multipliers do act: not the plain EKF
+    assert abs(from_file["rms_pos_m"] - plain["rms_pos_m"]) > 1e-6 * plain["rms_pos_m"]
 
 
-def test_multipliers_are_log_uniform_in_the_bounds():
-    cfg = ApsoConfig.load(ROOT / "studies" / "paper004_apso.toml")
-    lo = multipliers(cfg, [0.0, 0.0, 0.0])
-    hi = multipliers(cfg, [1.0, 1.0, 1.0])
-    assert lo == pytest.approx({"q_scale_att": 0.01, "q_scale_vel": 0.01, "r_scale": 0.1})
-    assert hi == pytest.approx({"q_scale_att": 100.0, "q_scale_vel": 100.0, "r_scale": 100.0})
+def test_a_parameter_file_without_apso_names_the_field(tmp_path):
+    from fuzzynav.filters.tuned_qr import read_multipliers
+
+    path = tmp_path / "other.json"
+    path.write_text(json.dumps({"filters": {"ekf-tuned": {"q_att": 1.0}}}))
+    with pytest.raises(InputFileError, match=r"\$\.filters\.apso"):
+        read_multipliers(path)
 
 
-def test_the_tuned_result_reproduces_its_expected_metrics(tmp_path):
-    """The shipped APSO result file re-run on its ``expected`` scenario and seed (the
-    mechanism of tests/test_rules_regression.py; the file is not a rule file, so it is not
-    in rules/)."""
-    from tests.test_rules_regression import check_expected
-
-    check_expected(ROOT / "studies" / "paper004_apso.result.json", tmp_path)
+def test_alias_refuses_a_study_without_apso(tmp_path, capsys):
+    bad = tmp_path / "b.toml"
+    bad.write_text((ROOT / "studies" / "paper000_baselines.toml").read_text())
+    assert apso_main([str(bad)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "apso" in err[0]

@@ -17,19 +17,34 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-# baseline studies ([baselines], no controllers) are checked in tests/tuning/test_baselines.py;
-# files with an [apso] table are read by fuzzynav.tuning.apso (tests/tuning/test_apso.py)
-EXAMPLES = sorted(p for p in STUDIES.glob("*.toml")
-                  if "[baselines]" not in p.read_text() and "apso" not in tomllib.loads(p.read_text()))
+# baseline studies ([baselines], no controllers; paper 004's APSO among them) are checked in
+# tests/tuning/test_baselines.py and tests/tuning/test_apso.py
+EXAMPLES = sorted(p for p in STUDIES.glob("*.toml") if "[baselines]" not in p.read_text())
 
 
 def _ctrl(**kw):
     return [dict(BASE["controllers"][0], **kw)]
 
 
+def _expected_runs(doc: dict) -> list:
+    """Scenarios x seeds, then each recording's sessions x recording seeds."""
+    from fuzzynav.realdata.dataspec import expand, parse_recording_spec
+
+    runs = [(sc, sd) for sc in doc.get("scenarios", []) for sd in doc.get("seeds", [])]
+    recs = [str(s) for r in doc.get("recordings", []) for s in expand(parse_recording_spec(r))]
+    return runs + [(r, sd) for r in recs for sd in doc.get("recording_seeds", [0])]
+
+
 @pytest.mark.parametrize("path", EXAMPLES, ids=[p.name for p in EXAMPLES])
-def test_example_configs_load_and_say_what_the_file_says(path):
+def test_example_configs_load_and_say_what_the_file_says(path, tmp_path, monkeypatch):
     doc = tomllib.loads(path.read_text())
+    # recordings: loading a config only checks that their directories exist
+    from fuzzynav.realdata.dataspec import DATA_DIR_ENV, parse_recording_spec
+
+    monkeypatch.setenv(DATA_DIR_ENV, str(tmp_path))
+    for key in ("train", "test"):
+        for spec in doc[key].get("recordings", []):
+            (tmp_path / parse_recording_spec(spec).directory).mkdir(parents=True, exist_ok=True)
     cfg = load_study_config(path)
     st = doc["study"]
     assert cfg.name == doc["name"]
@@ -37,7 +52,7 @@ def test_example_configs_load_and_say_what_the_file_says(path):
     assert cfg.pruner == st.get("pruner", "wilcoxon")
     assert cfg.multi_objective == (st.get("objective", "single") == "multi")
     for key, runs in (("train", cfg.train), ("test", cfg.test)):
-        assert list(runs) == [(sc, sd) for sc in doc[key]["scenarios"] for sd in doc[key]["seeds"]]
+        assert list(runs) == _expected_runs(doc[key])
     assert cfg.compare == tuple(doc["test"].get("compare", ["ekf", "fakf"]))
     assert [c.name for c in cfg.controllers] == [c["name"] for c in doc["controllers"]]
     for c, raw in zip(cfg.controllers, doc["controllers"]):

@@ -1,0 +1,197 @@
+"""Recording specs of a study: ``KIND:DIR[:SESSION][@WINDOW]``, the data directory, windows.
+
+A study (``[train] recordings = [...]``, ``docs/studies.md``) names recordings by the
+``--data`` syntax (:func:`fuzzynav.realdata.sources.parse_data_spec`) with two differences:
+
+* a relative ``DIR`` is looked up in the **data directory** -- ``$FUZZYNAV_DATA``, or
+  ``../shared/datasets`` beside the repository when it exists -- so a study file commits no
+  absolute path (``akit:akit:1-4`` is ``$FUZZYNAV_DATA/akit``, trajectories 1-4);
+* ``@A-B`` (seconds after the recording's first IMU sample) or ``@A-B%`` (percent of its
+  span) keeps a **time window**: the filter runs from the recording's start (its
+  initialisation needs the start) up to ``B`` and is scored on the epochs in ``[A, B]`` only,
+  so a run on ``@0-50%`` uses no data of ``@50-100%``.
+
+A spec with several sessions (``akit:akit:1-4``) stands for one run per session
+(:func:`expand`); the run's name is its single-session spec (``akit:akit:3``).
+Parsing needs no file; :func:`resolve` checks the directory.
+"""
+from __future__ import annotations
+
+import os
+import re
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from fuzzynav.errors import DataMissingError, FuzzynavError
+from fuzzynav.realdata.sources import SOURCES
+
+#: environment variable naming the directory relative recording specs are read from
+DATA_DIR_ENV = "FUZZYNAV_DATA"
+#: the default data directory, relative to the repository (the package's parent)
+DEFAULT_DATA_DIR = Path("..") / "shared" / "datasets"
+_WINDOW_RE = re.compile(r"^\s*(\d+(?:\.\d*)?)\s*-\s*(\d+(?:\.\d*)?)\s*(%?)\s*$")
+
+
+@dataclass(frozen=True)
+class Window:
+    """A time window ``[lo, hi]``: seconds after the first IMU sample, or percent of the span."""
+
+    lo: float
+    hi: float
+    percent: bool = False
+
+    def bounds(self, t_first: float, t_last: float) -> tuple:
+        """The window in the recording's clock [s], given its first and last IMU times."""
+        scale = (t_last - t_first) / 100.0 if self.percent else 1.0
+        return t_first + self.lo * scale, min(t_first + self.hi * scale, t_last)
+
+    def __str__(self) -> str:
+        return f"{self.lo:g}-{self.hi:g}{'%' if self.percent else ''}"
+
+
+@dataclass(frozen=True)
+class RecordingSpec:
+    """A parsed recording spec (module docstring)."""
+
+    kind: str
+    directory: str          # as written: relative ones are read from the data directory
+    session: str | None
+    window: Window | None
+
+    def __str__(self) -> str:
+        s = f"{self.kind}:{self.directory}"
+        s += f":{self.session}" if self.session is not None else ""
+        return s + (f"@{self.window}" if self.window is not None else "")
+
+
+def is_recording_name(name: str) -> bool:
+    """Whether a run name is a recording spec (``KIND:...`` with a registered kind)."""
+    kind, sep, _ = str(name).partition(":")
+    return bool(sep) and kind in SOURCES
+
+
+def parse_window(text: str) -> Window:
+    """``"0-50%"`` or ``"0-270"`` -> :class:`Window` (lo < hi; percentages up to 100)."""
+    m = _WINDOW_RE.match(text)
+    if not m:
+        raise FuzzynavError(f"time window {text!r}: expected A-B (seconds after the first "
+                            "IMU sample) or A-B% (percent of the recording), e.g. 0-50%")
+    lo, hi, pct = float(m.group(1)), float(m.group(2)), bool(m.group(3))
+    if not lo < hi or (pct and hi > 100.0):
+        raise FuzzynavError(f"time window {text!r}: needs A < B" + (" <= 100" if pct else ""))
+    return Window(lo, hi, pct)
+
+
+def parse_recording_spec(text) -> RecordingSpec:
+    """Split ``KIND:DIR[:SESSION][@WINDOW]`` (no file is read).
+
+    Raises
+    ------
+    FuzzynavError
+        When it is not a string of that form, the kind is not registered, or the window is
+        malformed.
+    """
+    if not isinstance(text, str):
+        raise FuzzynavError(f"expected a recording spec KIND:DIR[:SESSION][@A-B[%]], "
+                            f"got {text!r}")
+    body, at, win = text.partition("@")
+    kind, sep, rest = body.partition(":")
+    if not sep or not kind or not rest:
+        raise FuzzynavError(f"{text!r}: expected KIND:DIR[:SESSION][@A-B[%]] "
+                            "(e.g. akit:akit:1-4 or rtklib:rtklib-drive@0-50%)")
+    if kind not in SOURCES:
+        raise FuzzynavError(f"{text!r}: unknown recording kind {kind!r} "
+                            f"(known: {', '.join(sorted(SOURCES))})")
+    directory, colon, session = rest.rpartition(":")
+    if not colon:
+        directory, session = rest, None
+    if not directory or session == "":
+        raise FuzzynavError(f"{text!r}: empty directory or session")
+    return RecordingSpec(kind, directory, session, parse_window(win) if at else None)
+
+
+def data_dir() -> Path | None:
+    """The data directory: ``$FUZZYNAV_DATA``, else ``../shared/datasets`` beside the
+    repository if it exists, else ``None``."""
+    env = os.environ.get(DATA_DIR_ENV)
+    if env:
+        return Path(env).expanduser()
+    default = (Path(__file__).resolve().parents[2] / DEFAULT_DATA_DIR).resolve()
+    return default if default.is_dir() else None
+
+
+def resolve(spec: RecordingSpec) -> Path:
+    """The recording directory of a spec (relative ones under :func:`data_dir`).
+
+    Raises
+    ------
+    DataMissingError
+        When it does not exist (the message says where it was looked for and how to set
+        the data directory).
+    """
+    path = Path(spec.directory).expanduser()
+    if not path.is_absolute():
+        base = data_dir()
+        if base is None:
+            raise DataMissingError(f"{spec}: no data directory: set {DATA_DIR_ENV} to the "
+                                   f"directory that holds {spec.directory!r}")
+        path = base / path
+    if not path.is_dir():
+        raise DataMissingError(f"{spec}: recording directory {path} not found (relative "
+                               f"directories are read from {DATA_DIR_ENV} or "
+                               f"{DEFAULT_DATA_DIR} beside the repository)")
+    return path
+
+
+def expand(spec: RecordingSpec) -> list[RecordingSpec]:
+    """One spec per session: a source with a ``split`` (A-KIT: ``1-4`` -> 1, 2, 3, 4; no
+    session -> the source's default, A-KIT's 1-8)."""
+    split = SOURCES[spec.kind].split
+    if split is None:
+        return [spec]
+    return [replace(spec, session=str(s)) for s in split(spec.session)]
+
+
+def overlaps(a: RecordingSpec, b: RecordingSpec) -> bool:
+    """Whether two single-session specs share data that is scored (same recording and
+    session, overlapping windows; windows of different units are taken to overlap)."""
+    if (a.kind, a.directory, a.session) != (b.kind, b.directory, b.session):
+        return False
+    if a.window is None or b.window is None or a.window.percent != b.window.percent:
+        return True
+    return a.window.lo < b.window.hi and b.window.lo < a.window.hi
+
+
+# -- cutting a loaded recording at the end of its window ----------------------------------------
+def _cut_array(value, n: int, keep: np.ndarray):
+    """Rows of a per-sample (``n``) or per-increment (``n - 1``) array inside ``keep``."""
+    if isinstance(value, np.ndarray) and value.ndim >= 1:
+        if value.shape[0] == n:
+            return value[keep]
+        if value.shape[0] == n - 1 and n > 1:
+            return value[keep[1:]]
+    return value
+
+
+def until(stream, t_end: float):
+    """A copy of a time-stamped dataclass (``ImuData``, ``SensorData``, a reference) with
+    the samples after ``t_end`` removed, including per-sample arrays in its ``meta``."""
+    return within(stream, -np.inf, t_end)
+
+
+def within(stream, lo: float, hi: float):
+    """The samples of a time-stamped dataclass in ``[lo, hi]``.
+
+    Increment arrays (one row fewer than ``time_s``, as ``ImuData``'s) stay consistent only
+    when ``lo`` is before the first sample: cut an IMU with :func:`until`.
+    """
+    t = np.asarray(stream.time_s, float)
+    keep = (t >= lo - 1e-9) & (t <= hi + 1e-9)
+    n = t.size
+    fields = {k: _cut_array(getattr(stream, k), n, keep)
+              for k in stream.__dataclass_fields__ if k != "meta"}
+    if "meta" in stream.__dataclass_fields__:
+        fields["meta"] = {k: _cut_array(v, n, keep) for k, v in stream.meta.items()}
+    return replace(stream, **fields)

@@ -1,0 +1,135 @@
+"""Recordings as study runs: what :func:`fuzzynav.experiment.run_on_log` needs of a run.
+
+A study's ``(scenario, seed)`` run may name a recording (``akit:akit:3``,
+``rtklib:rtklib-drive@0-50%``; :mod:`.dataspec`).  :func:`recording_run` turns it into a
+:class:`RecordingRun`: the filter context named filters configure themselves from
+(:meth:`RecordingRun.context`) and a method that runs a filter configuration on the
+recording and scores it against its reference (:meth:`RecordingRun.run`).  The kind of run
+follows what the loaded recording holds, so any loader of :data:`~.sources.SOURCES` fits:
+
+* a DVL stream and a full reference (A-KIT): the filter starts from the reference and is
+  aided by the DVL (:mod:`.akit`); the seed is not used (nothing is drawn);
+* GNSS fixes and a reference of fixes (RTKLIB): the validation protocol's noisy fixes
+  (noise drawn from the seed, defaults of :class:`~.protocol.ProtocolSettings`) fed
+  throughout (:data:`STUDY_FEED`), from the start found on the data (:mod:`.session`).
+
+A window ``@A-B`` cuts every stream at ``B`` and scores the epochs from ``A`` on.  Metrics a
+recording cannot give (attitude: no attitude truth is scored) are left out.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from functools import lru_cache
+from typing import Callable
+
+from fuzzynav.errors import FuzzynavError
+from fuzzynav.realdata import akit
+from fuzzynav.realdata.dataspec import parse_recording_spec, resolve, until, within
+from fuzzynav.realdata.protocol import ProtocolSettings
+from fuzzynav.realdata.score import errors_against, score
+from fuzzynav.realdata.session import context_for, run_setup
+from fuzzynav.realdata.sources import SOURCES
+from fuzzynav.realdata.validate import fed_sigma, prepare_feeds
+
+#: which protocol feed a GNSS study run gets: the fixes throughout.  With the simulated
+#: outages the free-inertial drift of a consumer MEMS IMU (hundreds of metres in 60 s,
+#: docs/validation.md) would drown what a noise controller does to the aided error
+STUDY_FEED = "gnss"
+#: metrics a recording cannot give: left out, so that tables do not read them as diverged
+UNSCORED = ("rms_pitch_deg", "rms_roll_deg", "rms_heading_deg", "rms_att_deg")
+
+
+@dataclass(frozen=True)
+class RecordingRun:
+    """One recording (one session, one seed, one window) as a study run.
+
+    Attributes
+    ----------
+    name : str
+        The single-session spec (the study's "scenario" name of the run).
+    seed : int
+    sensors : dict
+        The aiding streams a filter is given (sensor name -> SensorData).
+    duration_s : float
+        Length of the run [s].
+    make_context : callable
+        ``make_context(options) -> FilterContext``.
+    run_setup : callable
+        ``run_setup(setup) -> (FilterResult, metrics)``.
+    """
+
+    name: str
+    seed: int
+    sensors: dict
+    duration_s: float
+    make_context: Callable
+    run_setup: Callable
+
+    def context(self, options=None):
+        """The :class:`~fuzzynav.filters.named.FilterContext` of this run."""
+        return self.make_context(options)
+
+    def run(self, setup):
+        """Run a filter configuration; ``(FilterResult, metrics)`` (module docstring)."""
+        res, metrics = self.run_setup(setup)
+        metrics = {k: v for k, v in metrics.items() if k not in UNSCORED}
+        metrics["completed"] = float(res.ok)
+        return res, metrics
+
+
+@lru_cache(maxsize=16)
+def _load(kind: str, directory: str, session):
+    """A loaded recording (kept: the two halves of a split and every seed share it)."""
+    loaded = SOURCES[kind].load(directory, session=session)
+    return loaded[0] if isinstance(loaded, list) else loaded
+
+
+def recording_run(name: str, seed: int = 0) -> RecordingRun:
+    """The :class:`RecordingRun` of a single-session recording spec and a seed.
+
+    Raises
+    ------
+    FuzzynavError
+        A malformed spec, a missing directory (``DataMissingError``) or a recording the
+        loader refuses (``InputFileError``).
+    """
+    spec = parse_recording_spec(name)
+    rec = _load(spec.kind, str(resolve(spec)), spec.session)
+    t_first, t_last = float(rec.imu.time_s[0]), float(rec.imu.time_s[-1])
+    lo, hi = spec.window.bounds(t_first, t_last) if spec.window else (t_first, t_last)
+    if hasattr(rec, "dvl"):
+        return _dvl_run(name, seed, rec, lo, hi)
+    if hasattr(rec, "gnss"):
+        return _gnss_run(name, seed, rec, lo, hi)
+    raise FuzzynavError(f"{name}: a {spec.kind} recording has neither a DVL nor GNSS "
+                        "stream a study can run")
+
+
+def _dvl_run(name, seed, rec, lo, hi) -> RecordingRun:
+    """An A-KIT-like run: start from the reference, DVL aiding, scored in ``[lo, hi]``."""
+    cut = replace(rec, imu=until(rec.imu, hi), dvl=until(rec.dvl, hi))
+    ref = within(rec.reference, lo, hi)
+    return RecordingRun(name, int(seed), {"dvl": cut.dvl}, hi - lo,
+                        lambda options: akit.context(cut, options),
+                        lambda setup: akit.run_setup(cut, setup, ref))
+
+
+def _gnss_run(name, seed, rec, lo, hi,
+              settings: ProtocolSettings = ProtocolSettings()) -> RecordingRun:
+    """A GNSS recording under the validation protocol (:data:`STUDY_FEED`), scored in
+    ``[lo, hi]``."""
+    cut = replace(rec, imu=until(rec.imu, hi), gnss=until(rec.gnss, hi),
+                  reference=until(rec.reference, hi))
+    feeds, windows, start, lever = prepare_feeds(cut, settings, seed)
+    sigma0 = fed_sigma(cut, settings)
+    t0 = max(settings.t_start_s, start.init.time_s, lo)
+
+    def run(setup):
+        res = run_setup(start, {"gnss": feeds[STUDY_FEED]}, setup, settings.use_velocity)
+        err = errors_against(res, cut.reference, lever, settings.velocity_lag_s)
+        return res, score(err, res.time_s, windows, t0)
+
+    return RecordingRun(name, int(seed), {"gnss": feeds[STUDY_FEED]}, hi - t0,
+                        lambda options: context_for(feeds[STUDY_FEED], options,
+                                                    init_pos_sigma_m=sigma0),
+                        run)

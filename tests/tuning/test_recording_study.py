@@ -1,0 +1,156 @@
+"""Studies trained on recordings and judged on other recordings (or other time windows).
+
+The recordings are synthetic A-KIT files (``tests/sim/akit_files.py``) in a data directory
+given by ``$FUZZYNAV_DATA``, so these run without the real data.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fuzzynav.errors import InputFileError
+from fuzzynav.realdata.dataspec import DATA_DIR_ENV
+from fuzzynav.tuning.config import load_study_config
+from fuzzynav.tuning.evaluate import run_table
+from fuzzynav.tuning.objective import Evaluator, score_metrics
+from tests.sim.akit_files import auv_trajectory, write_akit
+from tests.tuning.studies import RULES, study_doc, write_study
+
+DVL_CTRL = {"name": "dvl", "template": str(RULES / "paper004_ror_dvl.json"),
+            "partitions": {"ror": [3], "t": [3]}, "window": [3, 10],
+            "output_low": [0.5, 0.95], "output_range": [1.05, 2.0]}
+NO_ATT = {"weights": {"pos": 1.0, "vel": 1.0, "att": 0.0}, "baseline": "ekf"}
+
+
+@pytest.fixture(scope="module")
+def data_dir(tmp_path_factory):
+    """A data directory holding two synthetic A-KIT trajectories (``auv/``)."""
+    root = tmp_path_factory.mktemp("data")
+    for n in (1, 2):
+        write_akit(root / "auv", auv_trajectory(90.0 + 30.0 * n), n=n, lag=1)
+    return root
+
+
+@pytest.fixture
+def with_data(monkeypatch, data_dir):
+    monkeypatch.setenv(DATA_DIR_ENV, str(data_dir))
+    return data_dir
+
+
+def _doc(train, test):
+    doc = study_doc(name="rec", controllers=[DVL_CTRL], objective=NO_ATT)
+    doc["train"] = {"recordings": train}       # recordings only: no scenarios
+    doc["test"] = {"recordings": test, "compare": ["ekf"]}
+    return doc
+
+
+def test_recordings_expand_to_runs_beside_scenarios(tmp_path, with_data):
+    doc = _doc(["auv:1"], ["auv:2"])
+    doc["train"]["recordings"] = ["akit:auv:1-2@0-50%"]
+    doc["train"]["recording_seeds"] = [0, 3]
+    doc["test"]["recordings"] = ["akit:auv:1-2@50-100%"]
+    doc["test"].update(scenarios=["paper004"], seeds=[100])
+    cfg = load_study_config(write_study(tmp_path, doc))
+    assert cfg.train == (("akit:auv:1@0-50%", 0), ("akit:auv:1@0-50%", 3),
+                         ("akit:auv:2@0-50%", 0), ("akit:auv:2@0-50%", 3))
+    assert cfg.test == (("paper004", 100), ("akit:auv:1@50-100%", 0),
+                        ("akit:auv:2@50-100%", 0))
+
+
+@pytest.mark.parametrize("train, test, where, what", [
+    (["akit:auv"], ["akit:auv:2"], None, None),        # no session: all eight, 2 among them
+    (["akit:auv:1@0-60%"], ["akit:auv:1@50-100%"], "test.recordings", "overlaps"),
+    (["akit:auv:1"], ["akit:auv:1"], "test.recordings", "training recording"),
+    (["akit:nowhere:1"], ["akit:auv:2"], "train.recordings[0]", DATA_DIR_ENV),
+    (["akit:auv:1@9-2"], ["akit:auv:2"], "train.recordings[0]", "A < B"),
+    (["kitti:auv:1"], ["akit:auv:2"], "train.recordings[0]", "unknown recording kind"),
+    ("akit:auv:1", ["akit:auv:2"], "train.recordings", "non-empty array"),
+])
+def test_bad_recording_specs_name_the_key(tmp_path, with_data, train, test, where, what):
+    path = write_study(tmp_path, _doc(train, test))
+    if where is None:
+        with pytest.raises(InputFileError, match="training recording"):
+            load_study_config(path)
+        return
+    with pytest.raises(InputFileError, match=what) as err:
+        load_study_config(path)
+    assert err.value.where == where and str(path) in str(err.value)
+
+
+def test_attitude_weight_is_refused_on_recordings(tmp_path, with_data):
+    doc = _doc(["akit:auv:1"], ["akit:auv:2"])
+    doc["objective"] = {"weights": {"pos": 1.0, "vel": 1.0, "att": 1.0}}
+    with pytest.raises(InputFileError, match="attitude") as err:
+        load_study_config(write_study(tmp_path, doc))
+    assert err.value.where == "objective.weights.att"
+
+
+def test_absent_data_is_one_clear_error(tmp_path, monkeypatch):
+    monkeypatch.setenv(DATA_DIR_ENV, str(tmp_path / "no-such-dir"))
+    with pytest.raises(InputFileError, match="recording directory .* not found"):
+        load_study_config(write_study(tmp_path, _doc(["akit:auv:1"], ["akit:auv:2"])))
+
+
+def test_study_trains_on_one_recording_and_judges_another(tmp_path, with_data):
+    cfg = load_study_config(write_study(tmp_path, _doc(["akit:auv:1"], ["akit:auv:2"])))
+    ev = Evaluator(cfg)
+    base = ev.baseline("akit:auv:1", 0)
+    # the synthetic DVL is exact and the start is the reference: the EKF stays within metres
+    assert 0.0 < base["rms_pos_h_m"] < 5.0 and base["completed"] == 1.0
+    assert "rms_att_deg" not in base      # no attitude is scored on a recording
+    from fuzzynav.fuzzy import load_fis
+
+    systems = {"dvl": load_fis(DVL_CTRL["template"])}
+    table = run_table(ev, systems, cfg.test, cfg.compare)
+    assert set(table["scenario"]) == {"akit:auv:2"}
+    ekf = table[table["filter"] == "ekf"].iloc[0]
+    # the compared ekf is the baseline itself: every ratio 1 (two runs of the same setup)
+    assert ekf["pos_ratio"] == pytest.approx(1.0, rel=1e-9)
+    assert np.isnan(ekf["att_ratio"]) and ekf["score"] == pytest.approx(1.0, rel=1e-9)
+
+
+def test_time_window_scores_only_its_epochs(tmp_path, with_data):
+    """The first half runs on no data of the second; the second half is scored only there."""
+    doc = _doc(["akit:auv:2@0-50%"], ["akit:auv:2@50-100%"])
+    cfg = load_study_config(write_study(tmp_path, doc))
+    ev = Evaluator(cfg)
+    first, second, whole = (ev.log(n, 0) for n in
+                            ("akit:auv:2@0-50%", "akit:auv:2@50-100%", "akit:auv:2"))
+    t_end = whole.sensors["dvl"].time_s[-1]
+    assert first.sensors["dvl"].time_s[-1] <= 0.5 * t_end + 1e-9
+    assert second.sensors["dvl"].time_s[-1] == pytest.approx(t_end)
+    # a mean over two halves' squared errors makes the whole run's (up to the shared epoch)
+    m = [ev.baseline(n, 0) for n in ("akit:auv:2@0-50%", "akit:auv:2@50-100%", "akit:auv:2")]
+    halves = np.array([m[0]["rms_pos_h_m"], m[1]["rms_pos_h_m"]])
+    assert min(halves) <= m[2]["rms_pos_h_m"] <= max(halves) + 1e-9
+
+
+def test_missing_metric_group_with_zero_weight_does_not_count():
+    s = score_metrics({"rms_pos_m": 2.0, "rms_vel_mps": 1.0},
+                      {"rms_pos_m": 4.0, "rms_vel_mps": 1.0},
+                      {"pos": 1.0, "vel": 1.0, "att": 0.0})
+    assert s.score == pytest.approx(0.75) and np.isnan(s.ratios["att"])
+
+
+@pytest.mark.slow  # a 1 050-s simulated run with the exported rules (~35 s here)
+def test_export_of_a_recording_study_records_expected_on_the_simulated_run(
+        tmp_path, with_data, sim_cache):
+    """Trained on a recording, the exported rules' ``expected`` block is taken on the test
+    set's simulated run, so the regression test of the file needs no recording."""
+    import json
+
+    from fuzzynav.tuning.export import export_rules
+    from fuzzynav.tuning.run import run_study
+    from fuzzynav.tuning.study import open_study
+
+    doc = _doc(["akit:auv:1"], ["akit:auv:2"])
+    doc["study"].update(trials=2)
+    doc["test"].update(scenarios=["paper004"], seeds=[100])
+    cfg = load_study_config(write_study(tmp_path, doc))
+    run_study(cfg, cache_dir=sim_cache, progress=False)
+    out = tmp_path / "dvl.json"
+    export_rules(cfg, open_study(cfg), out, cache_dir=sim_cache)
+    saved = json.loads(out.read_text())
+    assert (saved["expected"]["scenario"], saved["expected"]["seed"]) == ("paper004", 100)
+    assert saved["provenance"]["train"] == [["akit:auv:1", 0]]
+    assert "att" not in saved["provenance"]["objective"]["ratios_to_ekf"]   # NaN left out
