@@ -1,4 +1,5 @@
-"""Recording specs of a study: ``KIND:DIR[:SESSION][@WINDOW]``, the data directory, windows.
+"""Recording specs of a study: ``KIND:DIR[:SESSION][@WINDOW][?OPTIONS]``, the data directory,
+windows.
 
 A study (``[train] recordings = [...]``, ``docs/studies.md``) names recordings by the
 ``--data`` syntax (:func:`fuzzynav.realdata.sources.parse_data_spec`) with two differences:
@@ -9,7 +10,9 @@ A study (``[train] recordings = [...]``, ``docs/studies.md``) names recordings b
 * ``@A-B`` (seconds after the recording's first IMU sample) or ``@A-B%`` (percent of its
   span) keeps a **time window**: the filter runs from the recording's start (its
   initialisation needs the start) up to ``B`` and is scored on the epochs in ``[A, B]`` only,
-  so a run on ``@0-50%`` uses no data of ``@50-100%``.
+  so a run on ``@0-50%`` uses no data of ``@50-100%``;
+* a ``?key=value&...`` suffix sets the loader's start options, as on the command line
+  (``docs/data.md``; e.g. ``rtklib:walk?min_speed=0.5``).
 
 A spec with several sessions (``akit:akit:1-4``) stands for one run per session
 (:func:`expand`); the run's name is its single-session spec (``akit:akit:3``).
@@ -25,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from fuzzynav.errors import DataMissingError, FuzzynavError
-from fuzzynav.realdata.sources import SOURCES
+from fuzzynav.realdata.sources import SOURCES, data_options, split_options
 
 #: environment variable naming the directory relative recording specs are read from
 DATA_DIR_ENV = "FUZZYNAV_DATA"
@@ -59,11 +62,14 @@ class RecordingSpec:
     directory: str          # as written: relative ones are read from the data directory
     session: str | None
     window: Window | None
+    #: the ``?key=value&...`` start options as written (``None``: the loader's defaults)
+    options: str | None = None
 
     def __str__(self) -> str:
         s = f"{self.kind}:{self.directory}"
         s += f":{self.session}" if self.session is not None else ""
-        return s + (f"@{self.window}" if self.window is not None else "")
+        s += f"@{self.window}" if self.window is not None else ""
+        return s + (f"?{self.options}" if self.options is not None else "")
 
 
 def is_recording_name(name: str) -> bool:
@@ -96,7 +102,10 @@ def parse_recording_spec(text) -> RecordingSpec:
     if not isinstance(text, str):
         raise FuzzynavError(f"expected a recording spec KIND:DIR[:SESSION][@A-B[%]], "
                             f"got {text!r}")
-    body, at, win = text.partition("@")
+    bare, options = split_options(text)
+    if options is not None:
+        data_options(text)      # a bad option is refused here, naming it
+    body, at, win = bare.partition("@")
     kind, sep, rest = body.partition(":")
     if not sep or not kind or not rest:
         raise FuzzynavError(f"{text!r}: expected KIND:DIR[:SESSION][@A-B[%]] "
@@ -109,7 +118,7 @@ def parse_recording_spec(text) -> RecordingSpec:
         directory, session = rest, None
     if not directory or session == "":
         raise FuzzynavError(f"{text!r}: empty directory or session")
-    return RecordingSpec(kind, directory, session, parse_window(win) if at else None)
+    return RecordingSpec(kind, directory, session, parse_window(win) if at else None, options)
 
 
 def data_dir() -> Path | None:

@@ -28,7 +28,7 @@ from fuzzynav.realdata.dataspec import parse_recording_spec, resolve, until, wit
 from fuzzynav.realdata.protocol import ProtocolSettings
 from fuzzynav.realdata.score import errors_against, score
 from fuzzynav.realdata.session import context_for, run_setup
-from fuzzynav.realdata.sources import SOURCES
+from fuzzynav.realdata.sources import SOURCES, data_options
 from fuzzynav.realdata.validate import fed_sigma, prepare_feeds
 
 #: which protocol feed a GNSS study run gets: the fixes throughout.  With the simulated
@@ -78,9 +78,11 @@ class RecordingRun:
 
 
 @lru_cache(maxsize=16)
-def _load(kind: str, directory: str, session):
+def _load(kind: str, directory: str, session, options: str | None = None):
     """A loaded recording (kept: the two halves of a split and every seed share it)."""
-    loaded = SOURCES[kind].load(directory, session=session)
+    start = None if options is None else data_options(f"{kind}:{directory}?{options}")
+    kw = {} if start is None else {"options": start}
+    loaded = SOURCES[kind].load(directory, session=session, **kw)
     return loaded[0] if isinstance(loaded, list) else loaded
 
 
@@ -94,7 +96,7 @@ def recording_run(name: str, seed: int = 0) -> RecordingRun:
         loader refuses (``InputFileError``).
     """
     spec = parse_recording_spec(name)
-    rec = _load(spec.kind, str(resolve(spec)), spec.session)
+    rec = _load(spec.kind, str(resolve(spec)), spec.session, spec.options)
     t_first, t_last = float(rec.imu.time_s[0]), float(rec.imu.time_s[-1])
     lo, hi = spec.window.bounds(t_first, t_last) if spec.window else (t_first, t_last)
     if hasattr(rec, "dvl"):

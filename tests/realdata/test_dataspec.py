@@ -100,3 +100,31 @@ def test_car_drive_halves_use_and_score_their_own_time(rtklib_drive, monkeypatch
         m = run_on_log(run, "ekf").metrics
         assert m["completed"] == 1.0 and np.isfinite(m["rms_pos_h_m"])
         assert "rms_att_deg" not in m
+
+
+def test_start_options_ride_with_the_spec_to_the_loader(monkeypatch, tmp_path):
+    import dataclasses
+
+    from fuzzynav.realdata import studyruns
+    from fuzzynav.realdata.sources import SOURCES
+
+    s = parse_recording_spec("rtklib:walk@0-50%?min_speed=0.5&heading=track")
+    assert s.window == Window(0.0, 50.0, True) and s.options == "min_speed=0.5&heading=track"
+    assert parse_recording_spec(str(s)) == s
+    with pytest.raises(FuzzynavError, match="min_sped"):
+        parse_recording_spec("rtklib:walk?min_sped=0.5")
+
+    seen = {}
+
+    class Stop(Exception):
+        pass
+
+    def fake_load(directory, session=None, **kw):
+        seen.update(kw)
+        raise Stop
+    monkeypatch.setitem(SOURCES, "rtklib", dataclasses.replace(SOURCES["rtklib"], load=fake_load))
+    studyruns._load.cache_clear()
+    with pytest.raises(Stop):
+        studyruns.recording_run(f"rtklib:{tmp_path}?min_speed=0.5")
+    studyruns._load.cache_clear()
+    assert seen["options"].min_speed_mps == pytest.approx(0.5)
