@@ -15,8 +15,9 @@ that lacks its data or its rules is skipped with a sentence on the page saying s
   throughout (a recording has no attitude truth); the outage drift is tabulated apart.
   The CI is over noise seeds of one recording, not over recordings.
 * **AUV** (``$FUZZYNAV_DATA/akit``): only with recording-trained DVL rules (``--auv-rules``,
-  default :data:`AUV_RULES`); the eight trajectories are the pairs, score the mean of the
-  horizontal-position and velocity RMS ratios to the EKF with DVL.
+  default :data:`AUV_RULES`), judged on the trajectories its provenance holds out (with the
+  APSO multipliers of the same fold beside); those trajectories are the pairs, score the
+  mean of the horizontal-position and velocity RMS ratios to the EKF with DVL.
 """
 from __future__ import annotations
 
@@ -29,7 +30,9 @@ import pandas as pd
 ROOT = Path(__file__).resolve().parents[1]
 #: rules tuned on a recording, looked for when no path is given
 CAR_RULES = ROOT / "rules" / "rtklib_drive_tuned.json"
-AUV_RULES = ROOT / "rules" / "akit_tuned_dvl.json"
+AUV_RULES = ROOT / "rules" / "paper004_fuzzy_dvl.json"
+#: the APSO multipliers of the same training fold (``studies/paper004_apso.toml``)
+AUV_APSO = ROOT / "studies" / "paper004_apso.json"
 CAR_FILTERS = ("ekf", "ekf-tuned", "als", "sage-husa", "sage-husa-tuned", "vb", "vb-tuned",
                "huber-tuned", "strong-tracking-tuned", "fakf")
 AUV_FILTERS = ("ekf", "sage-husa", "vb", "huber")
@@ -142,6 +145,15 @@ def car_section(directory: Path, params: Path, systems: dict, car_rules, seeds) 
         ""], df
 
 
+def _held_out_trajectories(rules: Path) -> list:
+    """The A-KIT trajectories a recording-trained rule file was judged on (its provenance)."""
+    import json
+
+    test = json.loads(rules.read_text()).get("provenance", {}).get("test", [])
+    return [str(name).rpartition(":")[2] for name, _seed in test
+            if str(name).startswith("akit:")]
+
+
 def auv_section(directory: Path, auv_rules) -> tuple:
     """Markdown lines of the AUV runs (or the note why they are skipped), and their rows."""
     import science_results as sr
@@ -156,20 +168,27 @@ def auv_section(directory: Path, auv_rules) -> tuple:
     from fuzzynav.realdata.akit import run_all
     from fuzzynav.sim.loaders.akit import load_akit
 
-    recs = load_akit(directory, "1-8")
+    held = _held_out_trajectories(rules)
+    if not held:
+        return [f"*The AUV trajectories are not judged: `{rules.name}` names no held-out "
+                "A-KIT trajectory in its provenance.*", ""], None
+    recs = load_akit(directory, ",".join(held))
+    extra = [("apso", "apso", {"rules": [str(AUV_APSO)]})] if AUV_APSO.is_file() else []
     frames = []
-    for label, name, opts in [*[(f, f, None) for f in AUV_FILTERS],
+    for label, name, opts in [*[(f, f, None) for f in AUV_FILTERS], *extra,
                               (AUV_FUZZY, "fakf", {"rules": [str(rules)]})]:
         df, _ = run_all(recs, name, opts)
         frames.append(df.assign(filter=label, scenario="akit"))
     df = pd.concat(frames)
     scores = sr.scores_to(df, "ekf", CAR_METRICS)
-    return ["### The AUV trajectories (A-KIT, 8 runs, DVL-aided)", "",
-            "Pairs are the eight trajectories; score: mean of horizontal-position and "
-            "velocity RMS ratios to the EKF with DVL.", "",
+    return [f"### The AUV trajectories held out (A-KIT {', '.join(held)}, DVL-aided)", "",
+            f"The controller (and `apso`) were tuned on the other A-KIT trajectories "
+            f"(`{rules.name}`'s provenance); pairs are the held-out trajectories; score: mean "
+            "of horizontal-position and velocity RMS ratios to the EKF with DVL. Both folds, "
+            "per trajectory: docs/paper004.md.", "",
             "| filter | score vs `ekf` |", "|---|---|",
             *[f"| {f} | {sr.cell(scores[scores['filter'] == f]['score'])} |"
-              for f in (AUV_FUZZY, *AUV_FILTERS)], "",
+              for f in (AUV_FUZZY, *AUV_FILTERS, *[e[0] for e in extra])], "",
             *_paired_lines(scores, "akit", [AUV_FUZZY], "ekf"), ""], df
 
 

@@ -80,8 +80,8 @@ def scaled_config(base, mult: dict):
 
 
 @register_filter("apso", "EKF with Q/R multipliers tuned by paper 004's adaptive PSO "
-                         "(an APSO result file as its rule file, e.g. apso@studies/"
-                         "paper004_apso.result.json; none = the EKF)", takes_rules=True)
+                         "(a baseline study's parameter file as its rule file, e.g. "
+                         "apso@studies/paper004_apso.json; none = the EKF)", takes_rules=True)
 def _apso(ctx) -> FilterSetup:
     from fuzzynav.filters.catalog import find_rule_file
 
