@@ -23,7 +23,7 @@ from fuzzynav.filters.catalog import bind_systems
 from fuzzynav.filters.named import FilterSetup
 from fuzzynav.sim.log import simulate
 from fuzzynav.sim.scenario import load_scenario
-from fuzzynav.tuning.config import GROUP_METRICS
+from fuzzynav.tuning.config import EXTRA_GROUP_METRICS, GROUP_METRICS
 from fuzzynav.tuning.space import ControllerSpace, build_all
 
 #: ratio given to a metric when the candidate's run failed or is not finite
@@ -56,7 +56,7 @@ class RunScore:
 
 def weighted_score(ratios: dict, weights: dict) -> float:
     """The weighted mean of group ratios (weights: group -> non-negative weight)."""
-    return sum(weights[g] * ratios[g] for g in GROUP_METRICS) / sum(weights.values())
+    return sum(w * ratios[g] for g, w in weights.items()) / sum(weights.values())
 
 
 def score_metrics(metrics: dict, baseline: dict, weights: dict) -> RunScore:
@@ -68,11 +68,15 @@ def score_metrics(metrics: dict, baseline: dict, weights: dict) -> RunScore:
         RMS metrics of the candidate and of the baseline (keys of :data:`GROUP_METRICS`;
         ``metrics["completed"]`` < 1 marks a run that failed).
     weights : dict
-        Group -> weight of its ratio in the score.
+        Group -> weight of its ratio in the score (the core groups of
+        :data:`GROUP_METRICS` are always scored; a weighted extra group of
+        :data:`~fuzzynav.tuning.config.EXTRA_GROUP_METRICS` too).
     """
     ok = metrics.get("completed", 1.0) >= 1.0
     ratios = {}
-    for g, key in GROUP_METRICS.items():
+    groups = {**GROUP_METRICS, **{g: EXTRA_GROUP_METRICS[g] for g in weights
+                                  if g in EXTRA_GROUP_METRICS}}
+    for g, key in groups.items():
         r = metrics[key] / baseline[key] if baseline[key] > 0 else math.nan
         ratios[g] = r if (ok and math.isfinite(r)) else FAILED_RATIO
     return RunScore(metrics, ratios, weighted_score(ratios, weights))
@@ -195,7 +199,7 @@ class Objective:
                 trial.report(scored[-1].score, step=step)
                 if trial.should_prune():
                     break
-        means = {g: float(np.mean([s.ratios[g] for s in scored])) for g in GROUP_METRICS}
+        means = {g: float(np.mean([s.ratios[g] for s in scored])) for g in scored[0].ratios}
         trial.set_user_attr("n_runs", len(scored))
         trial.set_user_attr("ratios", means)
         if self.cfg.multi_objective:
