@@ -4,11 +4,15 @@ Single (Rayleigh) scattering has zero polarization only at the sun and the antis
 scattering splits each of these index +1 singularities into two index +1/2 ones on the solar
 meridian (Berry, Dennis & Lee 2004, "Polarization singularities in the clear sky", New J.
 Phys. 6:162, §2-3): the **Babinet** point above the sun and the **Brewster** point below it,
-the **Arago** point above the antisun and a fourth one below it.  Following their model the
-two points of a pair sit symmetrically at an angular distance ``delta`` from the sun (or
-antisun) along the solar vertical; observed distances are about 15-25 deg (their figure 1
-and the neutral-point literature they cite), which is the range of the ``delta`` parameter
-here.  A point's elevation is therefore
+the **Arago** point above the antisun and a fourth one below it.  In their model the
+polarization field on the stereographic sky is a quartic with these four zeros: Babinet and
+Brewster on the sun's vertical, an angle ``sep`` apart and centred on the sun, Arago and the
+fourth point their antipodes.  Our points are exactly those zeros with ``sep = 2 delta``
+(``tests/nav/test_neutral_points_published.py`` checks it against the transcribed field):
+each point at ``delta`` from the sun (or antisun) along the solar vertical, independent of
+the sun's elevation in that model.  Observed distances are about 20 deg (AMS Glossary,
+"Arago point", after Neuberger 1951; 15-25 deg over sources and turbidity), the default
+and the range of ``delta`` here.  A point's elevation is therefore
 
     Babinet: h + delta,   Brewster: h - delta   (azimuth of the sun),
     Arago:  -h + delta,   fourth:  -h - delta   (azimuth of the antisun),

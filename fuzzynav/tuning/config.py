@@ -6,8 +6,9 @@ Layout (every key in ``docs/studies.md``)::
     description = "..."
     [study]          sampler, seed, trials, pruner, objective (single|multi|robust), ...
     [study.pso]      particles, iterations, inertia = w | [start, end], c1, c2  (sampler "pso")
-    [objective]      weights = {pos, vel, att}, baseline = "ekf", t_start_s, filter = "fakf"
-                     (the filter the candidate rule sets run in: one that takes rule files)
+    [objective]      weights = {pos, vel, att [, hdg, vel_h, pos_h]}, baseline = "ekf",
+                     t_start_s, filter = "fakf" (the filter the candidate rule sets run in:
+                     one that takes rule files)
     [train]          scenarios = [...], seeds = [...]  (built-in names, or TOML files
                      relative to this file, like templates); and/or recordings =
                      ["KIND:DIR[:SESSION][@A-B[%]]", ...], recording_seeds = [0]
@@ -40,6 +41,10 @@ TUNE_MODES = ("both", "rules", "breakpoints")
 FIS_TYPES = ("mamdani", "sugeno")
 #: objective groups and the metric each is measured by
 GROUP_METRICS = {"pos": "rms_pos_m", "vel": "rms_vel_mps", "att": "rms_att_deg"}
+#: further groups a single-objective study may weight (paper 003's ship: heading and the
+#: horizontal channels, where the 3-D figures are swamped by roll/pitch and the height)
+EXTRA_GROUP_METRICS = {"hdg": "rms_heading_deg", "vel_h": "rms_vel_h_mps",
+                       "pos_h": "rms_pos_h_m"}
 #: a study name becomes a file name (the journal) and an Optuna study name
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,99}$")
 #: a tuned output scales a covariance or R: a positive factor, at most this
@@ -122,6 +127,21 @@ class StudyConfig:
         if not self.multi_objective:
             return ["minimize"]
         return ["minimize"] * (2 if self.robust else 3)
+
+
+def _weights(wt: Table, multi_objective: bool) -> dict:
+    """``[objective.weights]``: every core group, and the extra groups given a weight."""
+    weights = {g: wt.number(g, 0.0, lo=0.0) for g in GROUP_METRICS}
+    for g in EXTRA_GROUP_METRICS:
+        w = wt.number(g, 0.0, lo=0.0)
+        if w > 0 and multi_objective:
+            raise wt.error(g, "a multi-objective study optimises pos, vel and att only")
+        if w > 0:
+            weights[g] = w
+    wt.finish()
+    if not sum(weights.values()) > 0:
+        raise wt.error("", "at least one weight must be positive")
+    return weights
 
 
 def _looks_like_path(name: str) -> bool:
@@ -372,10 +392,7 @@ def study_config_from_dict(doc: dict, path: Path | None = None,
     wt = ob.table("weights", required=False)
     weights = {"pos": 1.0, "vel": 1.0, "att": 1.0}
     if wt is not None:
-        weights = {g: wt.number(g, 0.0, lo=0.0) for g in GROUP_METRICS}
-        wt.finish()
-        if not sum(weights.values()) > 0:
-            raise wt.error("", "at least one weight must be positive")
+        weights = _weights(wt, multi_objective=study["multi_objective"])
     baseline = _filter_name(ob, "baseline", ob.string("baseline", "ekf"))
     t_start = ob.number("t_start_s", 0.0, lo=0.0)
     candidate = _candidate_filter(ob)

@@ -26,7 +26,7 @@ from fuzzynav.realdata.dataspec import is_recording_name
 from fuzzynav.realdata.studyruns import recording_run
 from fuzzynav.sim.log import simulate
 from fuzzynav.sim.scenario import load_scenario
-from fuzzynav.tuning.config import GROUP_METRICS
+from fuzzynav.tuning.config import EXTRA_GROUP_METRICS, GROUP_METRICS
 from fuzzynav.tuning.pareto import accuracy_and_worst
 from fuzzynav.tuning.space import ControllerSpace, build_all
 
@@ -61,8 +61,7 @@ class RunScore:
 def weighted_score(ratios: dict, weights: dict) -> float:
     """The weighted mean of group ratios (weights: group -> non-negative weight; a group
     of weight 0 does not count, even when its ratio is NaN)."""
-    return sum(weights[g] * ratios[g] for g in GROUP_METRICS if weights[g]) \
-        / sum(weights.values())
+    return sum(w * ratios[g] for g, w in weights.items() if w) / sum(weights.values())
 
 
 def score_metrics(metrics: dict, baseline: dict, weights: dict) -> RunScore:
@@ -74,11 +73,15 @@ def score_metrics(metrics: dict, baseline: dict, weights: dict) -> RunScore:
         RMS metrics of the candidate and of the baseline (keys of :data:`GROUP_METRICS`;
         ``metrics["completed"]`` < 1 marks a run that failed).
     weights : dict
-        Group -> weight of its ratio in the score.
+        Group -> weight of its ratio in the score (the core groups of
+        :data:`GROUP_METRICS` are always scored; a weighted extra group of
+        :data:`~fuzzynav.tuning.config.EXTRA_GROUP_METRICS` too).
     """
     ok = metrics.get("completed", 1.0) >= 1.0
     ratios = {}
-    for g, key in GROUP_METRICS.items():
+    groups = {**GROUP_METRICS, **{g: EXTRA_GROUP_METRICS[g] for g in weights
+                                  if g in EXTRA_GROUP_METRICS}}
+    for g, key in groups.items():
         if key not in baseline:  # a recording scores no attitude (its weight is 0)
             ratios[g] = math.nan
             continue
@@ -220,7 +223,7 @@ class Objective:
                 trial.report(scored[-1].score, step=step)
                 if trial.should_prune():
                     break
-        means = {g: float(np.mean([s.ratios[g] for s in scored])) for g in GROUP_METRICS}
+        means = {g: float(np.mean([s.ratios[g] for s in scored])) for g in scored[0].ratios}
         trial.set_user_attr("n_runs", len(scored))
         trial.set_user_attr("ratios", means)
         if self.cfg.robust:

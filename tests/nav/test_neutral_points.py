@@ -81,6 +81,20 @@ def test_noise_has_the_paper_accuracy_on_the_arago_babinet_pair():
     assert err.std() == pytest.approx(0.005, rel=0.06)
 
 
+def test_a_detector_faster_than_the_imu_averages_its_detections():
+    """Paper 003's 100-Hz detector on the 50-Hz IMU: one output per IMU sample, the mean of
+    two detections, so the noise and the claimed sigma are 0.005 / sqrt(2) (6 % tolerance:
+    the standard error of a std from ~10 000 samples is 0.7 %, as in the test above)."""
+    tr = generate(START, [Segment("cruise", 200)], 50.0, 5.0, 0.3)
+    d = Spec(rate_hz=100.0).simulate(tr, np.random.default_rng(3), UTC)
+    clean = Spec(rate_hz=100.0, angle_noise_rad=0.0, claimed_sigma_rad=0.005).simulate(
+        tr, np.random.default_rng(3), UTC)
+    assert np.diff(d.time_s).min() == pytest.approx(0.02)
+    err = attitude.wrap_pi(d.z[:, 0] - clean.z[:, 0])
+    assert err.std() == pytest.approx(0.005 / np.sqrt(2), rel=0.06)
+    assert d.sigma[0, 0] == pytest.approx(0.005 / np.sqrt(2), rel=1e-12)
+
+
 def test_filter_model_residual_and_jacobian():
     att = np.array([0.05, -0.08, 1.2])  # a rolling, pitching ship
     lla = START

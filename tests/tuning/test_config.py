@@ -106,6 +106,8 @@ BAD = [
      "at least one weight"),
     (dict(objective={"weights": {"pos": 1.0, "speed": 1.0}}), "objective.weights.speed",
      "unknown key"),
+    (dict(study={"objective": "multi"}, objective={"weights": {"pos": 1.0, "hdg": 1.0}}),
+     "objective.weights.hdg", "pos, vel and att only"),
     (dict(objective={"baseline": "ekff"}), "objective.baseline", "unknown filter 'ekff'"),
     (dict(train={"seeds": []}), "train.seeds", "non-empty array"),
     (dict(train={"seeds": [-1]}), "train.seeds", "non-negative"),

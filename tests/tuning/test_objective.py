@@ -106,6 +106,23 @@ def test_the_score_is_the_weighted_mean_of_the_ratios(tmp_path, sim_cache):
     assert score_metrics(metrics, base, cfg.weights).score == pytest.approx((2 * 0.5 + 2.0) / 3)
 
 
+def test_heading_and_horizontal_groups_enter_the_score_when_weighted(tmp_path, sim_cache):
+    """Paper 003's study weights heading and the horizontal channels: a candidate whose
+    3-D figures equal the baseline's but whose heading is 3 times worse must score worse."""
+    cfg = load_study_config(write_study(tmp_path, objective={
+        "weights": {"pos": 0.0, "vel": 0.0, "att": 0.0, "hdg": 2.0, "vel_h": 1.0,
+                    "pos_h": 1.0}}))
+    assert cfg.weights == {"pos": 0.0, "vel": 0.0, "att": 0.0, "hdg": 2.0, "vel_h": 1.0,
+                           "pos_h": 1.0}
+    scenario, seed = cfg.train[0]
+    base = Evaluator(cfg, sim_cache).baseline(scenario, seed)
+    metrics = dict(base, rms_heading_deg=3.0 * base["rms_heading_deg"],
+                   rms_pos_h_m=0.5 * base["rms_pos_h_m"])
+    scored = score_metrics(metrics, base, cfg.weights)
+    assert scored.ratios["hdg"] == pytest.approx(3.0) and scored.ratios["att"] == 1.0
+    assert scored.score == pytest.approx((2 * 3.0 + 1.0 + 0.5) / 4)
+
+
 class PruneAfter(optuna.pruners.BasePruner):
     """Prunes every trial once it has reported ``k`` runs."""
 

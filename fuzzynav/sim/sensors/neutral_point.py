@@ -10,7 +10,10 @@ Errors: each detected point's image position carries white noise of 1-sigma
 ``point_sigma = angle_noise_rad * L0 / sqrt(2)``, with ``L0 = pi - 2 delta`` the nominal
 Arago-Babinet baseline, so that ``beta`` has the paper's accuracy (0.005 rad) on that pair
 and a proportionally worse one on a shorter baseline (the Babinet-Brewster pair of a high
-sun).  ``clouds`` rows ``[start_s, end_s, scale]`` multiply the point noise by
+sun).  A detector faster than the IMU (paper 003: 100 Hz on a 50-Hz IMU) is reported once
+per IMU sample as the mean of its ``rate_hz / imu_rate`` detections in that interval: the
+heading hardly moves in 20 ms, so the mean carries the same information, with the point
+noise (and the claimed sigma) divided by the square root of that number.  ``clouds`` rows ``[start_s, end_s, scale]`` multiply the point noise by
 ``scale`` under cloud (0 = no detection at all).  No output above ``max_sun_elevation_deg``
 (the points crowd around the zenith and the detector loses them) or below
 ``min_sun_elevation_deg``.
@@ -41,7 +44,8 @@ class Spec:
     Parameters
     ----------
     rate_hz : float
-        Output rate [Hz] (paper 003: 100; at most the IMU rate here).
+        Detection rate [Hz] (paper 003: 100); above the IMU rate the detections of each IMU
+        interval are averaged into one output.
     angle_noise_rad : float
         1-sigma of ``beta`` on the Arago-Babinet baseline [rad] (paper 003: 0.005).
     claimed_sigma_rad : float, optional
@@ -90,7 +94,8 @@ class Spec:
         if start_utc is None:
             raise InputFileError(None, "start_utc", "the neutral-point sensor needs the "
                                                     "scenario's UTC start time (the sun)")
-        idx = epoch_indices(truth, 0.0, self.rate_hz)
+        per_epoch = max(1.0, self.rate_hz / float(truth.imu_rate_hz))  # detections averaged
+        idx = epoch_indices(truth, 0.0, self.rate_hz / per_epoch)
         time_s = np.asarray(truth.time_s)[idx]
         lla = np.asarray(truth.lla)[idx]
         jd = sun.julian_day(start_utc) + (time_s - truth.time_s[0]) / 86400.0
@@ -106,7 +111,7 @@ class Spec:
                 & (elev >= self.min_sun_elevation_deg))
         a = np.where(pair == 0, 2, 1)
         k = np.arange(idx.size)
-        sig = self.point_sigma() * scale
+        sig = self.point_sigma() * scale / np.sqrt(per_epoch)
         pa = img[k, a, :2] + sig[:, None] * rng.standard_normal((idx.size, 2))
         pb = img[k, 0, :2] + sig[:, None] * rng.standard_normal((idx.size, 2))
         beta = np.arctan2(pb[:, 1] - pa[:, 1], pb[:, 0] - pa[:, 0])
@@ -114,7 +119,7 @@ class Spec:
         z = np.column_stack([beta, sp.sun_n, pair])[keep]
         claimed = self.angle_noise_rad if self.claimed_sigma_rad is None else self.claimed_sigma_rad
         sigma = np.zeros_like(z)
-        sigma[:, 0] = claimed
+        sigma[:, 0] = claimed / np.sqrt(per_epoch)
         true = np.zeros_like(z)
         true[:, 0] = (np.sqrt(2.0) * sig / np.maximum(base, 1e-9))[keep]
         meta = {"delta_rad": float(delta), "fov_deg": float(self.fov_deg), "true_sigma": true,
