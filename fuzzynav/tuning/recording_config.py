@@ -42,7 +42,11 @@ def check_recordings_held_out(tt, train: tuple, test: tuple) -> None:
 
 
 def check_no_attitude(ob, runs: tuple, weights: dict) -> None:
-    """Recordings score no attitude: a study on them must not weigh it."""
-    if weights["att"] > 0 and any(is_recording_name(n) for n, _ in runs):
-        raise ob.error("weights.att", "recordings have no attitude truth: set "
-                                      "weights = { pos = ..., vel = ..., att = 0.0 }")
+    """Recordings score no attitude (nor heading): a study on them must not weigh it."""
+    if not any(is_recording_name(n) for n, _ in runs):
+        return
+    for group in ("att", "hdg"):
+        if weights.get(group, 0.0) > 0:
+            raise ob.error(f"weights.{group}", "recordings have no attitude truth: set "
+                                               f"weights = {{ pos = ..., vel = ..., {group} "
+                                               "= 0.0 }")

@@ -77,12 +77,13 @@ def test_bad_recording_specs_name_the_key(tmp_path, with_data, train, test, wher
     assert err.value.where == where and str(path) in str(err.value)
 
 
-def test_attitude_weight_is_refused_on_recordings(tmp_path, with_data):
+@pytest.mark.parametrize("group", ["att", "hdg"])
+def test_attitude_weight_is_refused_on_recordings(tmp_path, with_data, group):
     doc = _doc(["akit:auv:1"], ["akit:auv:2"])
-    doc["objective"] = {"weights": {"pos": 1.0, "vel": 1.0, "att": 1.0}}
+    doc["objective"] = {"weights": {"pos": 1.0, "vel": 1.0, "att": 0.0, group: 1.0}}
     with pytest.raises(InputFileError, match="attitude") as err:
         load_study_config(write_study(tmp_path, doc))
-    assert err.value.where == "objective.weights.att"
+    assert err.value.where == f"objective.weights.{group}"
 
 
 def test_absent_data_is_one_clear_error(tmp_path, monkeypatch):
