@@ -121,9 +121,10 @@ def car_section(directory: Path, params: Path, systems: dict, car_rules, seeds) 
 
     rules = Path(car_rules) if car_rules else CAR_RULES
     note = [] if rules.is_file() else [
-        f"No controller tuned on the drive itself (`{rules.name}` absent: the time-split "
-        "study of the drive writes it), so only the controller tuned on simulation is "
-        "judged here.", ""]
+        f"No controller tuned on the drive itself is judged here (`{rules.name}` absent): "
+        "the one tuned on the first half of the drive (`studies/rtklib_split.toml`) is "
+        "judged on the second half in docs/studies.md; this section runs the whole drive, "
+        "so only controllers tuned on simulation are held out here.", ""]
     with tempfile.TemporaryDirectory() as tmp:
         specs = _car_specs(params, _save_systems(systems, Path(tmp)), rules if rules.is_file()
                            else None)
