@@ -29,7 +29,7 @@ from fuzzynav.filters.error_st import EM_ST, st_measurement, st_reset, st_to_phi
 from fuzzynav.filters.feedback import bias_totals, feedback
 from fuzzynav.filters.layout import AUX_FORCE, AUX_RATE, AUX_XS, X_VEL
 from fuzzynav.nav.layout import NAV_SIZE, PREV_SIZE
-from fuzzynav.nav.strapdown import init_prev, mech_step, quat_to_dcm_into
+from fuzzynav.nav.strapdown import init_prev, mech_step_dcm, quat_to_dcm_into
 
 
 
@@ -240,6 +240,9 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
     t_fused = -math.inf
     tau = 0.0
     e = 0
+    # bias totals change only with xs (feedback, Gauss-Markov decay): formed then, not per sample
+    bias_totals(xs, blk_start, blk_kind, bg, ba)
+    since_out = 0  # samples since the last recorded output
     while e < E and ev_t[e] < time_s[0] - 1e-9:
         ev_flag[e] = EV_BEFORE_START
         e += 1
@@ -248,14 +251,10 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
             out, em)
     for k in range(N):
         dt = time_s[k + 1] - time_s[k]
-        bias_totals(xs, blk_start, blk_kind, bg, ba)
         for i in range(3):
             dth_c[i] = dth[k, i] - bg[i] * dt
             dv_c[i] = dv[k, i] - ba[i] * dt
-            aux[AUX_RATE + i] = dth_c[i] / dt
-            aux[AUX_FORCE + i] = dv_c[i] / dt
-        mech_step(nav, prev, dth_c, dv_c, dt, f_n)
-        quat_to_dcm_into(nav, C)
+        mech_step_dcm(nav, prev, dth_c, dv_c, dt, f_n, C)  # C: C_bn of nav, kept current
         for i in range(3):
             sumf[i] += f_n[i] * dt
             for j in range(3):
@@ -268,10 +267,14 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
                                  Qd, work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
                 tau = 0.0
                 fstate = after_propagation(fstate, reset)
+                bias_totals(xs, blk_start, blk_kind, bg, ba)
             s = ev_s[e]
             a = s_adapt[s]
             P, x, qd, Qacc = P3[s_local[s]], X[s_local[s]], QD[s_local[s]], Qacc3[s_local[s]]
             H[:, :] = 0.0
+            for i in range(3):  # the latest interval's rate and force, for the models only
+                aux[AUX_RATE + i] = dth_c[i] / dt
+                aux[AUX_FORCE + i] = dv_c[i] / dt
             for i in range(xs.size):
                 aux[AUX_XS + i] = xs[i]
             m = meas_fns[s_meas[s]](nav, C, aux, ev_data[e], s_mpar[s], t - ev_t[e], z, H, R,
@@ -338,6 +341,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
             else:
                 ok = kalman.covariance_ok(P)
             quat_to_dcm_into(nav, C)
+            bias_totals(xs, blk_start, blk_kind, bg, ba)
             if not ok:
                 return ST_COVARIANCE, k + 1
         if tau >= max_prop_dt - 1e-12:
@@ -345,7 +349,10 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
                              work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
             tau = 0.0
             fstate = after_propagation(fstate, reset)
-        if (k + 1) % out_stride == 0:
+            bias_totals(xs, blk_start, blk_kind, bg, ba)  # Gauss-Markov decay of xs
+        since_out += 1
+        if since_out == out_stride:
+            since_out = 0
             _record((k + 1) // out_stride, t, nav, xs, state, P3[0] if NL == 1 else
                     master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork), out, em)
     return ST_OK, N
