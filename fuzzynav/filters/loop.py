@@ -29,7 +29,7 @@ from fuzzynav.filters.error_st import EM_ST, st_measurement, st_reset, st_to_phi
 from fuzzynav.filters.feedback import bias_totals, feedback
 from fuzzynav.filters.layout import AUX_FORCE, AUX_RATE, AUX_XS, X_VEL
 from fuzzynav.nav.layout import NAV_SIZE, PREV_SIZE
-from fuzzynav.nav.strapdown import init_prev, mech_step_dcm, quat_to_dcm_into
+from fuzzynav.nav.strapdown import init_prev, mech_step, quat_to_dcm_into
 
 
 
@@ -254,7 +254,8 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
         for i in range(3):
             dth_c[i] = dth[k, i] - bg[i] * dt
             dv_c[i] = dv[k, i] - ba[i] * dt
-        mech_step_dcm(nav, prev, dth_c, dv_c, dt, f_n, C)  # C: C_bn of nav, kept current
+        mech_step(nav, prev, dth_c, dv_c, dt, f_n)
+        quat_to_dcm_into(nav, C)
         for i in range(3):
             sumf[i] += f_n[i] * dt
             for j in range(3):

@@ -27,7 +27,7 @@ import math
 import numba as nb
 import numpy as np
 
-from fuzzynav.nav.earth import OMEGA_IE, gravity_sin_nb, radii_sin_nb
+from fuzzynav.nav.earth import OMEGA_IE, gravity_nb, radii_nb
 from fuzzynav.nav.layout import (LLA_SLICE, NAV_H, NAV_LAT, NAV_LON, NAV_Q, NAV_SIZE, NAV_VEL,
                                  PREV_DTH, PREV_DV, PREV_FLAG, PREV_LLA, PREV_SIZE, PREV_VEL,
                                  Q_SLICE, VEL_SLICE)
@@ -98,34 +98,6 @@ def mech_step(nav, prev, dth, dv, dt, f_n):
         Output: mean specific force of the interval in the navigation frame [m/s^2]
         (for the error model).
     """
-    _step(nav, prev, dth, dv, dt, f_n, _dcm(nav[NAV_Q], nav[NAV_Q + 1], nav[NAV_Q + 2],
-                                             nav[NAV_Q + 3]))
-
-
-@nb.njit(cache=True)
-def mech_step_dcm(nav, prev, dth, dv, dt, f_n, C):
-    """:func:`mech_step` for a caller that keeps ``C_bn`` of ``nav`` in the 3x3 ``C``: read
-    on entry (instead of forming it again from the quaternion), the new one written on exit
-    (the same numbers as :func:`quat_to_dcm_into`)."""
-    _step(nav, prev, dth, dv, dt, f_n, (C[0, 0], C[0, 1], C[0, 2], C[1, 0], C[1, 1], C[1, 2],
-                                        C[2, 0], C[2, 1], C[2, 2]))
-    quat_to_dcm_into(nav, C)
-
-
-@nb.njit(cache=True)
-def _dcm(q0, q1, q2, q3):
-    """``C_bn`` of a quaternion as a 9-tuple, row by row (as :func:`quat_to_dcm_into`)."""
-    return (q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3, 2.0 * (q1 * q2 - q0 * q3),
-            2.0 * (q1 * q3 + q0 * q2), 2.0 * (q1 * q2 + q0 * q3),
-            q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3, 2.0 * (q2 * q3 - q0 * q1),
-            2.0 * (q1 * q3 - q0 * q2), 2.0 * (q2 * q3 + q0 * q1),
-            q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3)
-
-
-@nb.njit(cache=True)
-def _step(nav, prev, dth, dv, dt, f_n, c):
-    """The step of :func:`mech_step` with ``C_bn`` at the start of the interval as the
-    9-tuple ``c`` (row by row)."""
     if prev[PREV_FLAG] == 0.0:  # first step: no previous increments, so no coning/sculling
         for i in range(3):
             prev[PREV_DTH + i] = dth[i]
@@ -161,16 +133,25 @@ def _step(nav, prev, dth, dv, dt, f_n, c):
     vmu = 1.5 * vu - 0.5 * prev[PREV_VEL + 2]
     latm = 1.5 * lat - 0.5 * prev[PREV_LLA]
     hm = 1.5 * h - 0.5 * prev[PREV_LLA + 2]
+    rm, rn = radii_nb(latm)
     sl, cl = math.sin(latm), math.cos(latm)
-    rm, rn = radii_sin_nb(sl)
     wie_n, wie_u = OMEGA_IE * cl, OMEGA_IE * sl
     wen_e = -vmn / (rm + hm)
     wen_n = vme / (rn + hm)
     wen_u = vme * sl / cl / (rn + hm)
     wine, winn, winu = wen_e, wie_n + wen_n, wie_u + wen_u
-    g = gravity_sin_nb(sl, hm)
+    g = gravity_nb(latm, hm)
     # body -> navigation with the attitude at the start of the interval
-    c00, c01, c02, c10, c11, c12, c20, c21, c22 = c
+    q0, q1, q2, q3 = nav[NAV_Q], nav[NAV_Q + 1], nav[NAV_Q + 2], nav[NAV_Q + 3]
+    c00 = q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3
+    c01 = 2.0 * (q1 * q2 - q0 * q3)
+    c02 = 2.0 * (q1 * q3 + q0 * q2)
+    c10 = 2.0 * (q1 * q2 + q0 * q3)
+    c11 = q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3
+    c12 = 2.0 * (q2 * q3 - q0 * q1)
+    c20 = 2.0 * (q1 * q3 - q0 * q2)
+    c21 = 2.0 * (q2 * q3 + q0 * q1)
+    c22 = q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3
     ne = c00 * sx + c01 * sy + c02 * sz
     nn = c10 * sx + c11 * sy + c12 * sz
     nu = c20 * sx + c21 * sy + c22 * sz
@@ -194,7 +175,6 @@ def _step(nav, prev, dth, dv, dt, f_n, c):
     lat1 = lat + 0.5 * (vn + vn1) * dt / (rm + hm2)
     lon1 = lon + 0.5 * (ve + ve1) * dt / ((rn + hm2) * cl)
     # attitude: q <- q(-w_in dt) * q * q(phi)
-    q0, q1, q2, q3 = nav[NAV_Q], nav[NAV_Q + 1], nav[NAV_Q + 2], nav[NAV_Q + 3]
     a0, a1, a2, a3 = rv2q(-wine * dt, -winn * dt, -winu * dt)
     b0, b1, b2, b3 = rv2q(phx, phy, phz)
     q0, q1, q2, q3 = quat_mul(q0, q1, q2, q3, b0, b1, b2, b3)
