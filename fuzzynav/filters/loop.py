@@ -250,6 +250,9 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
     t_fused = -math.inf
     tau = 0.0
     e = 0
+    # bias totals change only with xs (feedback, Gauss-Markov decay): formed then, not per sample
+    bias_totals(xs, blk_start, blk_kind, bg, ba)
+    since_out = 0  # samples since the last recorded output
     while e < E and ev_t[e] < time_s[0] - 1e-9:
         ev_flag[e] = EV_BEFORE_START
         e += 1
@@ -258,12 +261,9 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
             beta, out, em)
     for k in range(N):
         dt = time_s[k + 1] - time_s[k]
-        bias_totals(xs, blk_start, blk_kind, bg, ba)
         for i in range(3):
             dth_c[i] = dth[k, i] - bg[i] * dt
             dv_c[i] = dv[k, i] - ba[i] * dt
-            aux[AUX_RATE + i] = dth_c[i] / dt
-            aux[AUX_FORCE + i] = dv_c[i] / dt
         mech_step(nav, prev, dth_c, dv_c, dt, f_n)
         quat_to_dcm_into(nav, C)
         for i in range(3):
@@ -278,10 +278,14 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
                                  Qd, work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
                 tau = 0.0
                 fstate = after_propagation(fstate, reset)
+                bias_totals(xs, blk_start, blk_kind, bg, ba)
             s = ev_s[e]
             a = s_adapt[s]
             P, x, qd, Qacc = P3[s_local[s]], X[s_local[s]], QD[s_local[s]], Qacc3[s_local[s]]
             H[:, :] = 0.0
+            for i in range(3):  # the latest interval's rate and force, for the models only
+                aux[AUX_RATE + i] = dth_c[i] / dt
+                aux[AUX_FORCE + i] = dv_c[i] / dt
             for i in range(xs.size):
                 aux[AUX_XS + i] = xs[i]
             m = meas_fns[s_meas[s]](nav, C, aux, ev_data[e], s_mpar[s], t - ev_t[e], z, H, R,
@@ -359,6 +363,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
             else:
                 ok = kalman.covariance_ok(P)
             quat_to_dcm_into(nav, C)
+            bias_totals(xs, blk_start, blk_kind, bg, ba)
             if not ok:
                 return ST_COVARIANCE, k + 1
         if tau >= max_prop_dt - 1e-12:
@@ -366,7 +371,10 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
                              work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
             tau = 0.0
             fstate = after_propagation(fstate, reset)
-        if (k + 1) % out_stride == 0:
+            bias_totals(xs, blk_start, blk_kind, bg, ba)  # Gauss-Markov decay of xs
+        since_out += 1
+        if since_out == out_stride:
+            since_out = 0
             _record((k + 1) // out_stride, t, nav, xs, state, P3[0] if NL == 1 else
                     master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork), beta, out, em)
     return ST_OK, N

@@ -50,23 +50,43 @@ def rot_y(ang, x, y, z):
 
 
 @nb.njit(cache=True)
+def _num_den(v, sx, sy, sz):
+    """Numerator and denominator of the AoP ``atan2`` of view ``v`` for sun ``s``."""
+    c = v[0] * sx + v[1] * sy + v[2] * sz
+    return sx - v[0] * c, v[1] * sz - v[2] * sy
+
+
+@nb.njit(cache=True)
+def _gradient(v, num, den):
+    """d aop / d s from the ``atan2`` arguments (``num`` and ``den`` not both zero)."""
+    inv_q = 1.0 / (num * num + den * den)
+    # d num/ds = e_x - v_x v ; d den/ds = (0, -v_z, v_y)
+    g0 = den * (1.0 - v[0] * v[0]) * inv_q
+    g1 = (den * (-v[0] * v[1]) + num * v[2]) * inv_q
+    g2 = (den * (-v[0] * v[2]) - num * v[1]) * inv_q
+    return g0, g1, g2
+
+
+@nb.njit(cache=True)
 def aop_unfolded_and_gradient(v, sx, sy, sz):
     """AoP of view ``v`` for sun ``s`` (body frame) in (-pi, pi] and d aop / d s.
 
     The angle is not folded: a caller forming a residual folds the difference once.
     """
-    c = v[0] * sx + v[1] * sy + v[2] * sz
-    num = sx - v[0] * c
-    den = v[1] * sz - v[2] * sy
-    q = num * num + den * den
-    if q == 0.0:  # sun on the view axis: unpolarized, no angle
+    num, den = _num_den(v, sx, sy, sz)
+    if num * num + den * den == 0.0:  # sun on the view axis: unpolarized, no angle
         return np.nan, np.nan, np.nan, np.nan
-    inv_q = 1.0 / q
-    # d num/ds = e_x - v_x v ; d den/ds = (0, -v_z, v_y)
-    g0 = den * (1.0 - v[0] * v[0]) * inv_q
-    g1 = (den * (-v[0] * v[1]) + num * v[2]) * inv_q
-    g2 = (den * (-v[0] * v[2]) - num * v[1]) * inv_q
+    g0, g1, g2 = _gradient(v, num, den)
     return math.atan2(num, den), g0, g1, g2
+
+
+@nb.njit(cache=True)
+def aop_gradient(v, sx, sy, sz):
+    """d aop / d s alone (no ``atan2``: callers that only need the slope skip its cost)."""
+    num, den = _num_den(v, sx, sy, sz)
+    if num * num + den * den == 0.0:
+        return np.nan, np.nan, np.nan
+    return _gradient(v, num, den)
 
 
 @nb.njit(cache=True)

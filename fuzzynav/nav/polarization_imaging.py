@@ -171,23 +171,35 @@ def imaging_pitch_heading(aops, views_b, sun_n, roll, pitch_prior, heading_prior
     n_used : int
         Number of views used.
     """
-    cov = np.full((2, 2), np.nan)
+    p, h, c00, c01, c11, k = imaging_fit(aops, views_b, sun_n, roll, pitch_prior,
+                                         heading_prior, pitch_prior_std, heading_prior_std,
+                                         sigma_aop)
+    cov = np.empty((2, 2))
+    cov[0, 0], cov[1, 1] = c00, c11
+    cov[0, 1] = cov[1, 0] = c01
+    return p, h, cov, k
+
+
+@nb.njit(cache=True)
+def imaging_fit(aops, views_b, sun_n, roll, pitch_prior, heading_prior, pitch_prior_std,
+                heading_prior_std, sigma_aop):
+    """:func:`imaging_pitch_heading` with the covariance as three scalars (no allocation,
+    for the filter's measurement model): ``pitch, heading, c_pp, c_ph, c_hh, n_used``."""
+    nan = np.nan
     m00, m01, m02, m11, m12, m22, k = _e_vector_scatter(aops, views_b)
     if k < 2:
-        return np.nan, np.nan, cov, k
+        return nan, nan, nan, nan, nan, k
     sx, sy, sz = _smallest_eigenvector(m00, m01, m02, m11, m12, m22)
     p, h = _nearest_candidate(sx, sy, sz, sun_n, roll, pitch_prior, heading_prior,
                               pitch_prior_std, heading_prior_std)
     if np.isnan(p):
-        return np.nan, np.nan, cov, k
+        return nan, nan, nan, nan, nan, k
     p, h, n00, n01, n11 = _gauss_newton(aops, views_b, sun_n, roll, p, h)
     det = n00 * n11 - n01 * n01
     if not det > 0.0:
-        return np.nan, np.nan, cov, k
+        return nan, nan, nan, nan, nan, k
     s2 = sigma_aop * sigma_aop / det
-    cov[0, 0], cov[1, 1] = s2 * n11, s2 * n00
-    cov[0, 1] = cov[1, 0] = -s2 * n01
-    return p, h % TWO_PI, cov, k
+    return p, h % TWO_PI, s2 * n11, -s2 * n01, s2 * n00, k
 
 
 @nb.njit(cache=True)

@@ -85,3 +85,36 @@ def test_noisy_fit_is_the_least_squares_minimum():
         assert abs(p - ref[0]) < 1e-9 and abs(sk.fold_half_pi(h - ref[1])) < 1e-9
         n_checked += 1
     assert n_checked > 130
+
+
+def test_aop_gradient_alone_is_the_slope_of_the_angle():
+    # the gradient-only helper (no atan2) must give the slope of the AoP itself: checked
+    # against central differences of the angle, and equal to the combined helper's
+    from fuzzynav.nav import polarization_geometry as pg
+
+    rng = np.random.default_rng(3)
+    h = 1e-6
+    for v in VIEWS[1:]:
+        s = _unit_rows(rng, 1)[0]
+        g = np.array(pg.aop_gradient(v, *s))
+        assert np.array_equal(g, pg.aop_unfolded_and_gradient(v, *s)[1:])
+        fd = [(pg.aop_unfolded_and_gradient(v, *(s + h * e))[0]
+               - pg.aop_unfolded_and_gradient(v, *(s - h * e))[0]) / (2 * h) for e in np.eye(3)]
+        np.testing.assert_allclose(g, fd, rtol=1e-6, atol=1e-8)
+    assert np.isnan(pg.aop_gradient(np.array([1.0, 0.0, 0.0]), 1.0, 0.0, 0.0)).all()
+
+
+def test_imaging_fit_is_the_solver_with_scalar_covariance():
+    rng = np.random.default_rng(4)
+    sun_n = np.array([0.3, 0.5, 0.81])
+    sun_n /= np.linalg.norm(sun_n)
+    for _ in range(20):
+        pitch, roll, heading = rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), rng.uniform(0, 6)
+        aops = sk.angle_of_polarization(VIEWS, euler_to_dcm([pitch, roll, heading]).T @ sun_n)
+        aops = aops + 0.01 * rng.standard_normal(aops.shape)
+        p, hd, cov, k = pim.imaging_pitch_heading(aops, VIEWS, sun_n, roll, pitch, heading,
+                                                  0.1, 0.2, 0.01)
+        fit = pim.imaging_fit(aops, VIEWS, sun_n, roll, pitch, heading, 0.1, 0.2, 0.01)
+        np.testing.assert_array_equal(fit[:2], (p, hd))
+        np.testing.assert_array_equal(fit[2:5], (cov[0, 0], cov[0, 1], cov[1, 1]))
+        assert cov[0, 1] == cov[1, 0] and fit[5] == k

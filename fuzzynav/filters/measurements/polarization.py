@@ -35,7 +35,8 @@ import numpy as np
 from fuzzynav.filters.layout import X_ATT
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.nav import polarization as ps
-from fuzzynav.nav.polarization_geometry import aop_and_gradient, dot3, sun_body_partials
+from fuzzynav.nav.polarization_geometry import aop_gradient, dot3, sun_body_partials
+from fuzzynav.nav.polarization_imaging import imaging_fit
 
 MODES = {"angles": 0, "aop": 1}
 CH_HEADING, CH_PITCH, CH_AOP = 0, 1, 2
@@ -106,7 +107,7 @@ def _roll_sensitivity(aops, views, sun, p, roll, h):
     for i in range(aops.size):
         if not math.isfinite(aops[i]):
             continue
-        _, g0, g1, g2 = aop_and_gradient(views[i], s[0], s[1], s[2])
+        g0, g1, g2 = aop_gradient(views[i], s[0], s[1], s[2])  # the angle is not needed
         dp, dr, dh = dot3(g0, g1, g2, ds_dp), dot3(g0, g1, g2, ds_dr), dot3(g0, g1, g2, ds_dh)
         a00 += dp * dp
         a01 += dp * dh
@@ -122,8 +123,8 @@ def _roll_sensitivity(aops, views, sun, p, roll, h):
 @nb.njit(cache=True)
 def _imaging(C, aops, views, sun, sigma, prior_std, J, z, H, R, chan):
     pitch, roll, heading = _euler(C)
-    p, h, cov, k = ps.imaging_pitch_heading(aops, views, sun, roll, pitch, heading,
-                                            prior_std[0], prior_std[1], sigma)
+    p, h, c00, c01, c11, _ = imaging_fit(aops, views, sun, roll, pitch, heading, prior_std[0],
+                                         prior_std[1], sigma)
     if not (math.isfinite(p) and math.isfinite(h)):
         return 0
     euler_jacobian(C, J)
@@ -134,27 +135,27 @@ def _imaging(C, aops, views, sun, sigma, prior_std, J, z, H, R, chan):
         J[0, j] -= dp_dr * J[1, j]
         J[2, j] -= dh_dr * J[1, j]
     dh = _wrap(heading - h)
-    if not (0.0 < cov[0, 0] < _MAX_VAR) or not (0.0 < cov[1, 1] < _MAX_VAR):
+    if not (0.0 < c00 < _MAX_VAR) or not (0.0 < c11 < _MAX_VAR):
         # degenerate geometry (views nearly in one plane with the sun): keep at most the
         # heading row when it alone is well determined
-        if not 0.0 < cov[1, 1] < _MAX_VAR:
+        if not 0.0 < c11 < _MAX_VAR:
             return 0
         z[0] = dh
         for j in range(3):
             H[0, X_ATT + j] = J[2, j]
-        R[0] = cov[1, 1]
+        R[0] = c11
         chan[0] = CH_HEADING
         return 1
-    g = cov[0, 1] / cov[0, 0]  # heading row conditioned on the pitch row
-    r1 = cov[1, 1] - g * cov[0, 1]
-    if not r1 > 1e-6 * cov[1, 1]:
+    g = c01 / c00  # heading row conditioned on the pitch row
+    r1 = c11 - g * c01
+    if not r1 > 1e-6 * c11:
         return 0
     z[0] = pitch - p
     z[1] = dh - g * z[0]
     for j in range(3):
         H[0, X_ATT + j] = J[0, j]
         H[1, X_ATT + j] = J[2, j] - g * J[0, j]
-    R[0] = cov[0, 0]
+    R[0] = c00
     R[1] = r1
     chan[0], chan[1] = CH_PITCH, CH_HEADING
     return 2
