@@ -78,9 +78,10 @@ def score_metrics(metrics: dict, baseline: dict, weights: dict) -> RunScore:
     return RunScore(metrics, ratios, weighted_score(ratios, weights))
 
 
-def setup_with_systems(log, systems: dict) -> FilterSetup:
-    """The EKF configuration of a log with the given fuzzy systems bound to its sensors."""
-    base = setup_for(log, "ekf")
+def setup_with_systems(log, systems: dict, base: FilterSetup | None = None) -> FilterSetup:
+    """The EKF configuration of a log with the given fuzzy systems bound to its sensors
+    (``base``: that configuration, when the caller keeps it)."""
+    base = base or setup_for(log, "ekf")
     items = [(fis, f"<candidate {name}>") for name, fis in systems.items()]
     return FilterSetup(base.config, bind_systems(items, log.sensors, required=True),
                        base.sensor_options, base.sigma_override)
@@ -102,6 +103,7 @@ class Evaluator:
         self._logs = {}
         self._scenarios = {}
         self._baseline = {}
+        self._ekf = {}  # the EKF setup of a run, which every candidate starts from
 
     # -- data -------------------------------------------------------------------------------
     def log(self, scenario: str, seed: int):
@@ -132,8 +134,10 @@ class Evaluator:
         """Run the candidate (controller name -> FuzzySystem) on one run: a
         :class:`~fuzzynav.experiment.RunOutcome` named :data:`CANDIDATE`."""
         log = self.log(scenario, seed)
+        if (scenario, seed) not in self._ekf:
+            self._ekf[(scenario, seed)] = setup_for(log, "ekf")
         return run_on_log(log, CANDIDATE, t_start_s=self.config.t_start_s,
-                          setup=setup_with_systems(log, systems))
+                          setup=setup_with_systems(log, systems, self._ekf[(scenario, seed)]))
 
     def judge(self, metrics: dict, scenario: str, seed: int) -> RunScore:
         """Score a filter's metrics on a run against the baseline on that run."""
