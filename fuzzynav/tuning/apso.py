@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -199,10 +200,15 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m fuzzynav.tuning.apso", description=__doc__)
     ap.add_argument("config")
     ap.add_argument("--out", required=True)
+    # the training logs are simulated once into the cache and read from it by every later run
+    ap.add_argument("--cache", metavar="DIR", help="simulation cache (default: $FUZZYNAV_CACHE "
+                    "or ~/.cache/fuzzynav, as fuzzynav study run)",
+                    default=os.environ.get("FUZZYNAV_CACHE",
+                                           str(Path.home() / ".cache" / "fuzzynav")))
     args = ap.parse_args(argv)
     try:
         cfg = ApsoConfig.load(args.config)
-        fit = Fitness(cfg)
+        fit = Fitness(cfg, args.cache)
         doc = result_document(cfg, run_apso(cfg, fit), fit)
         out = Path(args.out)
         tmp = out.with_name(f".{out.name}.tmp")
