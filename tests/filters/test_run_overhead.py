@@ -13,6 +13,7 @@ import pytest
 
 from fuzzynav import metrics
 from fuzzynav.filters.dispatch import memoise_table_types
+from fuzzynav.filters.result import FilterResult
 from fuzzynav.filters.runner import run_filter
 from fuzzynav.nav import attitude, earth
 from tests.filters.simple_data import CONFIG, run_inputs, trajectory
@@ -91,7 +92,7 @@ def test_errors_against_the_remembered_truth_equal_the_direct_ones(run):
 def test_the_memo_lets_its_trajectory_go():
     tr = trajectory(1)
     key = id(tr)
-    res = replace(_fake_result(tr))
+    res = _fake_result(tr)
     metrics.errors_vs_trajectory(res, tr)
     assert key in metrics._TRUTH_AT
     del tr, res
@@ -102,12 +103,7 @@ def test_the_memo_lets_its_trajectory_go():
 def _fake_result(tr):
     """A 'result' at the truth's 1-Hz epochs with the truth's own state."""
     k = np.arange(0, tr.time_s.size, 100)
-    return replace_result(tr.time_s[k], tr.lla[k], tr.vel_n[k], tr.q_bn[k])
-
-
-def replace_result(time_s, lla, vel_n, q_bn):
-    from fuzzynav.filters.result import FilterResult
-
+    time_s, lla, vel_n, q_bn = tr.time_s[k], tr.lla[k], tr.vel_n[k], tr.q_bn[k]
     return FilterResult(time_s=time_s, lla=lla, vel_n=vel_n, q_bn=q_bn,
                         sensor_states=np.zeros((time_s.size, 0)),
                         sigma=np.zeros((time_s.size, 15)), state_labels=())
