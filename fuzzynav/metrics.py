@@ -6,6 +6,7 @@ comparisons between two filters on the same seeds are paired (bootstrap over see
 """
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,14 +43,61 @@ def _enu_difference(lla, lla_ref):
     return earth.delta_lla_to_enu(d[:, 0], d[:, 1], d[:, 2], lla_ref[:, 0], lla_ref[:, 2])
 
 
-def errors_vs_trajectory(result, truth) -> NavErrors:
-    """Errors of a filter result against a simulated :class:`Trajectory` (same clock)."""
-    k = np.clip(np.searchsorted(truth.time_s, result.time_s - 1e-9), 0, truth.time_s.size - 1)
-    if np.abs(truth.time_s[k] - result.time_s).max() > 1e-6:
+@dataclass(frozen=True)
+class _TruthAt:
+    """A trajectory's truth at a result's epochs, with the local radii of its positions."""
+
+    time_s: np.ndarray
+    lla: np.ndarray
+    vel_n: np.ndarray
+    att: np.ndarray
+    r_m_h: np.ndarray      # R_M + h
+    r_n_h: np.ndarray      # R_N + h
+    cos_lat: np.ndarray
+
+
+#: truth sampled at a result's epochs, per live trajectory: every run of a study on a log
+#: asks for the same epochs (``{id(truth): (weakref to truth, [_TruthAt, ...])}``; an entry
+#: goes with its trajectory, so the memo never keeps a log alive)
+_TRUTH_AT = {}
+
+
+def _truth_at(truth, time_s) -> _TruthAt:
+    entry = _TRUTH_AT.get(id(truth))
+    if entry is not None and entry[0]() is truth:
+        for got in entry[1]:
+            if got.time_s.shape == time_s.shape and np.array_equal(got.time_s, time_s):
+                return got
+    k = np.clip(np.searchsorted(truth.time_s, time_s - 1e-9), 0, truth.time_s.size - 1)
+    if np.abs(truth.time_s[k] - time_s).max() > 1e-6:
         raise ValueError("result epochs are not on the truth's sample grid")
-    att_err = attitude.euler_error(result.att, truth.att[k])
-    return NavErrors(result.time_s, _enu_difference(result.lla, truth.lla[k]),
-                     result.vel_n - truth.vel_n[k], att_err)
+    lla = truth.lla[k]
+    r_m, r_n = earth.radii(lla[:, 0])
+    got = _TruthAt(time_s.copy(), lla, truth.vel_n[k], truth.att[k], r_m + lla[:, 2],
+                   r_n + lla[:, 2], np.cos(lla[:, 0]))
+    if entry is None or entry[0]() is not truth:
+        try:
+            ref = weakref.ref(truth, lambda _, key=id(truth): _TRUTH_AT.pop(key, None))
+        except TypeError:  # a truth without weak references: not remembered
+            return got
+        entry = _TRUTH_AT[id(truth)] = (ref, [])
+    entry[1][:] = entry[1][-3:] + [got]  # a few grids per log (output rates, early stops)
+    return got
+
+
+def errors_vs_trajectory(result, truth) -> NavErrors:
+    """Errors of a filter result against a simulated :class:`Trajectory` (same clock).
+
+    The truth at the result's epochs is remembered per trajectory (runs on one log share
+    their epochs); the errors are computed as :func:`_enu_difference` and
+    :func:`~fuzzynav.nav.attitude.euler_error` compute them, to the last bit.
+    """
+    ref = _truth_at(truth, result.time_s)
+    att_err = attitude.euler_error(result.att, ref.att)
+    d = result.lla - ref.lla
+    # earth.delta_lla_to_enu with the radii of the reference positions kept
+    pos = np.stack([d[:, 1] * ref.r_n_h * ref.cos_lat, d[:, 0] * ref.r_m_h, d[:, 2]], -1)
+    return NavErrors(result.time_s, pos, result.vel_n - ref.vel_n, att_err)
 
 
 def errors_vs_reference(result, ref_time_s, ref_lla, ref_vel_n=None) -> NavErrors:
@@ -78,16 +126,19 @@ def rms_metrics(err: NavErrors, t_start_s: float = 0.0) -> dict:
     ``max_pos_h_m`` and ``mean_pos_h_m`` (largest and mean horizontal error, paper 004).
     """
     sel = err.time_s >= t_start_s
+    if sel.all():  # the usual case (no convergence skipped): no copies
+        sel = slice(None)
     p, v, a = err.pos_m[sel], err.vel_mps[sel], np.rad2deg(err.att_rad[sel])
 
     def rms(x):
         return float(np.sqrt(np.mean(np.square(x)))) if x.size else float("nan")
 
+    h = np.hypot(p[:, 0], p[:, 1])
     out = {f"rms_pos_{ax}_m": rms(p[:, i]) for i, ax in enumerate(AXES)}
-    out["rms_pos_h_m"] = rms(np.hypot(p[:, 0], p[:, 1]))
+    out["rms_pos_h_m"] = rms(h)
     out["rms_pos_m"] = rms(np.linalg.norm(p, axis=1))
-    out["max_pos_h_m"] = float(np.max(np.hypot(p[:, 0], p[:, 1]))) if p.size else float("nan")
-    out["mean_pos_h_m"] = float(np.mean(np.hypot(p[:, 0], p[:, 1]))) if p.size else float("nan")
+    out["max_pos_h_m"] = float(np.max(h)) if p.size else float("nan")
+    out["mean_pos_h_m"] = float(np.mean(h)) if p.size else float("nan")
     out.update({f"rms_vel_{ax}_mps": rms(v[:, i]) for i, ax in enumerate(AXES)})
     out["rms_vel_mps"] = rms(np.linalg.norm(v, axis=1))
     out["rms_vel_h_mps"] = rms(np.hypot(v[:, 0], v[:, 1]))

@@ -1,6 +1,7 @@
 """Run a filter: pack Python objects into arrays, call the compiled loop, bundle the result."""
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -14,9 +15,13 @@ from fuzzynav.filters.config import FilterConfig
 from fuzzynav.filters.error_st import EM_ST, error_model_code, st_covariance
 from fuzzynav.filters.layout import N_CORE
 from fuzzynav.filters import loop
+from fuzzynav.filters.dispatch import memoise_table_types
 from fuzzynav.filters.result import EventLog, FilterResult, LocalStates
 from fuzzynav.nav import strapdown
 from fuzzynav.nav.layout import LLA_SLICE, NAV_SIZE, Q_SLICE, VEL_SLICE
+
+# the kernel tables are the same few tuples run after run: numba types them once
+memoise_table_types(loop.run_loop)
 
 
 @dataclass(frozen=True)
@@ -38,16 +43,31 @@ class InitialState:
     q_bn: np.ndarray
 
 
+#: nominal sample interval of IMU clocks already checked, ``{id(time_s): (weakref, ends,
+#: dt)}``: every run on a log reads the same clock array (an entry goes with its array; its
+#: ends and length are compared too, against a clock changed in place)
+_CLOCKS = {}
+
+
 def _imu_arrays(imu):
+    """The IMU arrays as the loop takes them, checked, and the nominal sample interval."""
     time_s = np.ascontiguousarray(imu.time_s, dtype=float)
     dth = np.ascontiguousarray(imu.dtheta_b, dtype=float)
     dv = np.ascontiguousarray(imu.dv_b, dtype=float)
     if time_s.shape != (dth.shape[0] + 1,) or dv.shape != dth.shape:
         raise FuzzynavError(f"IMU arrays disagree: time {time_s.shape}, dtheta {dth.shape}, "
                             f"dv {dv.shape} (time needs one entry more than the increments)")
-    if np.any(np.diff(time_s) <= 0):
+    ends = (time_s.size, float(time_s[0]), float(time_s[-1]))
+    known = _CLOCKS.get(id(time_s))
+    if known is not None and known[0]() is time_s and known[1] == ends:
+        return time_s, dth, dv, known[2]
+    step = np.diff(time_s)
+    if np.any(step <= 0):
         raise FuzzynavError("IMU sample times must increase strictly")
-    return time_s, dth, dv
+    dt_nom = float(np.median(step))
+    _CLOCKS[id(time_s)] = (weakref.ref(time_s, lambda _, k=id(time_s): _CLOCKS.pop(k, None)),
+                           ends, dt_nom)
+    return time_s, dth, dv, dt_nom
 
 
 def _sensor_tables(sensors, adapters, options, gate_probability):
@@ -118,21 +138,21 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
     -------
     FilterResult
     """
-    time_s, dth, dv = _imu_arrays(imu)
+    time_s, dth, dv, dt_nom = _imu_arrays(imu)
     tb = _sensor_tables(dict(sensors), dict(adapters or {}), dict(sensor_options or {}),
                         config.gate_probability)
     blk_start, blk_kind, blk_inv_tau = config.model.block_arrays()
     n = config.model.n_states
     em = error_model_code(config.error_model)
     bank, state = _bank(config, tb["names"], init, em)
-    dt_nom = float(np.median(np.diff(time_s)))
     stride = max(1, int(round(1.0 / (config.out_rate_hz * dt_nom))))
     K, NL = dth.shape[0] // stride + 1, bank.beta.size
     E, M = tb["ev_t"].size, tb["M"]
-    out = dict(t=np.full(K, np.nan), nav=np.full((K, NAV_SIZE), np.nan),
-               xs=np.full((K, n - N_CORE), np.nan), sig=np.full((K, n), np.nan),
-               xl=np.full((K, NL, n), np.nan), sigl=np.full((K, NL, n), np.nan),
-               beta=np.full((K, NL), np.nan))
+    # the loop writes whole output rows, in order; the time column (NaN until written) tells
+    # how many it wrote, so the other arrays need no filling
+    out = dict(t=np.full(K, np.nan), nav=np.empty((K, NAV_SIZE)), xs=np.empty((K, n - N_CORE)),
+               sig=np.empty((K, n)), xl=np.empty((K, NL, n)), sigl=np.empty((K, NL, n)),
+               beta=np.empty((K, NL)))
     ev = dict(r=np.full((E, M), np.nan), S=np.full((E, M), np.nan), nis=np.full(E, np.nan),
               flag=np.zeros(E, np.int64), diag=np.full((E, N_DIAG), np.nan))
     nav0 = strapdown.make_nav(init.lla, init.vel_n, init.q_bn)
@@ -174,7 +194,8 @@ def _bank(config: FilterConfig, names, init: InitialState, em: int):
 
 
 def _bundle(out, ev, tb, config, status, done, time_s, state) -> FilterResult:
-    keep = np.isfinite(out["t"])
+    # rows are written in order from the first: the written ones are a prefix, kept as views
+    keep = slice(0, int(np.count_nonzero(np.isfinite(out["t"]))))
     events = {}
     for i, (nm, mdl, bd) in enumerate(zip(tb["names"], tb["models"], tb["bounds"])):
         sel = tb["ev_s"] == i

@@ -90,10 +90,12 @@ def score_metrics(metrics: dict, baseline: dict, weights: dict) -> RunScore:
     return RunScore(metrics, ratios, weighted_score(ratios, weights))
 
 
-def setup_with_systems(log, systems: dict, filter_name: str = "fakf") -> FilterSetup:
+def setup_with_systems(log, systems: dict, filter_name: str = "fakf",
+                       base: FilterSetup | None = None) -> FilterSetup:
     """The configuration of a log with the given fuzzy systems: bound to its sensors in the
-    EKF (``fakf``, ``fuzzy``), or handed to another filter that takes rule files as its
-    ``systems`` option (a filter bank that takes a share controller)."""
+    EKF (``fakf``, ``fuzzy``; ``base``: the log's EKF configuration, when the caller keeps
+    it), or handed to another filter that takes rule files as its ``systems`` option (a
+    filter bank that takes a share controller)."""
     items = [(fis, f"<candidate {name}>") for name, fis in systems.items()]
     if filter_name not in ("fakf", "fuzzy"):
         setup = setup_for(log, filter_name, {"systems": items})
@@ -105,7 +107,7 @@ def setup_with_systems(log, systems: dict, filter_name: str = "fakf") -> FilterS
                                 "rule sets (its systems option); use fakf or a bank such "
                                 "as federated-fuzzy-beta")
         return setup
-    base = setup_for(log, "ekf")
+    base = base or setup_for(log, "ekf")
     return FilterSetup(base.config, bind_systems(items, log.sensors, required=True),
                        base.sensor_options, base.sigma_override)
 
@@ -126,6 +128,7 @@ class Evaluator:
         self._logs = {}
         self._scenarios = {}
         self._baseline = {}
+        self._ekf = {}  # the EKF setup of a run, which every candidate starts from
 
     # -- data -------------------------------------------------------------------------------
     def log(self, scenario: str, seed: int):
@@ -159,8 +162,11 @@ class Evaluator:
         """Run the candidate (controller name -> FuzzySystem) on one run: a
         :class:`~fuzzynav.experiment.RunOutcome` named :data:`CANDIDATE`."""
         log = self.log(scenario, seed)
+        if (scenario, seed) not in self._ekf:
+            self._ekf[(scenario, seed)] = setup_for(log, "ekf")
         return run_on_log(log, CANDIDATE, t_start_s=self.config.t_start_s,
-                          setup=setup_with_systems(log, systems, self.config.filter))
+                          setup=setup_with_systems(log, systems, self.config.filter,
+                                                   self._ekf[(scenario, seed)]))
 
     def judge(self, metrics: dict, scenario: str, seed: int) -> RunScore:
         """Score a filter's metrics on a run against the baseline on that run."""

@@ -1,0 +1,109 @@
+"""The per-run shortcuts of the study path give what the plain computations give.
+
+Kernel tables typed once per tuple (:mod:`fuzzynav.filters.dispatch`), output rows kept as
+views of what the loop wrote, and the truth at a result's epochs remembered per trajectory
+(:func:`fuzzynav.metrics.errors_vs_trajectory`).
+"""
+import gc
+from dataclasses import replace
+
+import numba as nb
+import numpy as np
+import pytest
+
+from fuzzynav import metrics
+from fuzzynav.filters.dispatch import memoise_table_types
+from fuzzynav.filters.result import FilterResult
+from fuzzynav.filters.runner import run_filter
+from fuzzynav.nav import attitude, earth
+from tests.filters.simple_data import CONFIG, run_inputs, trajectory
+
+
+@nb.njit("float64(float64)")
+def _plus_one(x):
+    return x + 1.0
+
+
+@nb.njit("float64(float64)")
+def _twice(x):
+    return 2.0 * x
+
+
+@nb.njit
+def _apply(fns, i, x):
+    return fns[i](x)
+
+
+def test_a_kernel_table_is_typed_once_and_a_new_one_afresh():
+    typed = []
+    plain = _apply.typeof_pyval
+    _apply.typeof_pyval = lambda v: (typed.append(v), plain(v))[1]
+    memoise_table_types(_apply)
+    assert _apply((_plus_one, _twice), 1, 3.0) == 6.0
+    assert _apply((_plus_one, _twice), 0, 3.0) == 4.0  # a new tuple of the same kernels
+    assert sum(type(v) is tuple for v in typed) == 1
+    assert _apply((_twice, _plus_one), 1, 3.0) == 4.0  # other kernels at index 1
+    assert sum(type(v) is tuple for v in typed) == 2
+
+
+@pytest.fixture(scope="module")
+def run():
+    tr = trajectory(1)
+    imu, gnss, init, _, _ = run_inputs(tr, 5)
+    return tr, run_filter(imu, {"gnss": gnss}, init, CONFIG)
+
+
+def _expected_errors(res, tr):
+    """The errors computed directly (earth.delta_lla_to_enu, attitude.euler_error)."""
+    k = np.searchsorted(tr.time_s, res.time_s - 1e-9)
+    d = res.lla - tr.lla[k]
+    pos = earth.delta_lla_to_enu(d[:, 0], d[:, 1], d[:, 2], tr.lla[k, 0], tr.lla[k, 2])
+    return pos, res.vel_n - tr.vel_n[k], attitude.euler_error(res.att, tr.att[k])
+
+
+def _check(res, tr):
+    err = metrics.errors_vs_trajectory(res, tr)
+    # the same floating-point operations in the same order: equal to the last bit (rtol 0)
+    for got, want in zip((err.pos_m, err.vel_mps, err.att_rad), _expected_errors(res, tr)):
+        np.testing.assert_allclose(got, want, rtol=0.0, atol=0.0)
+
+
+def test_output_rows_are_all_written(run):
+    tr, res = run
+    n = int(round((tr.time_s[-1] - tr.time_s[0]) * CONFIG.out_rate_hz)) + 1
+    assert res.time_s.shape == (n,) and np.all(np.diff(res.time_s) > 0)
+    for arr in (res.lla, res.vel_n, res.q_bn, res.sigma, res.locals.x, res.locals.sigma):
+        assert arr.shape[0] == n and np.isfinite(arr).all()
+
+
+def test_errors_against_the_remembered_truth_equal_the_direct_ones(run):
+    tr, res = run
+    _check(res, tr)
+    _check(res, tr)  # the second time from the memo
+    assert id(tr) in metrics._TRUTH_AT
+    moved = replace(res, lla=res.lla + 1e-7, vel_n=res.vel_n * 1.5)  # another run, same epochs
+    _check(moved, tr)
+    half = replace(res, time_s=res.time_s[::2], lla=res.lla[::2], vel_n=res.vel_n[::2],
+                   q_bn=res.q_bn[::2])  # other epochs: not the remembered ones
+    _check(half, tr)
+    _check(res, tr)
+
+
+def test_the_memo_lets_its_trajectory_go():
+    tr = trajectory(1)
+    key = id(tr)
+    res = _fake_result(tr)
+    metrics.errors_vs_trajectory(res, tr)
+    assert key in metrics._TRUTH_AT
+    del tr, res
+    gc.collect()
+    assert key not in metrics._TRUTH_AT
+
+
+def _fake_result(tr):
+    """A 'result' at the truth's 1-Hz epochs with the truth's own state."""
+    k = np.arange(0, tr.time_s.size, 100)
+    time_s, lla, vel_n, q_bn = tr.time_s[k], tr.lla[k], tr.vel_n[k], tr.q_bn[k]
+    return FilterResult(time_s=time_s, lla=lla, vel_n=vel_n, q_bn=q_bn,
+                        sensor_states=np.zeros((time_s.size, 0)),
+                        sigma=np.zeros((time_s.size, 15)), state_labels=())
