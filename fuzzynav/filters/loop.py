@@ -2,16 +2,14 @@
 
 Per IMU sample: bias-corrected increments -> strapdown step -> accumulate the mean attitude and
 specific force.  The covariance is propagated over the accumulated interval (with the mean
-``F``) whenever a measurement is due or ``max_prop_dt`` has passed — the error model varies
-slowly, so propagating every sample would cost ~100x more for no accuracy (see
-docs/benchmarks.md).  Measurement epochs go through the sensor's measurement model, its
-adaptation policy, optional chi-square gating, the Joseph update and closed-loop feedback.
-The filter is a bank of local filters over the one mechanization (:mod:`fuzzynav.filters.bank`):
-each measurement updates the local that owns its sensor, and the master fuses the locals and
-feeds the fused estimate back; the single filter is the bank of one, which skips the fusion.
-
-Memory is independent of the run length apart from the requested outputs (every
-``out_stride`` samples) and the per-epoch event log.
+``F``) when a measurement is due or ``max_prop_dt`` has passed: the error model varies slowly,
+so propagating every sample would cost ~100x more for no accuracy (docs/benchmarks.md).
+Measurement epochs go through the sensor's measurement model, its adaptation policy, optional
+chi-square gating, the Joseph update and closed-loop feedback.  The filter is a bank of local
+filters over the one mechanization (:mod:`fuzzynav.filters.bank`): each measurement updates
+the local that owns its sensor, the master fuses the locals and feeds the fused estimate back;
+the single filter is the bank of one, which skips the fusion.  Memory is independent of the
+run length apart from the outputs (every ``out_stride`` samples) and the per-epoch event log.
 """
 from __future__ import annotations
 

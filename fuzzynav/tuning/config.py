@@ -20,25 +20,24 @@ Layout (every key in ``docs/studies.md``)::
                      its lower end; default: the template's), types = ["mamdani",
                      "sugeno"] (the system types a trial may choose; default the template's)
 
-Every problem is one :class:`fuzzynav.errors.InputFileError` naming the file and key.
+Every problem is one :class:`fuzzynav.errors.InputFileError` naming the file and key. The
+``[[controllers]]`` tables are read by :mod:`fuzzynav.tuning.controller_config`.
 """
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 from fuzzynav.errors import FuzzynavError, InputFileError
-from fuzzynav.filters.adaptation.binding import WINDOW_RANGE
 from fuzzynav.fuzzy.io import brief
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
+from fuzzynav.tuning.controller_config import parse_controller, user_file
 from fuzzynav.tuning.recording_config import (check_no_attitude, check_recordings_held_out,
                                               recording_runs)
 from fuzzynav.tuning.samplers import get_optimiser, optimiser_names
 
 PRUNERS = ("none", "median", "wilcoxon")
-TUNE_MODES = ("both", "rules", "breakpoints")
-FIS_TYPES = ("mamdani", "sugeno")
 #: objective groups and the metric each is measured by
 GROUP_METRICS = {"pos": "rms_pos_m", "vel": "rms_vel_mps", "att": "rms_att_deg"}
 #: further groups a single-objective study may weight (paper 003's ship: heading and the
@@ -47,26 +46,6 @@ EXTRA_GROUP_METRICS = {"hdg": "rms_heading_deg", "vel_h": "rms_vel_h_mps",
                        "pos_h": "rms_pos_h_m"}
 #: a study name becomes a file name (the journal) and an Optuna study name
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,99}$")
-#: a tuned output scales a covariance or R: a positive factor, at most this
-MAX_OUTPUT_FACTOR = 1e3
-#: files a study may name are the user's own: never system places
-_SYSTEM_DIRS = (Path("/etc"), Path("/proc"), Path("/sys"), Path("/dev"), Path("/boot"))
-
-
-@dataclass(frozen=True)
-class ControllerConfig:
-    """How one rule file (controller) is tuned."""
-
-    name: str
-    template: Path
-    tune: str = "both"
-    partitions: dict = field(default_factory=dict)
-    free_triangles: bool = False
-    rule_weights: bool = False
-    window: tuple | None = None
-    output_range: tuple | None = None
-    output_low: tuple | None = None
-    types: tuple = ("mamdani",)
 
 
 @dataclass(frozen=True)
@@ -148,16 +127,6 @@ def _looks_like_path(name: str) -> bool:
     return name.endswith(".toml") or "/" in name or "\\" in name
 
 
-def _user_file(t: Table, key: str, path: Path, suffixes: tuple, what: str) -> Path:
-    """Refuse a path that is not a ``suffixes`` file or that lies in a system directory."""
-    real = path.resolve()
-    if path.suffix.lower() not in suffixes:
-        raise t.error(key, f"must be a {what} ({' or '.join(suffixes)}), got {brief(str(path))}")
-    if any(real.is_relative_to(d) for d in _SYSTEM_DIRS):
-        raise t.error(key, f"{brief(str(path))} is a system file, not a {what}")
-    return path
-
-
 def _scenario(t: Table, i: int, name: str, here: Path) -> tuple:
     """A scenario name, or a file path resolved against the config's directory; checked.
 
@@ -167,7 +136,7 @@ def _scenario(t: Table, i: int, name: str, here: Path) -> tuple:
 
     if _looks_like_path(name):
         path = Path(name) if Path(name).is_absolute() else here / name
-        name = str(_user_file(t, f"scenarios[{i}]", path, (".toml",), "scenario file"))
+        name = str(user_file(t, f"scenarios[{i}]", path, (".toml",), "scenario file"))
     try:
         return name, load_scenario(name).duration_s
     except FuzzynavError as exc:
@@ -234,92 +203,6 @@ def _compare(t: Table) -> tuple:
     if not isinstance(names, list):
         raise t.error("compare", "must be an array of filter names")
     return tuple(_filter_name(t, f"compare[{i}]", n) for i, n in enumerate(names))
-
-
-def _pair(t: Table, key):
-    if not t.has(key):
-        t._used.add(key)
-        return None
-    lo, hi = t.vector(key, 2, broadcast=False)
-    if not lo < hi:
-        raise t.error(key, f"needs lo < hi, got [{lo}, {hi}]")
-    return (lo, hi)
-
-
-def _factor_pair(t: Table, key):
-    """Bounds of a tuned output end: positive factors up to :data:`MAX_OUTPUT_FACTOR`."""
-    pair = _pair(t, key)
-    if pair is not None and not (pair[0] > 0.0 and pair[1] <= MAX_OUTPUT_FACTOR):
-        raise t.error(key, f"must lie in (0, {MAX_OUTPUT_FACTOR:g}] (the output is a factor "
-                           f"on a covariance), got {list(pair)}")
-    return pair
-
-
-def _window(t: Table):
-    pair = _pair(t, "window")
-    if pair is None:
-        return None
-    lo, hi = WINDOW_RANGE
-    if not all(float(v).is_integer() and lo <= v <= hi for v in pair):
-        raise t.error("window", f"must be two integer epoch counts in {lo}..{hi}, "
-                                f"got {list(pair)}")
-    return (int(pair[0]), int(pair[1]))
-
-
-def _types(t: Table) -> tuple:
-    """``types``: the fuzzy-system types a trial may choose (``.type`` when several)."""
-    raw, _ = t._get("types", ["mamdani"])
-    if isinstance(raw, str):
-        raw = [raw]
-    if not isinstance(raw, list) or not raw or not all(v in FIS_TYPES for v in raw):
-        raise t.error("types", f"must be an array of {', '.join(FIS_TYPES)}, got {brief(raw)}")
-    return tuple(dict.fromkeys(raw))
-
-
-def _controller(t: Table, here: Path) -> ControllerConfig:
-    name = t.string("name")
-    tmpl = Path(t.string("template"))
-    if not tmpl.is_absolute():
-        tmpl = here / tmpl
-    _user_file(t, "template", tmpl, (".json", ".fis"), "rule file")
-    if tmpl.is_dir():
-        raise t.error("template", f"{tmpl} is a directory, not a rule file")
-    if not tmpl.is_file():
-        raise t.error("template", f"rule file not found: {tmpl}")
-    parts = {}
-    pt = t.table("partitions", required=False)
-    if pt is not None:
-        for var, counts in pt.data.items():
-            pt._used.add(var)
-            if isinstance(counts, int) and not isinstance(counts, bool):
-                counts = [counts]
-            if not isinstance(counts, list) or not counts or not all(
-                    isinstance(c, int) and not isinstance(c, bool) and 1 <= c <= 9 for c in counts):
-                raise pt.error(var, "must be a term count in 2..9 (or 1 on an input, "
-                                    "which switches it off) or an array of them")
-            parts[var] = tuple(sorted(set(counts)))
-    c = ControllerConfig(name=name, template=tmpl,
-                         tune=t.string("tune", "both", choices=TUNE_MODES),
-                         partitions=parts,
-                         free_triangles=t.boolean("free_triangles", False),
-                         rule_weights=t.boolean("rule_weights", False),
-                         window=_window(t),
-                         output_range=_factor_pair(t, "output_range"),
-                         output_low=_factor_pair(t, "output_low"),
-                         types=_types(t))
-    t.finish()
-    if c.output_low and c.output_range and not c.output_low[1] < c.output_range[0]:
-        raise t.error("output_low", "must lie below output_range (the output's low end "
-                                    "must stay under its high end)")
-    from fuzzynav.tuning.space import check_against_template
-
-    try:
-        check_against_template(c)
-    except InputFileError as exc:
-        if exc.path is not None:  # the template itself is broken: its own error says where
-            raise
-        raise t.error(exc.where, exc.what) from None
-    return c
 
 
 def _check_held_out(tt: Table, train: tuple, test: tuple) -> None:
@@ -410,7 +293,7 @@ def study_config_from_dict(doc: dict, path: Path | None = None,
         raise ob.error("t_start_s", f"{t_start:g} s is at or after the end of the shortest "
                                     f"run ({min(shortest, shortest_test):g} s): nothing "
                                     "would be scored")
-    ctrls = tuple(_controller(c, here) for c in top.tables("controllers", need_controllers))
+    ctrls = tuple(parse_controller(c, here) for c in top.tables("controllers", need_controllers))
     if not ctrls and need_controllers:
         raise top.error("controllers", "a study needs at least one [[controllers]] table")
     if len({c.name for c in ctrls}) != len(ctrls):

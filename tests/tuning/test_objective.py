@@ -68,7 +68,7 @@ def test_a_run_that_loses_its_covariance_scores_the_failed_ratio(cfg, sim_cache)
         if k.startswith("gps.rule."):
             params[k] = int(k.split(">")[1].split(".")[0]) - 1  # the top output term
     params["gps.out_hi"] = 1e10
-    # a study file may not ask for such a range (config.MAX_OUTPUT_FACTOR): set it in code
+    # a study file may not ask for such a range (controller_config.MAX_OUTPUT_FACTOR): set it in code
     gps = dataclasses.replace(cfg.controllers[0], output_range=(1e9, 1e10))
     cfg_wide = dataclasses.replace(cfg, controllers=(gps, cfg.controllers[1]))
     obj = Objective(cfg_wide, sim_cache)

@@ -13,7 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from fuzzynav.fuzzy import load_fis
-from fuzzynav.tuning.config import ControllerConfig
+from fuzzynav.tuning.controller_config import ControllerConfig
 from fuzzynav.tuning.space import ControllerSpace, build_all
 from tests.tuning.studies import ATT, GPS, ROR_GNSS
 
