@@ -21,7 +21,8 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
-from fuzzynav.filters.kalman import diagonal_tail, row_dots, square_tail
+from fuzzynav.filters.kalman import diagonal_tail, square_tail
+from fuzzynav.filters.tiles import rows_dots
 from fuzzynav.filters.layout import (BLOCK_KINDS, CORE, COUPLE_ACCEL, COUPLE_GYRO, X_ATT,
                                      X_POS, X_VEL, StateLayout, kind_of)
 from fuzzynav.nav.earth import E2, OMEGA_IE, gravity_nb, radii_nb
@@ -251,11 +252,17 @@ def discretize(F, q_diag, dt, Phi, Qd, work):
     for i in range(d):
         for k in range(n):
             FQ[i, k] = F[i, k] * q_diag[k]
-    for i in range(n):  # Qd[i, j >= i]: the F Q F^T dot products first, into the row
+    for i in range(n):  # Qd[i, j >= i]: the F Q F^T dot products first
         for j in range(i, n):
             Qd[i, j] = 0.0
-        if i < d:
-            row_dots(FQ[i], F, i, d, Qd[i])
+    i = 0
+    while i < d:  # two rows at a time; row i + 1's entry (i + 1, i) is rewritten below
+        two = i + 1 < d
+        if two:
+            Qd[i + 1, i] = 0.0
+        rows_dots(FQ, i, two, F, i, d, Qd)
+        i += 2
+    for i in range(n):
         for j in range(i, n):
             if j < d:
                 acc = Qd[i, j]

@@ -17,6 +17,8 @@ import math
 
 import numba as nb
 
+from fuzzynav.filters.tiles import rows_dots, rows_dots_diff, rows_times
+
 
 @nb.njit(cache=True)
 def diagonal_tail(A):
@@ -39,24 +41,31 @@ def propagate(P, Phi, Qd, work):
     """In place ``P <- Phi P Phi^T + Qd`` (``work`` is an n x n scratch array).
 
     Rows of ``Phi`` from :func:`diagonal_tail` on are scalings; the others are multiplied
-    densely (a zero entry adds an exact zero, so the result is the same as skipping it).
+    densely (a zero entry adds an exact zero, so the result is the same as skipping it),
+    two rows at a time in register tiles (:mod:`fuzzynav.filters.tiles`).
     """
     n = P.shape[0]
     d = diagonal_tail(Phi)
-    for i in range(d):  # work = Phi P
-        row_times(Phi[i], P, work[i])
+    rows_times(Phi, 0, d, P, n, work)  # work = Phi P
     for i in range(d, n):
         a = Phi[i, i]
         for j in range(n):
             work[i, j] = a * P[i, j]
-    for i in range(n):  # P = work Phi^T + Qd, upper triangle (row i of P is free now)
-        for j in range(i, n):
-            P[i, j] = Qd[i, j]
-        row_dots(work[i], Phi, i, d, P[i])
-        for j in range(max(i, d), n):
-            P[i, j] += work[i, j] * Phi[j, j]
-        for j in range(i + 1, n):
-            P[j, i] = P[i, j]
+    i = 0
+    while i < n:  # P = work Phi^T + Qd, upper triangle of rows i, i+1 (free now)
+        two = i + 1 < n
+        r_end = i + 2 if two else i + 1
+        for r in range(i, r_end):
+            for j in range(i, n):
+                P[r, j] = Qd[r, j]
+        if i < d:
+            rows_dots(work, i, two, Phi, i, d, P)
+        for r in range(i, r_end):
+            for j in range(max(r, d), n):
+                P[r, j] += work[r, j] * Phi[j, j]
+            for j in range(r + 1, n):
+                P[j, r] = P[r, j]
+        i = r_end
 
 
 @nb.njit(cache=True)
@@ -134,15 +143,17 @@ def _add_rows(A, i, B, k_end, out):
 def square_tail(F, d, out):
     """``out = F F`` for ``F`` whose rows from ``d`` on are diagonal (:func:`diagonal_tail`).
 
-    Each entry sums the same products in the same order as :func:`sparse_left_mul`.
+    The rows above ``d`` are multiplied densely over their first ``d`` columns (the tail
+    rows contribute their diagonal entry only, added last).
     """
     n = F.shape[0]
-    out[:, :] = 0.0
+    rows_times(F, 0, d, F, d, out)
     for i in range(d):
-        _add_rows(F, i, F, d, out)
-        for j in range(d, n):  # the tail rows contribute their diagonal entry only
+        for j in range(d, n):
             out[i, j] += F[i, j] * F[j, j]
     for i in range(d, n):
+        for j in range(n):
+            out[i, j] = 0.0
         out[i, i] = F[i, i] * F[i, i]
 
 
@@ -286,33 +297,14 @@ def joseph_update(P, H, R, m, r, PHt, K, x, AP, APHt):
             for b in range(m):
                 s += K[i, b] * S[b, a]
             V[i, a] = s
-    for i in range(n):
-        row_dots_diff(V[i], K[i], m, K, PHt, i, n, P[i])
-        for j in range(i + 1, n):
-            P[j, i] = P[i, j]
-
-
-@nb.njit(cache=True)
-def row_dots_diff(a, c, m, B, D, j0, j1, out):
-    """``out[j] += a[:m] . B[j, :m] - c[:m] . D[j, :m]`` for ``j0 <= j < j1``, four rows at
-    a time (the Joseph update's rank-2m correction; see :func:`row_dots`)."""
-    j = j0
-    while j + 4 <= j1:
-        s0, s1, s2, s3 = out[j], out[j + 1], out[j + 2], out[j + 3]
-        for k in range(m):
-            u, w = a[k], c[k]
-            s0 += u * B[j, k] - w * D[j, k]
-            s1 += u * B[j + 1, k] - w * D[j + 1, k]
-            s2 += u * B[j + 2, k] - w * D[j + 2, k]
-            s3 += u * B[j + 3, k] - w * D[j + 3, k]
-        out[j], out[j + 1], out[j + 2], out[j + 3] = s0, s1, s2, s3
-        j += 4
-    while j < j1:
-        s = out[j]
-        for k in range(m):
-            s += a[k] * B[j, k] - c[k] * D[j, k]
-        out[j] = s
-        j += 1
+    i = 0
+    while i < n:  # rows i, i+1 from the diagonal on; (i + 1, i) is mirrored over below
+        two = i + 1 < n
+        rows_dots_diff(V, K, m, PHt, i, two, i, n, P)
+        for r in range(i, i + 2 if two else i + 1):
+            for j in range(r + 1, n):
+                P[j, r] = P[i + (r - i), j]
+        i += 2
 
 
 @nb.njit(cache=True)

@@ -1,0 +1,183 @@
+"""Small dense matrix products in register tiles (numba), for the covariance kernels.
+
+The covariance products of a 15- to 30-state filter are too small for BLAS (a call costs more
+than the arithmetic) and, written one dot product at a time, latency-bound: each sum waits for
+its previous addition.  These kernels compute two rows by four columns at once, eight
+independent sums sharing every load, which keeps the floating-point units busy.
+
+Every entry is still one sum in ascending index order, started from the same value, so the
+results are bit-for-bit those of the plain loops they replace (:func:`fuzzynav.filters.kalman.row_times`
+and :func:`~fuzzynav.filters.kalman.row_dots`); only the order in which entries are computed
+changes.  Two forms:
+
+* :func:`rows_times` — ``out[i, j] = sum_k A[i, k] B[k, j]`` (``A B``, rows of ``A``);
+* :func:`rows_dots` — ``out[i, j] += sum_k A[i, k] B[j, k]`` (``A B^T``, a block of it).
+"""
+from __future__ import annotations
+
+import numba as nb
+
+
+@nb.njit(cache=True)
+def rows_times(A, i0, i1, B, k_end, out):
+    """``out[i, :] = A[i, :k_end] B[:k_end, :]`` for the rows ``i0 <= i < i1``.
+
+    Sums run over ``k`` in ascending order from 0.0.
+    """
+    i = i0
+    while i + 2 <= i1:
+        _two_rows_times(A, i, B, k_end, out)
+        i += 2
+    if i < i1:
+        _one_row_times(A, i, B, k_end, out)
+
+
+@nb.njit(cache=True)
+def _two_rows_times(A, i, B, k_end, out):
+    n = B.shape[1]
+    j = 0
+    while j + 4 <= n:
+        a0 = a1 = a2 = a3 = b0 = b1 = b2 = b3 = 0.0
+        for k in range(k_end):
+            u, v = A[i, k], A[i + 1, k]
+            p0, p1, p2, p3 = B[k, j], B[k, j + 1], B[k, j + 2], B[k, j + 3]
+            a0 += u * p0
+            a1 += u * p1
+            a2 += u * p2
+            a3 += u * p3
+            b0 += v * p0
+            b1 += v * p1
+            b2 += v * p2
+            b3 += v * p3
+        out[i, j], out[i, j + 1], out[i, j + 2], out[i, j + 3] = a0, a1, a2, a3
+        out[i + 1, j], out[i + 1, j + 1], out[i + 1, j + 2], out[i + 1, j + 3] = b0, b1, b2, b3
+        j += 4
+    while j < n:
+        a0 = b0 = 0.0
+        for k in range(k_end):
+            p = B[k, j]
+            a0 += A[i, k] * p
+            b0 += A[i + 1, k] * p
+        out[i, j], out[i + 1, j] = a0, b0
+        j += 1
+
+
+@nb.njit(cache=True)
+def _one_row_times(A, i, B, k_end, out):
+    n = B.shape[1]
+    j = 0
+    while j + 4 <= n:
+        a0 = a1 = a2 = a3 = 0.0
+        for k in range(k_end):
+            u = A[i, k]
+            a0 += u * B[k, j]
+            a1 += u * B[k, j + 1]
+            a2 += u * B[k, j + 2]
+            a3 += u * B[k, j + 3]
+        out[i, j], out[i, j + 1], out[i, j + 2], out[i, j + 3] = a0, a1, a2, a3
+        j += 4
+    while j < n:
+        a0 = 0.0
+        for k in range(k_end):
+            a0 += A[i, k] * B[k, j]
+        out[i, j] = a0
+        j += 1
+
+
+@nb.njit(cache=True)
+def rows_dots(A, i, two, B, j0, j1, out):
+    """``out[r, j] += A[r] . B[j]`` for ``r = i`` (and ``i + 1`` when ``two``), ``j0 <= j < j1``.
+
+    Each sum starts from ``out``'s entry and adds the products in ascending ``k``.
+    """
+    n = A.shape[1]
+    j = j0
+    if two:
+        while j + 4 <= j1:
+            a0, a1, a2, a3 = out[i, j], out[i, j + 1], out[i, j + 2], out[i, j + 3]
+            b0, b1, b2, b3 = out[i + 1, j], out[i + 1, j + 1], out[i + 1, j + 2], \
+                out[i + 1, j + 3]
+            for k in range(n):
+                u, v = A[i, k], A[i + 1, k]
+                p0, p1, p2, p3 = B[j, k], B[j + 1, k], B[j + 2, k], B[j + 3, k]
+                a0 += u * p0
+                a1 += u * p1
+                a2 += u * p2
+                a3 += u * p3
+                b0 += v * p0
+                b1 += v * p1
+                b2 += v * p2
+                b3 += v * p3
+            out[i, j], out[i, j + 1], out[i, j + 2], out[i, j + 3] = a0, a1, a2, a3
+            out[i + 1, j], out[i + 1, j + 1], out[i + 1, j + 2], out[i + 1, j + 3] = \
+                b0, b1, b2, b3
+            j += 4
+        while j < j1:
+            a0, b0 = out[i, j], out[i + 1, j]
+            for k in range(n):
+                p = B[j, k]
+                a0 += A[i, k] * p
+                b0 += A[i + 1, k] * p
+            out[i, j], out[i + 1, j] = a0, b0
+            j += 1
+        return
+    while j + 4 <= j1:
+        a0, a1, a2, a3 = out[i, j], out[i, j + 1], out[i, j + 2], out[i, j + 3]
+        for k in range(n):
+            u = A[i, k]
+            a0 += u * B[j, k]
+            a1 += u * B[j + 1, k]
+            a2 += u * B[j + 2, k]
+            a3 += u * B[j + 3, k]
+        out[i, j], out[i, j + 1], out[i, j + 2], out[i, j + 3] = a0, a1, a2, a3
+        j += 4
+    while j < j1:
+        a0 = out[i, j]
+        for k in range(n):
+            a0 += A[i, k] * B[j, k]
+        out[i, j] = a0
+        j += 1
+
+
+@nb.njit(cache=True)
+def rows_dots_diff(V, K, m, D, i, two, j0, j1, out):
+    """``out[r, j] += V[r, :m] . K[j, :m] - K[r, :m] . D[j, :m]`` for ``r = i`` (and
+    ``i + 1`` when ``two``), ``j0 <= j < j1`` (the Joseph update's rank-2m correction).
+
+    Each sum starts from ``out``'s entry and adds ``V[r, k] K[j, k] - K[r, k] D[j, k]``
+    in ascending ``k``.
+    """
+    j = j0
+    if not two:
+        while j < j1:
+            s = out[i, j]
+            for k in range(m):
+                s += V[i, k] * K[j, k] - K[i, k] * D[j, k]
+            out[i, j] = s
+            j += 1
+        return
+    while j + 4 <= j1:
+        a0, a1, a2, a3 = out[i, j], out[i, j + 1], out[i, j + 2], out[i, j + 3]
+        b0, b1, b2, b3 = out[i + 1, j], out[i + 1, j + 1], out[i + 1, j + 2], out[i + 1, j + 3]
+        for k in range(m):
+            u, w, p, q = V[i, k], K[i, k], V[i + 1, k], K[i + 1, k]
+            k0, k1, k2, k3 = K[j, k], K[j + 1, k], K[j + 2, k], K[j + 3, k]
+            d0, d1, d2, d3 = D[j, k], D[j + 1, k], D[j + 2, k], D[j + 3, k]
+            a0 += u * k0 - w * d0
+            a1 += u * k1 - w * d1
+            a2 += u * k2 - w * d2
+            a3 += u * k3 - w * d3
+            b0 += p * k0 - q * d0
+            b1 += p * k1 - q * d1
+            b2 += p * k2 - q * d2
+            b3 += p * k3 - q * d3
+        out[i, j], out[i, j + 1], out[i, j + 2], out[i, j + 3] = a0, a1, a2, a3
+        out[i + 1, j], out[i + 1, j + 1], out[i + 1, j + 2], out[i + 1, j + 3] = b0, b1, b2, b3
+        j += 4
+    while j < j1:
+        a0, b0 = out[i, j], out[i + 1, j]
+        for k in range(m):
+            a0 += V[i, k] * K[j, k] - K[i, k] * D[j, k]
+            b0 += V[i + 1, k] * K[j, k] - K[i + 1, k] * D[j, k]
+        out[i, j], out[i + 1, j] = a0, b0
+        j += 1
