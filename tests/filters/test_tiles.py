@@ -1,0 +1,69 @@
+"""The register-tiled products against numpy and against plain in-order sums.
+
+Every tile entry is one sum in ascending index order, so it must agree with the plain
+Python loop to rounding (stated: 1e-14 relative; in practice identical), for every shape:
+odd and even row counts, column counts that are and are not multiples of four.
+"""
+import numpy as np
+import pytest
+
+from fuzzynav.filters.tiles import rows_dots, rows_dots_diff, rows_times
+
+SHAPES = [(1, 1), (2, 3), (3, 4), (5, 7), (9, 15), (10, 19), (15, 15)]
+
+
+def _close(a, b, rel=1e-14):
+    scale = max(np.abs(b).max(), 1e-300)
+    assert np.abs(a - b).max() <= rel * scale
+
+
+@pytest.mark.parametrize("rows, n", SHAPES)
+def test_rows_times_is_a_times_b_for_the_chosen_rows(rows, n):
+    rng = np.random.default_rng(rows * 100 + n)
+    A, B = rng.normal(size=(n, n)), rng.normal(size=(n, n))
+    k_end = max(1, n - 2)
+    out = np.full((n, n), np.nan)
+    rows_times(A, 0, rows if rows <= n else n, B, k_end, out)
+    r = min(rows, n)
+    plain = np.array([[sum(A[i, k] * B[k, j] for k in range(k_end)) for j in range(n)]
+                      for i in range(r)])
+    _close(out[:r], plain)
+    _close(out[:r], A[:r, :k_end] @ B[:k_end], rel=1e-12)
+    assert np.isnan(out[r:]).all()  # rows outside the range are left alone
+
+
+@pytest.mark.parametrize("two", [False, True])
+@pytest.mark.parametrize("n, j0, j1", [(15, 0, 9), (15, 3, 15), (7, 2, 3), (19, 4, 17)])
+def test_rows_dots_adds_a_b_transpose_to_the_block(two, n, j0, j1):
+    rng = np.random.default_rng(n + j0 + 31 * j1)
+    A, B, out0 = rng.normal(size=(n, n)), rng.normal(size=(n, n)), rng.normal(size=(n, n))
+    out = out0.copy()
+    i = 1
+    rows_dots(A, i, two, B, j0, j1, out)
+    rows = [i, i + 1] if two else [i]
+    expect = out0.copy()
+    for r in rows:
+        for j in range(j0, j1):
+            s = out0[r, j]
+            for k in range(n):
+                s += A[r, k] * B[j, k]
+            expect[r, j] = s
+    _close(out, expect)
+    np.testing.assert_array_equal(np.delete(out, rows, axis=0), np.delete(out0, rows, axis=0))
+
+
+@pytest.mark.parametrize("two", [False, True])
+@pytest.mark.parametrize("m", [1, 2, 6])
+def test_rows_dots_diff_is_the_rank_2m_joseph_correction(two, m):
+    n = 15
+    rng = np.random.default_rng(m)
+    V, K, D, out0 = (rng.normal(size=(n, 6)), rng.normal(size=(n, 6)),
+                     rng.normal(size=(n, 6)), rng.normal(size=(n, n)))
+    out = out0.copy()
+    rows_dots_diff(V, K, m, D, 4, two, 4, n, out)
+    expect = out0 + V[:, :m] @ K[:, :m].T - K[:, :m] @ D[:, :m].T
+    for r in ([4, 5] if two else [4]):
+        _close(out[r, 4:], expect[r, 4:], rel=1e-12)
+    untouched = np.ones((n, n), bool)
+    untouched[4:6 if two else 5, 4:] = False
+    np.testing.assert_array_equal(out[untouched], out0[untouched])
