@@ -17,7 +17,7 @@ import math
 
 import numba as nb
 
-from fuzzynav.filters.tiles import rows_dots, rows_dots_diff, rows_times
+from fuzzynav.filters.tiles import rows_dots, rows_dots_diff
 
 
 @nb.njit(cache=True)
@@ -46,7 +46,7 @@ def propagate(P, Phi, Qd, work):
     """
     n = P.shape[0]
     d = diagonal_tail(Phi)
-    rows_times(Phi, 0, d, P, n, work)  # work = Phi P
+    _rows_product(Phi, P, d, n, work)  # work[:d] = Phi P
     for i in range(d, n):
         a = Phi[i, i]
         for j in range(n):
@@ -69,55 +69,15 @@ def propagate(P, Phi, Qd, work):
 
 
 @nb.njit(cache=True)
-def row_times(a, B, out):
-    """``out = a B`` (a row times a square matrix), four columns at a time in registers;
-    each entry sums ``a[k] B[k, j]`` in index order."""
-    n = a.size
-    j = 0
-    while j + 4 <= n:
-        s0 = s1 = s2 = s3 = 0.0
-        for k in range(n):
-            w = a[k]
-            s0 += w * B[k, j]
-            s1 += w * B[k, j + 1]
-            s2 += w * B[k, j + 2]
-            s3 += w * B[k, j + 3]
-        out[j], out[j + 1], out[j + 2], out[j + 3] = s0, s1, s2, s3
-        j += 4
-    while j < n:
-        s = 0.0
-        for k in range(n):
-            s += a[k] * B[k, j]
-        out[j] = s
-        j += 1
-
-
-@nb.njit(cache=True)
-def row_dots(a, B, j0, j1, out):
-    """``out[j] += a . B[j]`` for the rows ``j0 <= j < j1`` of ``B``.
-
-    Four rows at a time: four independent sums share each load of ``a`` (the dot products
-    of the covariance kernels are latency-bound one at a time); every sum still runs in
-    index order, so the result is the same as one dot product after another.
-    """
-    n = a.size
-    j = j0
-    while j + 4 <= j1:
-        s0, s1, s2, s3 = out[j], out[j + 1], out[j + 2], out[j + 3]
-        for k in range(n):
-            w = a[k]
-            s0 += w * B[j, k]
-            s1 += w * B[j + 1, k]
-            s2 += w * B[j + 2, k]
-            s3 += w * B[j + 3, k]
-        out[j], out[j + 1], out[j + 2], out[j + 3] = s0, s1, s2, s3
-        j += 4
-    while j < j1:
-        s = out[j]
-        for k in range(n):
-            s += a[k] * B[j, k]
-        out[j] = s
-        j += 1
+def _rows_product(A, B, rows, n, out):
+    """``out[:rows, :n] = A[:rows] B``, two rows at a time (sums in ascending ``k`` from 0)."""
+    for i in range(rows):
+        for j in range(n):
+            out[i, j] = 0.0
+    i = 0
+    while i < rows:
+        rows_dots(A, i, i + 1 < rows, B.T, 0, n, out)
+        i += 2
 
 
 @nb.njit(cache=True)
@@ -147,7 +107,7 @@ def square_tail(F, d, out):
     rows contribute their diagonal entry only, added last).
     """
     n = F.shape[0]
-    rows_times(F, 0, d, F, d, out)
+    _rows_product(F[:, :d], F[:d, :], d, n, out)
     for i in range(d):
         for j in range(d, n):
             out[i, j] += F[i, j] * F[j, j]

@@ -6,82 +6,14 @@ its previous addition.  These kernels compute two rows by four columns at once, 
 independent sums sharing every load, which keeps the floating-point units busy.
 
 Every entry is still one sum in ascending index order, started from the same value, so the
-results are bit-for-bit those of the plain loops they replace (:func:`fuzzynav.filters.kalman.row_times`
-and :func:`~fuzzynav.filters.kalman.row_dots`); only the order in which entries are computed
-changes.  Two forms:
-
-* :func:`rows_times` — ``out[i, j] = sum_k A[i, k] B[k, j]`` (``A B``, rows of ``A``);
-* :func:`rows_dots` — ``out[i, j] += sum_k A[i, k] B[j, k]`` (``A B^T``, a block of it).
+results are bit-for-bit those of plain loops computing one dot product after another; only
+the order in which entries are computed changes.  :func:`rows_dots` adds a block of
+``A B^T``; given a transposed view ``B.T`` it computes ``A B`` (its loads then run along
+the rows of ``B``).  :func:`rows_dots_diff` is the Joseph update's rank-2m correction.
 """
 from __future__ import annotations
 
 import numba as nb
-
-
-@nb.njit(cache=True)
-def rows_times(A, i0, i1, B, k_end, out):
-    """``out[i, :] = A[i, :k_end] B[:k_end, :]`` for the rows ``i0 <= i < i1``.
-
-    Sums run over ``k`` in ascending order from 0.0.
-    """
-    i = i0
-    while i + 2 <= i1:
-        _two_rows_times(A, i, B, k_end, out)
-        i += 2
-    if i < i1:
-        _one_row_times(A, i, B, k_end, out)
-
-
-@nb.njit(cache=True)
-def _two_rows_times(A, i, B, k_end, out):
-    n = B.shape[1]
-    j = 0
-    while j + 4 <= n:
-        a0 = a1 = a2 = a3 = b0 = b1 = b2 = b3 = 0.0
-        for k in range(k_end):
-            u, v = A[i, k], A[i + 1, k]
-            p0, p1, p2, p3 = B[k, j], B[k, j + 1], B[k, j + 2], B[k, j + 3]
-            a0 += u * p0
-            a1 += u * p1
-            a2 += u * p2
-            a3 += u * p3
-            b0 += v * p0
-            b1 += v * p1
-            b2 += v * p2
-            b3 += v * p3
-        out[i, j], out[i, j + 1], out[i, j + 2], out[i, j + 3] = a0, a1, a2, a3
-        out[i + 1, j], out[i + 1, j + 1], out[i + 1, j + 2], out[i + 1, j + 3] = b0, b1, b2, b3
-        j += 4
-    while j < n:
-        a0 = b0 = 0.0
-        for k in range(k_end):
-            p = B[k, j]
-            a0 += A[i, k] * p
-            b0 += A[i + 1, k] * p
-        out[i, j], out[i + 1, j] = a0, b0
-        j += 1
-
-
-@nb.njit(cache=True)
-def _one_row_times(A, i, B, k_end, out):
-    n = B.shape[1]
-    j = 0
-    while j + 4 <= n:
-        a0 = a1 = a2 = a3 = 0.0
-        for k in range(k_end):
-            u = A[i, k]
-            a0 += u * B[k, j]
-            a1 += u * B[k, j + 1]
-            a2 += u * B[k, j + 2]
-            a3 += u * B[k, j + 3]
-        out[i, j], out[i, j + 1], out[i, j + 2], out[i, j + 3] = a0, a1, a2, a3
-        j += 4
-    while j < n:
-        a0 = 0.0
-        for k in range(k_end):
-            a0 += A[i, k] * B[k, j]
-        out[i, j] = a0
-        j += 1
 
 
 @nb.njit(cache=True)
