@@ -15,13 +15,14 @@ from fuzzynav.filters.config import FilterConfig
 from fuzzynav.filters.error_st import EM_ST, error_model_code, st_covariance
 from fuzzynav.filters.layout import N_CORE
 from fuzzynav.filters import loop
-from fuzzynav.filters.dispatch import memoise_table_types
+from fuzzynav.filters.dispatch import memoise_kernel_addresses, memoise_table_types
 from fuzzynav.filters.result import EventLog, FilterResult, LocalStates
 from fuzzynav.nav import strapdown
 from fuzzynav.nav.layout import LLA_SLICE, NAV_SIZE, Q_SLICE, VEL_SLICE
 
 # the kernel tables are the same few tuples run after run: numba types them once
 memoise_table_types(loop.run_loop)
+memoise_kernel_addresses()
 
 
 @dataclass(frozen=True)
