@@ -6,10 +6,14 @@ the one argument it cannot type from a fingerprint: it falls back to Python, whi
 each function's signature and looks up its machine address -- milliseconds per run, the
 same answer every time.  :func:`memoise_table_types` keeps that answer per tuple; numba still
 types and checks every other argument and picks the overload itself, so a run cannot reach
-a kernel compiled for other types.
+a kernel compiled for other types.  Unboxing the tuple then asks Python, per function, for
+the addresses of its compiled code for the signature the loop was typed with (two lookups
+through the overload table per function, ~0.1 ms each); :func:`memoise_kernel_addresses`
+keeps those per function and signature.
 """
 from __future__ import annotations
 
+import numba.experimental.function_type as _function_type
 from numba.core.dispatcher import Dispatcher
 
 #: tuples of kernels whose numba type is kept (a process builds a handful: one per registry
@@ -46,3 +50,45 @@ def memoise_table_types(dispatcher: Dispatcher) -> Dispatcher:
     # fingerprint (numba/_dispatcher.cpp), so an instance attribute takes effect
     dispatcher.typeof_pyval = typeof_pyval
     return dispatcher
+
+
+def _memoised_address(lookup):
+    """``lookup(func, sig)`` answered once per compiled function and signature object.
+
+    numba's unboxing code passes the signature as a constant it unpickles once, so the same
+    object comes back call after call: the key is the pair's identities (both kept alive by
+    the entry, so an identity is not reused while its entry lives) and the function's
+    overload count, so a function compiled for more signatures since is asked afresh.
+    """
+    memo = {}
+
+    def address(func, sig):
+        if not isinstance(func, Dispatcher):
+            return lookup(func, sig)
+        key = (id(func), id(sig))
+        hit = memo.get(key)
+        if hit is not None and hit[2] == len(func.overloads):
+            return hit[3]
+        addr = lookup(func, sig)
+        if len(memo) >= MAX_TABLES * 16:
+            memo.clear()
+        memo[key] = (func, sig, len(func.overloads), addr)
+        return addr
+
+    address.memoised = True
+    return address
+
+
+def memoise_kernel_addresses() -> None:
+    """Make numba look up a compiled function's addresses once per signature (idempotent).
+
+    Replaces the two module-level lookups that numba's generated unboxing code fetches by
+    name on every call (``numba.experimental.function_type._get_wrapper_address`` and
+    ``_get_jit_address``) with memoised ones answering the same.  An address stays valid
+    while its function lives: numba never frees an overload's code (``Dispatcher.recompile``
+    would, and fuzzynav never calls it).
+    """
+    for name in ("_get_wrapper_address", "_get_jit_address"):
+        lookup = getattr(_function_type, name)
+        if not getattr(lookup, "memoised", False):
+            setattr(_function_type, name, _memoised_address(lookup))

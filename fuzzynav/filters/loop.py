@@ -32,7 +32,6 @@ from fuzzynav.nav.layout import NAV_SIZE, PREV_SIZE
 from fuzzynav.nav.strapdown import init_prev, mech_step, quat_to_dcm_into
 
 
-
 class Imu(NamedTuple):
     """IMU increments: ``dth``, ``dv`` (N, 3) [rad, m/s] and ``time_s`` (N+1,)."""
 
@@ -168,7 +167,10 @@ def _record(j, t, nav, xs, st, P_master, beta, out, em):
         _sigma_into(out_sigl[j, k], P3[k], nav, em)
         for i in range(X.shape[1]):
             out_xl[j, k, i] = X[k, i]
-    _sigma_into(out_sig[j], P_master, nav, em)
+    if X.shape[0] > 1:
+        _sigma_into(out_sig[j], P_master, nav, em)
+    else:  # the bank of one: its master is its local, whose sigma is formed just above
+        out_sig[j, :] = out_sigl[j, 0]
 
 
 @nb.njit(cache=True)
@@ -262,8 +264,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
         for i in range(3):
             dth_c[i] = dth[k, i] - bg[i] * dt
             dv_c[i] = dv[k, i] - ba[i] * dt
-        mech_step(nav, prev, dth_c, dv_c, dt, f_n)
-        quat_to_dcm_into(nav, C)
+        mech_step(nav, prev, dth_c, dv_c, dt, f_n, C)  # C follows the new attitude
         for i in range(3):
             sumf[i] += f_n[i] * dt
             for j in range(3):

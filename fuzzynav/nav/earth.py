@@ -40,8 +40,13 @@ M_RATIO = OMEGA_IE**2 * A**2 * B / GM
 @nb.njit(cache=True)
 def radii_nb(lat_rad):
     """Meridian and prime-vertical radii of curvature ``(R_M, R_N)`` [m] (numba scalar)."""
-    s = math.sin(lat_rad)
-    w2 = 1.0 - E2 * s * s
+    return radii_sin_nb(math.sin(lat_rad))
+
+
+@nb.njit(cache=True)
+def radii_sin_nb(sin_lat):
+    """:func:`radii_nb` from the sine of the latitude (for callers that already have it)."""
+    w2 = 1.0 - E2 * sin_lat * sin_lat
     r_n = A / math.sqrt(w2)
     return r_n * (1.0 - E2) / w2, r_n
 
@@ -49,7 +54,13 @@ def radii_nb(lat_rad):
 @nb.njit(cache=True)
 def gravity_nb(lat_rad, h_m):
     """Magnitude of WGS-84 normal gravity [m/s^2] at latitude and height (numba scalar)."""
-    s2 = math.sin(lat_rad) ** 2
+    return gravity_sin_nb(math.sin(lat_rad), h_m)
+
+
+@nb.njit(cache=True)
+def gravity_sin_nb(sin_lat, h_m):
+    """:func:`gravity_nb` from the sine of the latitude (for callers that already have it)."""
+    s2 = sin_lat * sin_lat
     g0 = GAMMA_E * (1.0 + K_SOMIGLIANA * s2) / math.sqrt(1.0 - E2 * s2)
     return g0 * (1.0 - 2.0 / A * (1.0 + F + M_RATIO - 2.0 * F * s2) * h_m
                  + 3.0 * h_m * h_m / (A * A))

@@ -1,6 +1,7 @@
 """The per-run shortcuts of the study path give what the plain computations give.
 
-Kernel tables typed once per tuple (:mod:`fuzzynav.filters.dispatch`), output rows kept as
+Kernel tables typed once per tuple and their addresses looked up once per kernel and
+signature (:mod:`fuzzynav.filters.dispatch`), output rows kept as
 views of what the loop wrote, and the truth at a result's epochs remembered per trajectory
 (:func:`fuzzynav.metrics.errors_vs_trajectory`).
 """
@@ -12,6 +13,7 @@ import numpy as np
 import pytest
 
 from fuzzynav import metrics
+from fuzzynav.filters import dispatch
 from fuzzynav.filters.dispatch import memoise_table_types
 from fuzzynav.filters.result import FilterResult
 from fuzzynav.filters.runner import run_filter
@@ -44,6 +46,45 @@ def test_a_kernel_table_is_typed_once_and_a_new_one_afresh():
     assert sum(type(v) is tuple for v in typed) == 1
     assert _apply((_twice, _plus_one), 1, 3.0) == 4.0  # other kernels at index 1
     assert sum(type(v) is tuple for v in typed) == 2
+
+
+@nb.njit("float64(float64)")
+def _minus_one(x):
+    return x - 1.0
+
+
+@nb.njit
+def _halve(x):
+    return 0.5 * x
+
+
+def test_kernel_addresses_are_looked_up_once_per_kernel_and_signature():
+    asked = []
+    address = dispatch._memoised_address(lambda f, sig: (asked.append(f), id(f) + len(sig))[1])
+    sig_a, sig_b = tuple([1, 2]), tuple([1, 2])  # equal but distinct objects: the unboxer's are one object
+    assert address(_plus_one, sig_a) == id(_plus_one) + 2
+    assert address(_plus_one, sig_a) == id(_plus_one) + 2
+    assert address(_twice, sig_a) == id(_twice) + 2
+    assert asked == [_plus_one, _twice]
+    address(_plus_one, sig_b)  # another signature object
+    assert len(asked) == 3
+    _halve(1.0)
+    address(_halve, sig_a)
+    _halve(1)  # a new overload: asked afresh
+    address(_halve, sig_a)
+    assert asked[-2:] == [_halve, _halve] and len(asked) == 5
+    text = "not a dispatcher"
+    assert address(text, sig_a) == id(text) + 2
+    assert len(asked) == 6  # anything else goes straight through
+
+
+def test_memoised_addresses_still_call_the_right_kernels():
+    dispatch.memoise_kernel_addresses()
+    dispatch.memoise_kernel_addresses()  # idempotent: one memo layer
+    for _ in range(3):  # the second and third calls come from the memo
+        assert _apply((_minus_one, _twice), 0, 3.0) == 2.0
+        assert _apply((_twice, _minus_one), 0, 3.0) == 6.0
+        assert _apply((_twice, _minus_one), 1, 3.0) == 2.0
 
 
 @pytest.fixture(scope="module")
