@@ -17,9 +17,9 @@ import math
 import numba as nb
 import numpy as np
 
-from fuzzynav.nav.polarization_geometry import (HALF_PI, TWO_PI, aop_unfolded_and_gradient3,
-                                                dot3, rot_x, rot_y, sun_body_partials_cs,
-                                                wrap_pi)
+from fuzzynav.nav.polarization_geometry import (HALF_PI, TWO_PI, aop_residual_and_gradient3,
+                                                dot3, mod_pos, rot_x, rot_y,
+                                                sun_body_partials_cs, wrap_pi)
 
 #: entries per view in a frames array (:func:`view_frames`): view, x reference, y reference
 FRAME = 9
@@ -61,15 +61,29 @@ def view_frames(views_b):
 
 
 @nb.njit(cache=True)
-def _e_vector_scatter(aops, frames):
+def aop_trig(aops):
+    """``[cos aop_1..k, sin aop_1..k]`` of one epoch (NaN where the AoP is NaN).
+
+    The fit needs them for the E-vectors and for every residual; the filter has them
+    tabulated in its data rows (computed once per run, all epochs at a time).
+    """
+    k = aops.shape[0]
+    out = np.empty(2 * k)
+    for i in range(k):
+        out[i], out[k + i] = math.cos(aops[i]), math.sin(aops[i])
+    return out
+
+
+@nb.njit(cache=True)
+def _e_vector_scatter(aops, trig, frames):
     """``sum e e^T`` (6 entries) of the measured body-frame E-vectors; count used (no NaN)."""
     m00 = m01 = m02 = m11 = m12 = m22 = 0.0
-    k = 0
+    k, k_all = 0, aops.shape[0]
     for i in range(aops.shape[0]):
         if np.isnan(aops[i]):
             continue
         o = FRAME * i
-        ca, sa = math.cos(aops[i]), math.sin(aops[i])
+        ca, sa = trig[i], trig[k_all + i]
         ex = ca * frames[o + 3] + sa * frames[o + 6]
         ey = ca * frames[o + 4] + sa * frames[o + 7]
         ez = ca * frames[o + 5] + sa * frames[o + 8]
@@ -150,7 +164,7 @@ def _nearest_candidate(sx, sy, sz, sun_n, roll, pitch_prior, heading_prior,
             if not dist_p < best_d:  # cannot win (or NaN)
                 continue
             wx, wy, _ = rot_x(p, sign * ux, sign * uy, sign * uz)
-            h = (math.atan2(wy, wx) - sun_azimuth) % TWO_PI
+            h = mod_pos(math.atan2(wy, wx) - sun_azimuth, TWO_PI)
             dist = dist_p + (wrap_pi(h - heading_prior) / heading_prior_std) ** 2
             if dist < best_d:  # False for an absent (NaN) candidate
                 best_p, best_h, best_d = p, h, dist
@@ -210,23 +224,23 @@ def imaging_fit(aops, views_b, sun_n, roll, pitch_prior, heading_prior, pitch_pr
                 heading_prior_std, sigma_aop):
     """:func:`imaging_pitch_heading` with the covariance as three scalars:
     ``pitch, heading, c_pp, c_ph, c_hh, n_used``."""
-    return imaging_fit_frames(aops, view_frames(views_b), sun_n, roll, pitch_prior,
-                              heading_prior, pitch_prior_std, heading_prior_std,
-                              sigma_aop)[:6]
+    return imaging_fit_frames(aops, aop_trig(aops), view_frames(views_b), sun_n, roll,
+                              pitch_prior, heading_prior, pitch_prior_std,
+                              heading_prior_std, sigma_aop)[:6]
 
 
 @nb.njit(cache=True)
-def imaging_fit_frames(aops, frames, sun_n, roll, pitch_prior, heading_prior,
+def imaging_fit_frames(aops, trig, frames, sun_n, roll, pitch_prior, heading_prior,
                        pitch_prior_std, heading_prior_std, sigma_aop):
-    """:func:`imaging_fit` on precomputed :func:`view_frames`, without allocation (the
-    filter's measurement model), and how the solution moves with the roll it was given.
+    """:func:`imaging_fit` on precomputed :func:`view_frames` and :func:`aop_trig`, without
+    allocation (the filter's measurement model), and how the solution moves with the roll.
 
     Returns ``pitch, heading, c_pp, c_ph, c_hh, n_used, dpitch_droll, dheading_droll``; the
     last two by implicit differentiation of the normal equations at fixed AoPs,
     ``-(J^T J)^-1 J^T d aop/d roll``, from the sums of the fit's last evaluation.
     """
     nan = np.nan
-    m00, m01, m02, m11, m12, m22, k = _e_vector_scatter(aops, frames)
+    m00, m01, m02, m11, m12, m22, k = _e_vector_scatter(aops, trig, frames)
     if k < 2:
         return nan, nan, nan, nan, nan, k, nan, nan
     sx, sy, sz = _smallest_eigenvector(m00, m01, m02, m11, m12, m22)
@@ -235,14 +249,14 @@ def imaging_fit_frames(aops, frames, sun_n, roll, pitch_prior, heading_prior,
     if np.isnan(p):
         return nan, nan, nan, nan, nan, k, nan, nan
     c_roll, s_roll = math.cos(-roll), math.sin(-roll)  # fixed for the whole fit
-    p, h, n00, n01, n11, b0, b1 = _gauss_newton(aops, frames, sun_n, c_roll, s_roll, p, h)
+    p, h, n00, n01, n11, b0, b1 = _gauss_newton(aops, trig, frames, sun_n, c_roll, s_roll, p, h)
     det = n00 * n11 - n01 * n01
     if not det > 0.0:
         return nan, nan, nan, nan, nan, k, nan, nan
     s2 = sigma_aop * sigma_aop / det
-    h_out = h % TWO_PI
+    h_out = mod_pos(h, TWO_PI)
     if h_out != h:  # the sensitivity at the heading reported (differs in the last digits)
-        n00r, n01r, n11r, _, _, _, b0, b1 = _normal_equations(aops, frames, sun_n, c_roll,
+        n00r, n01r, n11r, _, _, _, b0, b1 = _normal_equations(aops, trig, frames, sun_n, c_roll,
                                                               s_roll, p, h_out)
         dp_dr, dh_dr = _roll_sensitivity(n00r, n01r, n11r, b0, b1)
     else:
@@ -260,27 +274,22 @@ def _roll_sensitivity(a00, a01, a11, b0, b1):
 
 
 @nb.njit(cache=True)
-def _fold_residual(a):
-    """Axial residual folded into [-pi/2, pi/2]: cheaper than ``%``; either end will do."""
-    return a - math.pi * math.floor(a / math.pi + 0.5)
-
-
-@nb.njit(cache=True)
-def _normal_equations(aops, frames, sun_n, c_roll, s_roll, p, h):
+def _normal_equations(aops, trig, frames, sun_n, c_roll, s_roll, p, h):
     """``J^T J`` (3 entries), ``J^T r``, the cost ``r^T r`` of the AoP residuals and
     ``J^T d aop/d roll`` (2 entries; a few products a view, spares a separate pass)."""
     # the sun's body direction and its partials are the same for every view
     s, ds_dp, ds_dr, ds_dh = sun_body_partials_cs(sun_n, p, c_roll, s_roll, h)
     n00 = n01 = n11 = g0 = g1 = cost = b0 = b1 = 0.0
-    for i in range(aops.shape[0]):
+    k = aops.shape[0]
+    for i in range(k):
         if np.isnan(aops[i]):
             continue
         o = FRAME * i
-        a, ga, gb, gc = aop_unfolded_and_gradient3(frames[o], frames[o + 1], frames[o + 2],
-                                                   s[0], s[1], s[2])
+        r, ga, gb, gc = aop_residual_and_gradient3(trig[i], trig[k + i], frames[o],
+                                                   frames[o + 1], frames[o + 2], s[0], s[1],
+                                                   s[2])
         dp, dh = dot3(ga, gb, gc, ds_dp), dot3(ga, gb, gc, ds_dh)
         dr = dot3(ga, gb, gc, ds_dr)
-        r = _fold_residual(aops[i] - a)
         n00 += dp * dp
         n01 += dp * dh
         n11 += dh * dh
@@ -293,7 +302,7 @@ def _normal_equations(aops, frames, sun_n, c_roll, s_roll, p, h):
 
 
 @nb.njit(cache=True)
-def _gauss_newton(aops, frames, sun_n, c_roll, s_roll, p, h):
+def _gauss_newton(aops, trig, frames, sun_n, c_roll, s_roll, p, h):
     """Least-squares (pitch, heading) of the AoP residuals; ``J^T J``, ``J^T d aop/d roll``.
 
     Gauss-Newton with Levenberg damping: the start can sit on the fold where J^T J is
@@ -305,7 +314,7 @@ def _gauss_newton(aops, frames, sun_n, c_roll, s_roll, p, h):
     creeps along a flat valley until the damped steps vanish (tens of iterations, at most
     ``_MAX_ITER``); its covariance then says the attitude is undetermined.
     """
-    n00, n01, n11, g0, g1, cost, b0, b1 = _normal_equations(aops, frames, sun_n, c_roll,
+    n00, n01, n11, g0, g1, cost, b0, b1 = _normal_equations(aops, trig, frames, sun_n, c_roll,
                                                              s_roll, p, h)
     lam = _LAM_START
     for _ in range(_MAX_ITER):
@@ -320,7 +329,7 @@ def _gauss_newton(aops, frames, sun_n, c_roll, s_roll, p, h):
         moved = step_p * (n00 * step_p + 2.0 * n01 * step_h) + n11 * step_h * step_h
         if abs(step_p) + abs(step_h) < _STEP_TOL or moved < _STEP_TOL * _STEP_TOL:
             break
-        trial = _normal_equations(aops, frames, sun_n, c_roll, s_roll, p + step_p,
+        trial = _normal_equations(aops, trig, frames, sun_n, c_roll, s_roll, p + step_p,
                                   h + step_h)
         slack = _COST_RTOL if lam <= _LAM_UNDAMPED else 0.0
         if trial[5] <= cost * (1.0 + slack):

@@ -1,9 +1,11 @@
 """Skylight-polarization compass: heading (and pitch) residuals against the INS.
 
 Data row (:mod:`fuzzynav.sim.sensors.polarization`): ``[aop_1..aop_k, sun_e, sun_n, sun_u,
-sigma_1..sigma_k, 0, 0, 0]``.  Parameters: ``[sensor_type, k, mode, prior_pitch_std,
-prior_heading_std, frames (k x 9)]``, the frames (view direction and the reference axes of
-its AoP, :func:`~fuzzynav.nav.polarization_imaging.view_frames`) computed once per run.
+sigma_1..sigma_k, 0, 0, 0, cos aop_1..k, sin aop_1..k]``, the cosines and sines tabulated
+for all epochs at once (:func:`rows`; a row without them has them computed per epoch).
+Parameters: ``[sensor_type, k, mode, prior_pitch_std, prior_heading_std, frames (k x 9)]``,
+the frames (view direction and the reference axes of its AoP,
+:func:`~fuzzynav.nav.polarization_imaging.view_frames`) computed once per run.
 
 Modes
 -----
@@ -34,9 +36,12 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.filters.layout import X_ATT
-from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
+from fuzzynav.filters.measurements import (MEAS_SIG, MeasurementModel, default_rows,
+                                           register)
 from fuzzynav.nav import polarization as ps
-from fuzzynav.nav.polarization_imaging import FRAME, imaging_fit_frames, view_frames
+from fuzzynav.nav.polarization_geometry import TWO_PI, fold_half_pi, mod_pos, wrap_pi
+from fuzzynav.nav.polarization_imaging import (FRAME, aop_trig, imaging_fit_frames,
+                                               view_frames)
 
 MODES = {"angles": 0, "aop": 1}
 CH_HEADING, CH_PITCH, CH_AOP = 0, 1, 2
@@ -66,20 +71,10 @@ def euler_rows(C):
 
 
 @nb.njit(cache=True)
-def _wrap(a):
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
-
-
-@nb.njit(cache=True)
-def _fold(a):
-    return (a + 0.5 * math.pi) % math.pi - 0.5 * math.pi
-
-
-@nb.njit(cache=True)
 def _euler(C):
     pitch = math.asin(max(-1.0, min(1.0, C[2, 1])))
     roll = math.atan2(-C[2, 0], C[2, 2])
-    heading = math.atan2(C[0, 1], C[1, 1]) % (2.0 * math.pi)
+    heading = mod_pos(math.atan2(C[0, 1], C[1, 1]), TWO_PI)
     return pitch, roll, heading
 
 
@@ -93,7 +88,7 @@ def _point(C, aop, sun, sigma, J, z, H, R, chan):
     if not (math.isfinite(dp) and math.isfinite(dr)):
         return 0  # the two heading roots coincide: the conversion is singular here
     euler_jacobian(C, J)
-    z[0] = _wrap(heading - h)
+    z[0] = wrap_pi(heading - h)
     for j in range(3):
         H[0, X_ATT + j] = J[2, j] - dp * J[0, j] - dr * J[1, j]
     R[0] = (dh_da * sigma) ** 2
@@ -102,10 +97,10 @@ def _point(C, aop, sun, sigma, J, z, H, R, chan):
 
 
 @nb.njit(cache=True)
-def _imaging(C, aops, frames, sun, sigma, prior_std, z, H, R, chan):
+def _imaging(C, aops, trig, frames, sun, sigma, prior_std, z, H, R, chan):
     pitch, roll, heading = _euler(C)
     p, h, c00, c01, c11, _, dp_dr, dh_dr = imaging_fit_frames(
-        aops, frames, sun, roll, pitch, heading, prior_std[0], prior_std[1], sigma)
+        aops, trig, frames, sun, roll, pitch, heading, prior_std[0], prior_std[1], sigma)
     if not (math.isfinite(p) and math.isfinite(h)):
         return 0
     if not (math.isfinite(dp_dr) and math.isfinite(dh_dr)):
@@ -114,7 +109,7 @@ def _imaging(C, aops, frames, sun, sigma, prior_std, z, H, R, chan):
     # rows as seen through the solver: d(angle) - d(solution)/d(roll) d(roll)
     jp = (jp[0] - dp_dr * jr[0], jp[1] - dp_dr * jr[1], jp[2] - dp_dr * jr[2])
     jh = (jh[0] - dh_dr * jr[0], jh[1] - dh_dr * jr[1], jh[2] - dh_dr * jr[2])
-    dh = _wrap(heading - h)
+    dh = wrap_pi(heading - h)
     if not (0.0 < c00 < _MAX_VAR) or not (0.0 < c11 < _MAX_VAR):
         # degenerate geometry (views nearly in one plane with the sun): keep at most the
         # heading row when it alone is well determined
@@ -150,7 +145,7 @@ def _raw(C, aops, frames, sun, sigmas, z, H, R, chan):
         pred, jac = ps.aop_attitude_jacobian(C, frames[FRAME * i:FRAME * i + 3], sun)
         if not math.isfinite(pred):
             continue
-        z[m] = _fold(pred - aops[i])
+        z[m] = fold_half_pi(pred - aops[i])
         for j in range(3):
             H[m, X_ATT + j] = jac[j]
         R[m] = sigmas[i] ** 2
@@ -173,7 +168,9 @@ def polarization_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
             return 0
         J = np.empty((3, 3))
         return _point(C_bn, aops[0], sun, sig[0], J, z, H, R, chan)
-    return _imaging(C_bn, aops, frames, sun, sig[0], par[3:5], z, H, R, chan)
+    t0 = 2 * k + 6  # the tabulated cosines and sines follow z and sigma
+    trig = row[t0:t0 + 2 * k] if row.size >= t0 + 2 * k else aop_trig(aops)
+    return _imaging(C_bn, aops, trig, frames, sun, sig[0], par[3:5], z, H, R, chan)
 
 
 def _pack(data, options) -> np.ndarray:
@@ -188,5 +185,13 @@ def _pack(data, options) -> np.ndarray:
                             MODES[mode], *prior], view_frames(np.ascontiguousarray(views))])
 
 
+def rows(data) -> np.ndarray:
+    """Data rows with the AoPs' cosines and sines appended (all epochs in one numpy call)."""
+    k = data.z.shape[1] - 3
+    aops = np.asarray(data.z[:, :k], float)
+    return np.hstack([default_rows(data), np.cos(aops), np.sin(aops)])
+
+
 MODEL = register(MeasurementModel(kind="polarization", kernel=polarization_kernel,
-                                  max_rows=9, channels=("heading", "pitch", "aop"), pack=_pack))
+                                  max_rows=9, channels=("heading", "pitch", "aop"), pack=_pack,
+                                  rows=rows))
