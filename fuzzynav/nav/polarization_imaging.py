@@ -18,7 +18,7 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.nav.polarization_geometry import (HALF_PI, TWO_PI, aop_residual_and_gradient3,
-                                                dot3, mod_pos, rot_x, rot_y,
+                                                dot3, mod_pos, rot_x, rot_y_cs,
                                                 sun_body_partials_cs, wrap_pi)
 
 #: entries per view in a frames array (:func:`view_frames`): view, x reference, y reference
@@ -134,26 +134,26 @@ def _smallest_eigenvector(m00, m01, m02, m11, m12, m22):
 
 
 @nb.njit(cache=True)
-def _nearest_candidate(sx, sy, sz, sun_n, roll, pitch_prior, heading_prior,
-                       pitch_prior_std, heading_prior_std):
+def _nearest_candidate(sx, sy, sz, sun_n, sun_azimuth, c_roll, s_roll, pitch_prior,
+                       heading_prior, pitch_prior_std, heading_prior_std):
     """Of the up to four attitudes with ``C_bn (+-s_b) = sun_n``, the nearest to the prior.
 
     ``u = R2(roll) s_b`` must rise to the sun's elevation under ``R1(pitch)``:
     ``rho cos(pitch - p0) = sun_U``, roots ``p0 +- d``; ``-u`` has them shifted by pi.  Near the
     fold (sun abeam) noise can lift the sun's elevation just out of reach of any pitch; up to
     ``_FOLD_SLACK`` the fold point itself is a candidate and Gauss-Newton refines.  Distances
-    in prior standard deviations; NaN when no candidate exists.  The heading term of a
+    in prior standard deviations; NaN when no candidate exists.  ``c_roll, s_roll`` are
+    ``cos(-roll), sin(-roll)`` (shared with the fit).  The heading term of a
     distance only adds to its pitch term (rounding is monotonic), so a candidate whose pitch
     alone is no nearer than the best so far is skipped before its trigonometry: the same
     choice, fewer ``cos``/``sin``/``atan2``.
     """
-    ux, uy, uz = rot_y(roll, sx, sy, sz)
+    ux, uy, uz = rot_y_cs(c_roll, -s_roll, sx, sy, sz)  # R2(roll): c_roll, s_roll of -roll
     rho = math.hypot(uy, uz)
     if rho < 1e-12 or abs(sun_n[2]) > rho + _FOLD_SLACK:
         return np.nan, np.nan
     p0 = math.atan2(uy, uz)
     d = math.acos(min(1.0, max(-1.0, sun_n[2] / rho)))
-    sun_azimuth = math.atan2(sun_n[1], sun_n[0])
     best_p, best_h, best_d = np.nan, np.nan, np.inf
     for sign, shift in ((1.0, 0.0), (-1.0, math.pi)):
         for root in (p0 + shift + d, p0 + shift - d):
@@ -224,31 +224,33 @@ def imaging_fit(aops, views_b, sun_n, roll, pitch_prior, heading_prior, pitch_pr
                 heading_prior_std, sigma_aop):
     """:func:`imaging_pitch_heading` with the covariance as three scalars:
     ``pitch, heading, c_pp, c_ph, c_hh, n_used``."""
-    return imaging_fit_frames(aops, aop_trig(aops), view_frames(views_b), sun_n, roll,
-                              pitch_prior, heading_prior, pitch_prior_std,
-                              heading_prior_std, sigma_aop)[:6]
+    return imaging_fit_frames(aops, aop_trig(aops), view_frames(views_b), sun_n,
+                              math.atan2(sun_n[1], sun_n[0]), roll, pitch_prior,
+                              heading_prior, pitch_prior_std, heading_prior_std,
+                              sigma_aop)[:6]
 
 
 @nb.njit(cache=True)
-def imaging_fit_frames(aops, trig, frames, sun_n, roll, pitch_prior, heading_prior,
-                       pitch_prior_std, heading_prior_std, sigma_aop):
+def imaging_fit_frames(aops, trig, frames, sun_n, sun_azimuth, roll, pitch_prior,
+                       heading_prior, pitch_prior_std, heading_prior_std, sigma_aop):
     """:func:`imaging_fit` on precomputed :func:`view_frames` and :func:`aop_trig`, without
     allocation (the filter's measurement model), and how the solution moves with the roll.
 
     Returns ``pitch, heading, c_pp, c_ph, c_hh, n_used, dpitch_droll, dheading_droll``; the
     last two by implicit differentiation of the normal equations at fixed AoPs,
     ``-(J^T J)^-1 J^T d aop/d roll``, from the sums of the fit's last evaluation.
+    ``sun_azimuth`` is ``atan2(sun_n[1], sun_n[0])`` (the filter tabulates it per epoch).
     """
     nan = np.nan
     m00, m01, m02, m11, m12, m22, k = _e_vector_scatter(aops, trig, frames)
     if k < 2:
         return nan, nan, nan, nan, nan, k, nan, nan
     sx, sy, sz = _smallest_eigenvector(m00, m01, m02, m11, m12, m22)
-    p, h = _nearest_candidate(sx, sy, sz, sun_n, roll, pitch_prior, heading_prior,
-                              pitch_prior_std, heading_prior_std)
+    c_roll, s_roll = math.cos(-roll), math.sin(-roll)  # fixed for the whole fit
+    p, h = _nearest_candidate(sx, sy, sz, sun_n, sun_azimuth, c_roll, s_roll, pitch_prior,
+                              heading_prior, pitch_prior_std, heading_prior_std)
     if np.isnan(p):
         return nan, nan, nan, nan, nan, k, nan, nan
-    c_roll, s_roll = math.cos(-roll), math.sin(-roll)  # fixed for the whole fit
     p, h, n00, n01, n11, b0, b1 = _gauss_newton(aops, trig, frames, sun_n, c_roll, s_roll, p, h)
     det = n00 * n11 - n01 * n01
     if not det > 0.0:

@@ -114,8 +114,8 @@ def test_nonholonomic_constraint_residual_and_jacobian():
 
 
 def test_polarization_rows_carry_the_aop_trigonometry():
-    """The model's rows end in cos and sin of the AoPs; a row without them (computed per
-    epoch then) gives the same fix to rounding."""
+    """The model's rows end in cos and sin of the AoPs and the sun's azimuth; a row without
+    them (computed per epoch then) gives the same fix to rounding."""
     data, tr = _polarization_row({"sensor_type": "imaging"})
     model = get("polarization")
     par = model.pack(data, {})
@@ -126,6 +126,11 @@ def test_polarization_rows_carry_the_aop_trigonometry():
     ok = ~np.isnan(data.z[:, :k])
     np.testing.assert_allclose((c * c + s * s)[ok], 1.0, rtol=1e-15)
     np.testing.assert_allclose(np.arctan2(s, c)[ok], data.z[:, :k][ok], atol=1e-15)
+    # the sun's azimuth: its unit direction at that azimuth and elevation
+    az, sun = full[:, w + 2 * k], data.z[:, k:k + 3]
+    horiz = np.sqrt(1.0 - sun[:, 2] ** 2)
+    np.testing.assert_allclose(np.column_stack([horiz * np.cos(az), horiz * np.sin(az)]),
+                               sun[:, :2], atol=1e-12)
     i = int(round(data.time_s[0] * tr.imu_rate_hz))
     nav = _perturbed(strapdown.make_nav(tr.lla[i], tr.vel_n[i], tr.q_bn[i]),
                      np.r_[0.01, -0.02, 0.03, np.zeros(6)])

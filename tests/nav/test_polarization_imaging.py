@@ -151,8 +151,9 @@ def test_roll_sensitivity_is_the_slope_of_the_fit():
         pitch, roll = rng.uniform(-0.3, 0.3, 2)
         aops = sk.angle_of_polarization(VIEWS, euler_to_dcm([pitch, roll, heading]).T @ sun_n)
         aops = aops + noise * rng.standard_normal(aops.shape)
-        fit = pim.imaging_fit_frames(aops, pim.aop_trig(aops), frames, sun_n, roll, pitch,
-                                     heading, 0.1, 0.2, 0.01)
+        fit = pim.imaging_fit_frames(aops, pim.aop_trig(aops), frames, sun_n,
+                                     np.arctan2(sun_n[1], sun_n[0]), roll, pitch, heading,
+                                     0.1, 0.2, 0.01)
         if not (fit[2] < 0.01 and fit[4] < 0.01):
             continue  # a fit on the fold: the attitude is undetermined, no slope to compare
         used += 1

@@ -1,8 +1,9 @@
 """Skylight-polarization compass: heading (and pitch) residuals against the INS.
 
 Data row (:mod:`fuzzynav.sim.sensors.polarization`): ``[aop_1..aop_k, sun_e, sun_n, sun_u,
-sigma_1..sigma_k, 0, 0, 0, cos aop_1..k, sin aop_1..k]``, the cosines and sines tabulated
-for all epochs at once (:func:`rows`; a row without them has them computed per epoch).
+sigma_1..sigma_k, 0, 0, 0, cos aop_1..k, sin aop_1..k, sun_azimuth]``, the last 2k + 1
+tabulated for all epochs at once (:func:`rows`; a row without them has them computed per
+epoch).
 Parameters: ``[sensor_type, k, mode, prior_pitch_std, prior_heading_std, frames (k x 9)]``,
 the frames (view direction and the reference axes of its AoP,
 :func:`~fuzzynav.nav.polarization_imaging.view_frames`) computed once per run.
@@ -97,10 +98,10 @@ def _point(C, aop, sun, sigma, J, z, H, R, chan):
 
 
 @nb.njit(cache=True)
-def _imaging(C, aops, trig, frames, sun, sigma, prior_std, z, H, R, chan):
+def _imaging(C, aops, trig, frames, sun, sun_az, sigma, prior_std, z, H, R, chan):
     pitch, roll, heading = _euler(C)
     p, h, c00, c01, c11, _, dp_dr, dh_dr = imaging_fit_frames(
-        aops, trig, frames, sun, roll, pitch, heading, prior_std[0], prior_std[1], sigma)
+        aops, trig, frames, sun, sun_az, roll, pitch, heading, prior_std[0], prior_std[1], sigma)
     if not (math.isfinite(p) and math.isfinite(h)):
         return 0
     if not (math.isfinite(dp_dr) and math.isfinite(dh_dr)):
@@ -168,9 +169,12 @@ def polarization_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
             return 0
         J = np.empty((3, 3))
         return _point(C_bn, aops[0], sun, sig[0], J, z, H, R, chan)
-    t0 = 2 * k + 6  # the tabulated cosines and sines follow z and sigma
-    trig = row[t0:t0 + 2 * k] if row.size >= t0 + 2 * k else aop_trig(aops)
-    return _imaging(C_bn, aops, trig, frames, sun, sig[0], par[3:5], z, H, R, chan)
+    t0 = 2 * k + 6  # the tabulated cosines, sines and sun azimuth follow z and sigma
+    if row.size > t0 + 2 * k:
+        trig, sun_az = row[t0:t0 + 2 * k], row[t0 + 2 * k]
+    else:
+        trig, sun_az = aop_trig(aops), math.atan2(sun[1], sun[0])
+    return _imaging(C_bn, aops, trig, frames, sun, sun_az, sig[0], par[3:5], z, H, R, chan)
 
 
 def _pack(data, options) -> np.ndarray:
@@ -186,10 +190,12 @@ def _pack(data, options) -> np.ndarray:
 
 
 def rows(data) -> np.ndarray:
-    """Data rows with the AoPs' cosines and sines appended (all epochs in one numpy call)."""
+    """Data rows with the AoPs' cosines and sines and the sun's azimuth appended (all epochs
+    in one numpy call each)."""
     k = data.z.shape[1] - 3
     aops = np.asarray(data.z[:, :k], float)
-    return np.hstack([default_rows(data), np.cos(aops), np.sin(aops)])
+    sun_az = np.arctan2(data.z[:, k + 1], data.z[:, k])
+    return np.hstack([default_rows(data), np.cos(aops), np.sin(aops), sun_az[:, None]])
 
 
 MODEL = register(MeasurementModel(kind="polarization", kernel=polarization_kernel,
