@@ -2,7 +2,8 @@
 
 The numba kernel :func:`imaging_pitch_heading` (re-exported by :mod:`fuzzynav.nav.polarization`,
 whose docstring states the measurement model) runs at every imaging epoch inside the compiled
-filter (as :func:`imaging_fit_frames`), so it allocates nothing and works on plain floats: the
+filter (as :func:`imaging_fit_frames`), so it works on plain floats and allocates nothing but
+the AoPs' cosines and sines (:func:`aop_trig`, computed once and used by every iterate): the
 views' reference frames computed once per run (:func:`view_frames`), the smallest
 eigenvector of a symmetric 3x3 in closed form, candidates skipped before their trigonometry
 when they cannot win, the roll rotation computed once per fit and the sun's body direction
@@ -64,8 +65,8 @@ def view_frames(views_b):
 def aop_trig(aops):
     """``[cos aop_1..k, sin aop_1..k]`` of one epoch (NaN where the AoP is NaN).
 
-    The fit needs them for the E-vectors and for every residual; the filter has them
-    tabulated in its data rows (computed once per run, all epochs at a time).
+    The fit needs them for the E-vectors and for every residual (where they spare an
+    ``atan2`` per view and iterate); one small array per epoch.
     """
     k = aops.shape[0]
     out = np.empty(2 * k)
@@ -239,7 +240,7 @@ def imaging_fit_frames(aops, trig, frames, sun_n, sun_azimuth, roll, pitch_prior
     Returns ``pitch, heading, c_pp, c_ph, c_hh, n_used, dpitch_droll, dheading_droll``; the
     last two by implicit differentiation of the normal equations at fixed AoPs,
     ``-(J^T J)^-1 J^T d aop/d roll``, from the sums of the fit's last evaluation.
-    ``sun_azimuth`` is ``atan2(sun_n[1], sun_n[0])`` (the filter tabulates it per epoch).
+    ``sun_azimuth`` is ``atan2(sun_n[1], sun_n[0])``.
     """
     nan = np.nan
     m00, m01, m02, m11, m12, m22, k = _e_vector_scatter(aops, trig, frames)

@@ -112,30 +112,3 @@ def test_nonholonomic_constraint_residual_and_jacobian():
     Hn = _numeric_H(model, nav, row, par, m, [1e-6] * 3 + [1e-3] * 3 + [1.0] * 3)
     np.testing.assert_allclose(H[:, :9], Hn, atol=1e-6)
 
-
-def test_polarization_rows_carry_the_aop_trigonometry():
-    """The model's rows end in cos and sin of the AoPs and the sun's azimuth; a row without
-    them (computed per epoch then) gives the same fix to rounding."""
-    data, tr = _polarization_row({"sensor_type": "imaging"})
-    model = get("polarization")
-    par = model.pack(data, {})
-    full, short = model.rows(data), default_rows(data)
-    w, k = short.shape[1], data.z.shape[1] - 3
-    np.testing.assert_array_equal(full[:, :w], short)
-    c, s = full[:, w:w + k], full[:, w + k:w + 2 * k]
-    ok = ~np.isnan(data.z[:, :k])
-    np.testing.assert_allclose((c * c + s * s)[ok], 1.0, rtol=1e-15)
-    np.testing.assert_allclose(np.arctan2(s, c)[ok], data.z[:, :k][ok], atol=1e-15)
-    # the sun's azimuth: its unit direction at that azimuth and elevation
-    az, sun = full[:, w + 2 * k], data.z[:, k:k + 3]
-    horiz = np.sqrt(1.0 - sun[:, 2] ** 2)
-    np.testing.assert_allclose(np.column_stack([horiz * np.cos(az), horiz * np.sin(az)]),
-                               sun[:, :2], atol=1e-12)
-    i = int(round(data.time_s[0] * tr.imu_rate_hz))
-    nav = _perturbed(strapdown.make_nav(tr.lla[i], tr.vel_n[i], tr.q_bn[i]),
-                     np.r_[0.01, -0.02, 0.03, np.zeros(6)])
-    m_full, *out_full = _call(model, nav, full[0], par)
-    m_short, *out_short = _call(model, nav, short[0], par)
-    assert m_full == m_short == 2
-    for a, b in zip(out_full, out_short):
-        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-15)

@@ -1,9 +1,9 @@
 """Skylight-polarization compass: heading (and pitch) residuals against the INS.
 
 Data row (:mod:`fuzzynav.sim.sensors.polarization`): ``[aop_1..aop_k, sun_e, sun_n, sun_u,
-sigma_1..sigma_k, 0, 0, 0, cos aop_1..k, sin aop_1..k, sun_azimuth]``, the last 2k + 1
-tabulated for all epochs at once (:func:`rows`; a row without them has them computed per
-epoch).
+sigma_1..sigma_k, 0, 0, 0]``.  (Tabulating the AoPs' cosines and sines in the rows would
+cost more per run, in numpy, than computing them at each epoch: they are computed once per
+epoch, into one small array, and serve the E-vectors and every residual of the fit.)
 Parameters: ``[sensor_type, k, mode, prior_pitch_std, prior_heading_std, frames (k x 9)]``,
 the frames (view direction and the reference axes of its AoP,
 :func:`~fuzzynav.nav.polarization_imaging.view_frames`) computed once per run.
@@ -37,8 +37,7 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.filters.layout import X_ATT
-from fuzzynav.filters.measurements import (MEAS_SIG, MeasurementModel, default_rows,
-                                           register)
+from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.nav import polarization as ps
 from fuzzynav.nav.polarization_geometry import TWO_PI, fold_half_pi, mod_pos, wrap_pi
 from fuzzynav.nav.polarization_imaging import (FRAME, aop_trig, imaging_fit_frames,
@@ -169,12 +168,8 @@ def polarization_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
             return 0
         J = np.empty((3, 3))
         return _point(C_bn, aops[0], sun, sig[0], J, z, H, R, chan)
-    t0 = 2 * k + 6  # the tabulated cosines, sines and sun azimuth follow z and sigma
-    if row.size > t0 + 2 * k:
-        trig, sun_az = row[t0:t0 + 2 * k], row[t0 + 2 * k]
-    else:
-        trig, sun_az = aop_trig(aops), math.atan2(sun[1], sun[0])
-    return _imaging(C_bn, aops, trig, frames, sun, sun_az, sig[0], par[3:5], z, H, R, chan)
+    return _imaging(C_bn, aops, aop_trig(aops), frames, sun, math.atan2(sun[1], sun[0]),
+                    sig[0], par[3:5], z, H, R, chan)
 
 
 def _pack(data, options) -> np.ndarray:
@@ -189,15 +184,5 @@ def _pack(data, options) -> np.ndarray:
                             MODES[mode], *prior], view_frames(np.ascontiguousarray(views))])
 
 
-def rows(data) -> np.ndarray:
-    """Data rows with the AoPs' cosines and sines and the sun's azimuth appended (all epochs
-    in one numpy call each)."""
-    k = data.z.shape[1] - 3
-    aops = np.asarray(data.z[:, :k], float)
-    sun_az = np.arctan2(data.z[:, k + 1], data.z[:, k])
-    return np.hstack([default_rows(data), np.cos(aops), np.sin(aops), sun_az[:, None]])
-
-
 MODEL = register(MeasurementModel(kind="polarization", kernel=polarization_kernel,
-                                  max_rows=9, channels=("heading", "pitch", "aop"), pack=_pack,
-                                  rows=rows))
+                                  max_rows=9, channels=("heading", "pitch", "aop"), pack=_pack))
