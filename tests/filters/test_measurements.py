@@ -111,4 +111,3 @@ def test_nonholonomic_constraint_residual_and_jacobian():
     assert m == 2 and np.allclose(z, 0.0, atol=1e-12) and np.allclose(R, [0.01, 0.04])
     Hn = _numeric_H(model, nav, row, par, m, [1e-6] * 3 + [1e-3] * 3 + [1.0] * 3)
     np.testing.assert_allclose(H[:, :9], Hn, atol=1e-6)
-
