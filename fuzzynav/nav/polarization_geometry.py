@@ -17,15 +17,27 @@ TWO_PI = 2.0 * math.pi
 
 
 @nb.njit(cache=True)
+def mod_pos(a, m):
+    """``a % m`` (``m > 0``) without the ``fmod`` when ``a`` already lies in ``(0, m)``.
+
+    There the remainder is ``a`` itself, bit for bit, and that is the usual case of the
+    angles folded here: the same numbers, a library call less.
+    """
+    if 0.0 < a < m:
+        return a
+    return a % m
+
+
+@nb.njit(cache=True)
 def fold_half_pi(a):
     """Axial angle folded into [-pi/2, pi/2)."""
-    return (a + HALF_PI) % math.pi - HALF_PI
+    return mod_pos(a + HALF_PI, math.pi) - HALF_PI
 
 
 @nb.njit(cache=True)
 def wrap_pi(a):
     """Angle wrapped into [-pi, pi)."""
-    return (a + math.pi) % TWO_PI - math.pi
+    return mod_pos(a + math.pi, TWO_PI) - math.pi
 
 
 @nb.njit(cache=True)
@@ -38,32 +50,52 @@ def rot_z(ang, x, y, z):
 @nb.njit(cache=True)
 def rot_x(ang, x, y, z):
     """Active rotation by ``ang`` about x (R1)."""
-    c, s = math.cos(ang), math.sin(ang)
-    return x, c * y - s * z, s * y + c * z
+    return rot_x_cs(math.cos(ang), math.sin(ang), x, y, z)
 
 
 @nb.njit(cache=True)
 def rot_y(ang, x, y, z):
     """Active rotation by ``ang`` about y (R2)."""
-    c, s = math.cos(ang), math.sin(ang)
+    return rot_y_cs(math.cos(ang), math.sin(ang), x, y, z)
+
+
+@nb.njit(cache=True)
+def rot_x_cs(c, s, x, y, z):
+    """:func:`rot_x` by the angle of cosine ``c`` and sine ``s`` (shared by several calls)."""
+    return x, c * y - s * z, s * y + c * z
+
+
+@nb.njit(cache=True)
+def rot_y_cs(c, s, x, y, z):
+    """:func:`rot_y` by the angle of cosine ``c`` and sine ``s`` (shared by several calls)."""
     return c * x + s * z, y, -s * x + c * z
 
 
 @nb.njit(cache=True)
 def _num_den(v, sx, sy, sz):
     """Numerator and denominator of the AoP ``atan2`` of view ``v`` for sun ``s``."""
-    c = v[0] * sx + v[1] * sy + v[2] * sz
-    return sx - v[0] * c, v[1] * sz - v[2] * sy
+    return _num_den3(v[0], v[1], v[2], sx, sy, sz)
+
+
+@nb.njit(cache=True)
+def _num_den3(vx, vy, vz, sx, sy, sz):
+    c = vx * sx + vy * sy + vz * sz
+    return sx - vx * c, vy * sz - vz * sy
 
 
 @nb.njit(cache=True)
 def _gradient(v, num, den):
     """d aop / d s from the ``atan2`` arguments (``num`` and ``den`` not both zero)."""
+    return _gradient3(v[0], v[1], v[2], num, den)
+
+
+@nb.njit(cache=True)
+def _gradient3(vx, vy, vz, num, den):
     inv_q = 1.0 / (num * num + den * den)
     # d num/ds = e_x - v_x v ; d den/ds = (0, -v_z, v_y)
-    g0 = den * (1.0 - v[0] * v[0]) * inv_q
-    g1 = (den * (-v[0] * v[1]) + num * v[2]) * inv_q
-    g2 = (den * (-v[0] * v[2]) - num * v[1]) * inv_q
+    g0 = den * (1.0 - vx * vx) * inv_q
+    g1 = (den * (-vx * vy) + num * vz) * inv_q
+    g2 = (den * (-vx * vz) - num * vy) * inv_q
     return g0, g1, g2
 
 
@@ -73,11 +105,34 @@ def aop_unfolded_and_gradient(v, sx, sy, sz):
 
     The angle is not folded: a caller forming a residual folds the difference once.
     """
-    num, den = _num_den(v, sx, sy, sz)
+    return aop_unfolded_and_gradient3(v[0], v[1], v[2], sx, sy, sz)
+
+
+@nb.njit(cache=True)
+def aop_unfolded_and_gradient3(vx, vy, vz, sx, sy, sz):
+    """:func:`aop_unfolded_and_gradient` of the view ``(vx, vy, vz)`` given as scalars."""
+    num, den = _num_den3(vx, vy, vz, sx, sy, sz)
     if num * num + den * den == 0.0:  # sun on the view axis: unpolarized, no angle
         return np.nan, np.nan, np.nan, np.nan
-    g0, g1, g2 = _gradient(v, num, den)
+    g0, g1, g2 = _gradient3(vx, vy, vz, num, den)
     return math.atan2(num, den), g0, g1, g2
+
+
+@nb.njit(cache=True)
+def aop_residual_and_gradient3(c_meas, s_meas, vx, vy, vz, sx, sy, sz):
+    """Residual ``aop_meas - aop`` folded into [-pi/2, pi/2] and d aop / d s.
+
+    ``c_meas, s_meas`` are the cosine and sine of the measured angle.  The residual is the
+    ``atan`` of its tangent, ``(s_m den - c_m num) / (c_m den + s_m num)``: the fold modulo
+    pi comes with it, and ``atan`` of a quotient costs about half an ``atan2`` (a fit
+    evaluates one per view and iterate).  NaN when the sun is on the view axis.
+    """
+    num, den = _num_den3(vx, vy, vz, sx, sy, sz)
+    if num * num + den * den == 0.0:
+        return np.nan, np.nan, np.nan, np.nan
+    g0, g1, g2 = _gradient3(vx, vy, vz, num, den)
+    r = math.atan((s_meas * den - c_meas * num) / (c_meas * den + s_meas * num))
+    return r, g0, g1, g2
 
 
 @nb.njit(cache=True)
@@ -102,12 +157,22 @@ def sun_body_partials(sun_n, pitch, roll, heading):
 
     ``s_b = R2(roll)^T R1(pitch)^T R3(heading) sun_n``, applied rotation by rotation.
     """
+    return sun_body_partials_cs(sun_n, pitch, math.cos(-roll), math.sin(-roll), heading)
+
+
+@nb.njit(cache=True)
+def sun_body_partials_cs(sun_n, pitch, c_roll, s_roll, heading):
+    """:func:`sun_body_partials` with ``c_roll, s_roll = cos(-roll), sin(-roll)`` given.
+
+    A fit at fixed roll evaluates the sun many times: its roll rotation is computed once.
+    """
     tx, ty, tz = rot_z(heading, sun_n[0], sun_n[1], sun_n[2])
-    ux, uy, uz = rot_x(-pitch, tx, ty, tz)
-    s = rot_y(-roll, ux, uy, uz)
+    cp, sp = math.cos(-pitch), math.sin(-pitch)
+    ux, uy, uz = rot_x_cs(cp, sp, tx, ty, tz)
+    s = rot_y_cs(c_roll, s_roll, ux, uy, uz)
     # d/dheading: R3' = [e_z x] R3 ; d/dpitch: R1(-p)' = -[e_x x] R1(-p) ; same for roll
-    ds_dh = rot_y(-roll, *rot_x(-pitch, -ty, tx, 0.0))
-    ds_dp = rot_y(-roll, 0.0, uz, -uy)
+    ds_dh = rot_y_cs(c_roll, s_roll, *rot_x_cs(cp, sp, -ty, tx, 0.0))
+    ds_dp = rot_y_cs(c_roll, s_roll, 0.0, uz, -uy)
     ds_dr = (-s[2], 0.0, s[0])
     return s, ds_dp, ds_dr, ds_dh
 

@@ -2,10 +2,14 @@
 
 The numba kernel :func:`imaging_pitch_heading` (re-exported by :mod:`fuzzynav.nav.polarization`,
 whose docstring states the measurement model) runs at every imaging epoch inside the compiled
-filter, so it allocates nothing but its covariance output and works on plain floats: the
-smallest eigenvector of a symmetric 3x3 in closed form, the sun's body direction and its
-partials computed once per Gauss-Newton iterate and shared by all views, and a stop as soon as
-the step falls below :data:`_STEP_TOL`.
+filter (as :func:`imaging_fit_frames`), so it works on plain floats and allocates nothing but
+the AoPs' cosines and sines (:func:`aop_trig`, computed once and used by every iterate): the
+views' reference frames computed once per run (:func:`view_frames`), the smallest
+eigenvector of a symmetric 3x3 in closed form, candidates skipped before their trigonometry
+when they cannot win, the roll rotation computed once per fit and the sun's body direction
+and its partials once per Gauss-Newton iterate (shared by all views), a stop as soon as the
+step falls below :data:`_STEP_TOL`, and the solution's roll sensitivity from the sums of the
+fit's last evaluation.
 """
 from __future__ import annotations
 
@@ -14,9 +18,12 @@ import math
 import numba as nb
 import numpy as np
 
-from fuzzynav.nav.polarization_geometry import (HALF_PI, TWO_PI, aop_unfolded_and_gradient,
-                                                dot3, rot_x, rot_y, sun_body_partials,
-                                                wrap_pi)
+from fuzzynav.nav.polarization_geometry import (HALF_PI, TWO_PI, aop_residual_and_gradient3,
+                                                dot3, mod_pos, rot_x, rot_y_cs,
+                                                sun_body_partials_cs, wrap_pi)
+
+#: entries per view in a frames array (:func:`view_frames`): view, x reference, y reference
+FRAME = 9
 
 #: how far (sine of elevation) a noisy sun direction may miss the reachable elevations
 _FOLD_SLACK = 0.05
@@ -32,21 +39,55 @@ _MAX_ITER = 200
 
 
 @nb.njit(cache=True)
-def _e_vector_scatter(aops, views_b):
-    """``sum e e^T`` (6 entries) of the measured body-frame E-vectors; count used (no NaN)."""
-    m00 = m01 = m02 = m11 = m12 = m22 = 0.0
-    k = 0
-    for i in range(aops.shape[0]):
-        if np.isnan(aops[i]):
-            continue
+def view_frames(views_b):
+    """Per-view constants of a sensor, flat: ``[v, x_ref, y_ref]`` (9 entries a view).
+
+    ``x_ref`` is the body x axis projected perpendicular to ``v`` (where each AoP is measured
+    from) and ``y_ref = v x x_ref``; a filter computes them once per run (its sensor
+    parameters), not at every epoch.
+    """
+    k = views_b.shape[0]
+    out = np.empty(FRAME * k)
+    for i in range(k):
         vx, vy, vz = views_b[i, 0], views_b[i, 1], views_b[i, 2]
-        # local reference: x_b projected perpendicular to v, then y = v x x_ref
         xx, xy, xz = 1.0 - vx * vx, -vx * vy, -vx * vz
         nx = math.sqrt(xx * xx + xy * xy + xz * xz)
         xx, xy, xz = xx / nx, xy / nx, xz / nx
         yx, yy, yz = vy * xz - vz * xy, vz * xx - vx * xz, vx * xy - vy * xx
-        ca, sa = math.cos(aops[i]), math.sin(aops[i])
-        ex, ey, ez = ca * xx + sa * yx, ca * xy + sa * yy, ca * xz + sa * yz
+        o = FRAME * i
+        out[o], out[o + 1], out[o + 2] = vx, vy, vz
+        out[o + 3], out[o + 4], out[o + 5] = xx, xy, xz
+        out[o + 6], out[o + 7], out[o + 8] = yx, yy, yz
+    return out
+
+
+@nb.njit(cache=True)
+def aop_trig(aops):
+    """``[cos aop_1..k, sin aop_1..k]`` of one epoch (NaN where the AoP is NaN).
+
+    The fit needs them for the E-vectors and for every residual (where they spare an
+    ``atan2`` per view and iterate); one small array per epoch.
+    """
+    k = aops.shape[0]
+    out = np.empty(2 * k)
+    for i in range(k):
+        out[i], out[k + i] = math.cos(aops[i]), math.sin(aops[i])
+    return out
+
+
+@nb.njit(cache=True)
+def _e_vector_scatter(aops, trig, frames):
+    """``sum e e^T`` (6 entries) of the measured body-frame E-vectors; count used (no NaN)."""
+    m00 = m01 = m02 = m11 = m12 = m22 = 0.0
+    k, k_all = 0, aops.shape[0]
+    for i in range(aops.shape[0]):
+        if np.isnan(aops[i]):
+            continue
+        o = FRAME * i
+        ca, sa = trig[i], trig[k_all + i]
+        ex = ca * frames[o + 3] + sa * frames[o + 6]
+        ey = ca * frames[o + 4] + sa * frames[o + 7]
+        ez = ca * frames[o + 5] + sa * frames[o + 8]
         m00 += ex * ex
         m01 += ex * ey
         m02 += ex * ez
@@ -94,39 +135,38 @@ def _smallest_eigenvector(m00, m01, m02, m11, m12, m22):
 
 
 @nb.njit(cache=True)
-def _attitude_candidate(pitch, ux, uy, uz, sun_azimuth):
-    """(pitch, heading) bringing the rolled body sun ``u`` onto the sun; NaN past +-90°."""
-    pitch = wrap_pi(pitch)
-    if abs(pitch) > HALF_PI:
-        return np.nan, np.nan
-    wx, wy, _ = rot_x(pitch, ux, uy, uz)
-    return pitch, (math.atan2(wy, wx) - sun_azimuth) % TWO_PI
-
-
-@nb.njit(cache=True)
-def _nearest_candidate(sx, sy, sz, sun_n, roll, pitch_prior, heading_prior,
-                       pitch_prior_std, heading_prior_std):
+def _nearest_candidate(sx, sy, sz, sun_n, sun_azimuth, c_roll, s_roll, pitch_prior,
+                       heading_prior, pitch_prior_std, heading_prior_std):
     """Of the up to four attitudes with ``C_bn (+-s_b) = sun_n``, the nearest to the prior.
 
     ``u = R2(roll) s_b`` must rise to the sun's elevation under ``R1(pitch)``:
     ``rho cos(pitch - p0) = sun_U``, roots ``p0 +- d``; ``-u`` has them shifted by pi.  Near the
     fold (sun abeam) noise can lift the sun's elevation just out of reach of any pitch; up to
     ``_FOLD_SLACK`` the fold point itself is a candidate and Gauss-Newton refines.  Distances
-    in prior standard deviations; NaN when no candidate exists.
+    in prior standard deviations; NaN when no candidate exists.  ``c_roll, s_roll`` are
+    ``cos(-roll), sin(-roll)`` (shared with the fit).  The heading term of a
+    distance only adds to its pitch term (rounding is monotonic), so a candidate whose pitch
+    alone is no nearer than the best so far is skipped before its trigonometry: the same
+    choice, fewer ``cos``/``sin``/``atan2``.
     """
-    ux, uy, uz = rot_y(roll, sx, sy, sz)
+    ux, uy, uz = rot_y_cs(c_roll, -s_roll, sx, sy, sz)  # R2(roll): c_roll, s_roll of -roll
     rho = math.hypot(uy, uz)
     if rho < 1e-12 or abs(sun_n[2]) > rho + _FOLD_SLACK:
         return np.nan, np.nan
     p0 = math.atan2(uy, uz)
     d = math.acos(min(1.0, max(-1.0, sun_n[2] / rho)))
-    sun_azimuth = math.atan2(sun_n[1], sun_n[0])
     best_p, best_h, best_d = np.nan, np.nan, np.inf
     for sign, shift in ((1.0, 0.0), (-1.0, math.pi)):
         for root in (p0 + shift + d, p0 + shift - d):
-            p, h = _attitude_candidate(root, sign * ux, sign * uy, sign * uz, sun_azimuth)
-            dist = ((wrap_pi(p - pitch_prior) / pitch_prior_std) ** 2
-                    + (wrap_pi(h - heading_prior) / heading_prior_std) ** 2)
+            p = wrap_pi(root)
+            if abs(p) > HALF_PI:
+                continue  # no attitude with this pitch
+            dist_p = (wrap_pi(p - pitch_prior) / pitch_prior_std) ** 2
+            if not dist_p < best_d:  # cannot win (or NaN)
+                continue
+            wx, wy, _ = rot_x(p, sign * ux, sign * uy, sign * uz)
+            h = mod_pos(math.atan2(wy, wx) - sun_azimuth, TWO_PI)
+            dist = dist_p + (wrap_pi(h - heading_prior) / heading_prior_std) ** 2
             if dist < best_d:  # False for an absent (NaN) candidate
                 best_p, best_h, best_d = p, h, dist
     return best_p, best_h
@@ -183,55 +223,90 @@ def imaging_pitch_heading(aops, views_b, sun_n, roll, pitch_prior, heading_prior
 @nb.njit(cache=True)
 def imaging_fit(aops, views_b, sun_n, roll, pitch_prior, heading_prior, pitch_prior_std,
                 heading_prior_std, sigma_aop):
-    """:func:`imaging_pitch_heading` with the covariance as three scalars (no allocation,
-    for the filter's measurement model): ``pitch, heading, c_pp, c_ph, c_hh, n_used``."""
+    """:func:`imaging_pitch_heading` with the covariance as three scalars:
+    ``pitch, heading, c_pp, c_ph, c_hh, n_used``."""
+    return imaging_fit_frames(aops, aop_trig(aops), view_frames(views_b), sun_n,
+                              math.atan2(sun_n[1], sun_n[0]), roll, pitch_prior,
+                              heading_prior, pitch_prior_std, heading_prior_std,
+                              sigma_aop)[:6]
+
+
+@nb.njit(cache=True)
+def imaging_fit_frames(aops, trig, frames, sun_n, sun_azimuth, roll, pitch_prior,
+                       heading_prior, pitch_prior_std, heading_prior_std, sigma_aop):
+    """:func:`imaging_fit` on precomputed :func:`view_frames` and :func:`aop_trig`, without
+    allocation (the filter's measurement model), and how the solution moves with the roll.
+
+    Returns ``pitch, heading, c_pp, c_ph, c_hh, n_used, dpitch_droll, dheading_droll``; the
+    last two by implicit differentiation of the normal equations at fixed AoPs,
+    ``-(J^T J)^-1 J^T d aop/d roll``, from the sums of the fit's last evaluation.
+    ``sun_azimuth`` is ``atan2(sun_n[1], sun_n[0])``.
+    """
     nan = np.nan
-    m00, m01, m02, m11, m12, m22, k = _e_vector_scatter(aops, views_b)
+    m00, m01, m02, m11, m12, m22, k = _e_vector_scatter(aops, trig, frames)
     if k < 2:
-        return nan, nan, nan, nan, nan, k
+        return nan, nan, nan, nan, nan, k, nan, nan
     sx, sy, sz = _smallest_eigenvector(m00, m01, m02, m11, m12, m22)
-    p, h = _nearest_candidate(sx, sy, sz, sun_n, roll, pitch_prior, heading_prior,
-                              pitch_prior_std, heading_prior_std)
+    c_roll, s_roll = math.cos(-roll), math.sin(-roll)  # fixed for the whole fit
+    p, h = _nearest_candidate(sx, sy, sz, sun_n, sun_azimuth, c_roll, s_roll, pitch_prior,
+                              heading_prior, pitch_prior_std, heading_prior_std)
     if np.isnan(p):
-        return nan, nan, nan, nan, nan, k
-    p, h, n00, n01, n11 = _gauss_newton(aops, views_b, sun_n, roll, p, h)
+        return nan, nan, nan, nan, nan, k, nan, nan
+    p, h, n00, n01, n11, b0, b1 = _gauss_newton(aops, trig, frames, sun_n, c_roll, s_roll, p, h)
     det = n00 * n11 - n01 * n01
     if not det > 0.0:
-        return nan, nan, nan, nan, nan, k
+        return nan, nan, nan, nan, nan, k, nan, nan
     s2 = sigma_aop * sigma_aop / det
-    return p, h % TWO_PI, s2 * n11, -s2 * n01, s2 * n00, k
+    h_out = mod_pos(h, TWO_PI)
+    if h_out != h:  # the sensitivity at the heading reported (differs in the last digits)
+        n00r, n01r, n11r, _, _, _, b0, b1 = _normal_equations(aops, trig, frames, sun_n, c_roll,
+                                                              s_roll, p, h_out)
+        dp_dr, dh_dr = _roll_sensitivity(n00r, n01r, n11r, b0, b1)
+    else:
+        dp_dr, dh_dr = _roll_sensitivity(n00, n01, n11, b0, b1)
+    return p, h_out, s2 * n11, -s2 * n01, s2 * n00, k, dp_dr, dh_dr
 
 
 @nb.njit(cache=True)
-def _fold_residual(a):
-    """Axial residual folded into [-pi/2, pi/2]: cheaper than ``%``; either end will do."""
-    return a - math.pi * math.floor(a / math.pi + 0.5)
+def _roll_sensitivity(a00, a01, a11, b0, b1):
+    """``d(pitch, heading)/d(roll)`` from ``J^T J`` and ``J^T d aop/d roll``; NaN if singular."""
+    det = a00 * a11 - a01 * a01
+    if not det > 0.0:
+        return np.nan, np.nan
+    return -(a11 * b0 - a01 * b1) / det, -(a00 * b1 - a01 * b0) / det
 
 
 @nb.njit(cache=True)
-def _normal_equations(aops, views_b, sun_n, roll, p, h):
-    """``J^T J`` (3 entries), ``J^T r`` and the cost ``r^T r`` of the AoP residuals."""
+def _normal_equations(aops, trig, frames, sun_n, c_roll, s_roll, p, h):
+    """``J^T J`` (3 entries), ``J^T r``, the cost ``r^T r`` of the AoP residuals and
+    ``J^T d aop/d roll`` (2 entries; a few products a view, spares a separate pass)."""
     # the sun's body direction and its partials are the same for every view
-    s, ds_dp, _, ds_dh = sun_body_partials(sun_n, p, roll, h)
-    n00 = n01 = n11 = g0 = g1 = cost = 0.0
-    for i in range(aops.shape[0]):
+    s, ds_dp, ds_dr, ds_dh = sun_body_partials_cs(sun_n, p, c_roll, s_roll, h)
+    n00 = n01 = n11 = g0 = g1 = cost = b0 = b1 = 0.0
+    k = aops.shape[0]
+    for i in range(k):
         if np.isnan(aops[i]):
             continue
-        a, ga, gb, gc = aop_unfolded_and_gradient(views_b[i], s[0], s[1], s[2])
+        o = FRAME * i
+        r, ga, gb, gc = aop_residual_and_gradient3(trig[i], trig[k + i], frames[o],
+                                                   frames[o + 1], frames[o + 2], s[0], s[1],
+                                                   s[2])
         dp, dh = dot3(ga, gb, gc, ds_dp), dot3(ga, gb, gc, ds_dh)
-        r = _fold_residual(aops[i] - a)
+        dr = dot3(ga, gb, gc, ds_dr)
         n00 += dp * dp
         n01 += dp * dh
         n11 += dh * dh
         g0 += dp * r
         g1 += dh * r
         cost += r * r
-    return n00, n01, n11, g0, g1, cost
+        b0 += dp * dr
+        b1 += dh * dr
+    return n00, n01, n11, g0, g1, cost, b0, b1
 
 
 @nb.njit(cache=True)
-def _gauss_newton(aops, views_b, sun_n, roll, p, h):
-    """Least-squares (pitch, heading) of the AoP residuals and ``J^T J`` (3 entries) there.
+def _gauss_newton(aops, trig, frames, sun_n, c_roll, s_roll, p, h):
+    """Least-squares (pitch, heading) of the AoP residuals; ``J^T J``, ``J^T d aop/d roll``.
 
     Gauss-Newton with Levenberg damping: the start can sit on the fold where J^T J is
     singular (noisy sun abeam); the damping steps off it and fades as the fit converges.
@@ -242,7 +317,8 @@ def _gauss_newton(aops, views_b, sun_n, roll, p, h):
     creeps along a flat valley until the damped steps vanish (tens of iterations, at most
     ``_MAX_ITER``); its covariance then says the attitude is undetermined.
     """
-    n00, n01, n11, g0, g1, cost = _normal_equations(aops, views_b, sun_n, roll, p, h)
+    n00, n01, n11, g0, g1, cost, b0, b1 = _normal_equations(aops, trig, frames, sun_n, c_roll,
+                                                             s_roll, p, h)
     lam = _LAM_START
     for _ in range(_MAX_ITER):
         damp = lam * 0.5 * (n00 + n11)
@@ -256,14 +332,15 @@ def _gauss_newton(aops, views_b, sun_n, roll, p, h):
         moved = step_p * (n00 * step_p + 2.0 * n01 * step_h) + n11 * step_h * step_h
         if abs(step_p) + abs(step_h) < _STEP_TOL or moved < _STEP_TOL * _STEP_TOL:
             break
-        trial = _normal_equations(aops, views_b, sun_n, roll, p + step_p, h + step_h)
+        trial = _normal_equations(aops, trig, frames, sun_n, c_roll, s_roll, p + step_p,
+                                  h + step_h)
         slack = _COST_RTOL if lam <= _LAM_UNDAMPED else 0.0
         if trial[5] <= cost * (1.0 + slack):
             p, h = p + step_p, h + step_h
-            n00, n01, n11, g0, g1, cost = trial
+            n00, n01, n11, g0, g1, cost, b0, b1 = trial
             lam = max(lam * 0.1, _LAM_MIN)
         else:
             lam *= 10.0
             if lam > _LAM_MAX:
                 break
-    return p, h, n00, n01, n11
+    return p, h, n00, n01, n11, b0, b1

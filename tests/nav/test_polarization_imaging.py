@@ -1,6 +1,7 @@
 """Imaging solver internals: closed-form eigenvector, and the fit lands on the LSQ minimum."""
 import numpy as np
 
+from fuzzynav.nav import polarization_geometry as pg
 from fuzzynav.nav import polarization_imaging as pim
 from fuzzynav.nav.attitude import euler_to_dcm
 from fuzzynav.sim import skylight as sk
@@ -90,8 +91,6 @@ def test_noisy_fit_is_the_least_squares_minimum():
 def test_aop_gradient_alone_is_the_slope_of_the_angle():
     # the gradient-only helper (no atan2) must give the slope of the AoP itself: checked
     # against central differences of the angle, and equal to the combined helper's
-    from fuzzynav.nav import polarization_geometry as pg
-
     rng = np.random.default_rng(3)
     h = 1e-6
     for v in VIEWS[1:]:
@@ -119,4 +118,63 @@ def test_imaging_fit_is_the_solver_with_scalar_covariance():
         fit = pim.imaging_fit(aops, VIEWS, sun_n, roll, pitch, heading, 0.1, 0.2, 0.01)
         np.testing.assert_array_equal(fit[:2], (p, hd))
         np.testing.assert_array_equal(fit[2:5], (cov[0, 0], cov[0, 1], cov[1, 1]))
-        assert cov[0, 1] == cov[1, 0] and fit[5] == k
+        np.testing.assert_array_equal(cov[0, 1], cov[1, 0])  # NaN for a fit on the fold
+        assert fit[5] == k
+
+
+def test_view_frames_are_the_sky_models_aop_axes():
+    frames = pim.view_frames(VIEWS).reshape(-1, pim.FRAME)
+    np.testing.assert_array_equal(frames[:, :3], VIEWS)
+    x_ref, y_ref = frames[:, 3:6], frames[:, 6:9]
+    np.testing.assert_allclose(np.linalg.norm(x_ref, axis=1), 1.0, rtol=1e-14)
+    np.testing.assert_allclose(np.einsum("ij,ij->i", x_ref, VIEWS), 0.0, atol=1e-15)
+    np.testing.assert_allclose(y_ref, np.cross(VIEWS, x_ref), atol=1e-15)
+    # the angle of the E-vector (v x s) in these axes is the sky model's AoP
+    for s in _unit_rows(np.random.default_rng(6), 20):
+        e = np.cross(VIEWS, s)
+        aop = np.arctan2(np.einsum("ij,ij->i", e, y_ref), np.einsum("ij,ij->i", e, x_ref))
+        d = (aop - sk.angle_of_polarization(VIEWS, s) + np.pi / 2) % np.pi - np.pi / 2
+        np.testing.assert_allclose(d, 0.0, atol=1e-12)
+
+
+def test_roll_sensitivity_is_the_slope_of_the_fit():
+    """Implicit differentiation against central differences of the fit in the given roll."""
+    sun_n = np.array([0.3, 0.5, 0.81])
+    sun_n /= np.linalg.norm(sun_n)
+    frames, d, used = pim.view_frames(VIEWS), 1e-6, 0
+    # (seed, heading, AoP noise); seed 3 at 1e-4 rad: the fit starts below 2 pi and ends
+    # above it, so the slope is re-evaluated at the heading reported (taken modulo 2 pi)
+    for seed, heading, noise in ((3, 1e-4, 0.001), (7, 2 * np.pi - 1e-6, 0.01),
+                                 (8, 1.0, 0.01), (9, 2.0, 0.01), (10, 3.0, 0.01),
+                                 (11, 4.5, 0.01), (12, 5.5, 0.01)):
+        rng = np.random.default_rng(seed)
+        pitch, roll = rng.uniform(-0.3, 0.3, 2)
+        aops = sk.angle_of_polarization(VIEWS, euler_to_dcm([pitch, roll, heading]).T @ sun_n)
+        aops = aops + noise * rng.standard_normal(aops.shape)
+        fit = pim.imaging_fit_frames(aops, pim.aop_trig(aops), frames, sun_n,
+                                     np.arctan2(sun_n[1], sun_n[0]), roll, pitch, heading,
+                                     0.1, 0.2, 0.01)
+        if not (fit[2] < 0.01 and fit[4] < 0.01):
+            continue  # a fit on the fold: the attitude is undetermined, no slope to compare
+        used += 1
+        up, down = (pim.imaging_fit(aops, VIEWS, sun_n, roll + s * d, pitch, heading, 0.1, 0.2,
+                                    0.01) for s in (1.0, -1.0))
+        dp = (up[0] - down[0]) / (2 * d)
+        dh = ((up[1] - down[1] + np.pi) % (2 * np.pi) - np.pi) / (2 * d)
+        np.testing.assert_allclose(fit[6:], (dp, dh), rtol=1e-5, atol=1e-7)
+    assert used >= 5
+
+
+def test_residual_by_atan_is_the_folded_angle_difference():
+    rng = np.random.default_rng(9)
+    for _ in range(500):
+        v, s = _unit_rows(rng, 2)
+        a = pg.aop_unfolded_and_gradient(v, *s)
+        meas = a[0] + rng.choice([rng.uniform(-1.5, 1.5), rng.uniform(-1e-3, 1e-3)]) \
+            + np.pi * rng.integers(-2, 3)
+        r, *g = pg.aop_residual_and_gradient3(np.cos(meas), np.sin(meas), *v, *s)
+        ref = (meas - a[0] + np.pi / 2) % np.pi - np.pi / 2
+        assert abs(r - ref) < 1e-12 or abs(abs(r - ref) - np.pi) < 1e-12  # ends of the fold
+        np.testing.assert_allclose(g, a[1:], rtol=1e-12, atol=1e-15)
+    nan = pg.aop_residual_and_gradient3(1.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0)
+    assert np.isnan(nan).all()  # sun on the view axis: no angle

@@ -1,8 +1,12 @@
 """Skylight-polarization compass: heading (and pitch) residuals against the INS.
 
 Data row (:mod:`fuzzynav.sim.sensors.polarization`): ``[aop_1..aop_k, sun_e, sun_n, sun_u,
-sigma_1..sigma_k, 0, 0, 0]``.  Parameters: ``[sensor_type, k, mode, prior_pitch_std,
-prior_heading_std, views_b (k x 3)]``.
+sigma_1..sigma_k, 0, 0, 0]``.  (Tabulating the AoPs' cosines and sines in the rows would
+cost more per run, in numpy, than computing them at each epoch: they are computed once per
+epoch, into one small array, and serve the E-vectors and every residual of the fit.)
+Parameters: ``[sensor_type, k, mode, prior_pitch_std, prior_heading_std, frames (k x 9)]``,
+the frames (view direction and the reference axes of its AoP,
+:func:`~fuzzynav.nav.polarization_imaging.view_frames`) computed once per run.
 
 Modes
 -----
@@ -35,8 +39,9 @@ import numpy as np
 from fuzzynav.filters.layout import X_ATT
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.nav import polarization as ps
-from fuzzynav.nav.polarization_geometry import aop_gradient, dot3, sun_body_partials
-from fuzzynav.nav.polarization_imaging import imaging_fit
+from fuzzynav.nav.polarization_geometry import TWO_PI, fold_half_pi, mod_pos, wrap_pi
+from fuzzynav.nav.polarization_imaging import (FRAME, aop_trig, imaging_fit_frames,
+                                               view_frames)
 
 MODES = {"angles": 0, "aop": 1}
 CH_HEADING, CH_PITCH, CH_AOP = 0, 1, 2
@@ -48,30 +53,28 @@ _HDR = 5
 @nb.njit(cache=True)
 def euler_jacobian(C, J):
     """Rows d(pitch, roll, heading)/d(phi) of ``C_bn`` for ``C_calc = (I - [phi x]) C``."""
+    jp, jr, jh = euler_rows(C)
+    for j in range(3):
+        J[0, j], J[1, j], J[2, j] = jp[j], jr[j], jh[j]
+
+
+@nb.njit(cache=True)
+def euler_rows(C):
+    """:func:`euler_jacobian` as three 3-tuples (pitch, roll, heading rows): no array."""
     cp2 = C[0, 1] ** 2 + C[1, 1] ** 2  # cos^2 pitch
     cp = math.sqrt(cp2)
-    J[0, 0], J[0, 1], J[0, 2] = -C[1, 1] / cp, C[0, 1] / cp, 0.0
-    J[1, 0] = (C[2, 2] * C[1, 0] - C[2, 0] * C[1, 2]) / cp2
-    J[1, 1] = (C[2, 0] * C[0, 2] - C[2, 2] * C[0, 0]) / cp2
-    J[1, 2] = 0.0
-    J[2, 0], J[2, 1], J[2, 2] = -C[2, 1] * C[0, 1] / cp2, -C[2, 1] * C[1, 1] / cp2, 1.0
-
-
-@nb.njit(cache=True)
-def _wrap(a):
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
-
-
-@nb.njit(cache=True)
-def _fold(a):
-    return (a + 0.5 * math.pi) % math.pi - 0.5 * math.pi
+    jp = (-C[1, 1] / cp, C[0, 1] / cp, 0.0)
+    jr = ((C[2, 2] * C[1, 0] - C[2, 0] * C[1, 2]) / cp2,
+          (C[2, 0] * C[0, 2] - C[2, 2] * C[0, 0]) / cp2, 0.0)
+    jh = (-C[2, 1] * C[0, 1] / cp2, -C[2, 1] * C[1, 1] / cp2, 1.0)
+    return jp, jr, jh
 
 
 @nb.njit(cache=True)
 def _euler(C):
     pitch = math.asin(max(-1.0, min(1.0, C[2, 1])))
     roll = math.atan2(-C[2, 0], C[2, 2])
-    heading = math.atan2(C[0, 1], C[1, 1]) % (2.0 * math.pi)
+    heading = mod_pos(math.atan2(C[0, 1], C[1, 1]), TWO_PI)
     return pitch, roll, heading
 
 
@@ -85,7 +88,7 @@ def _point(C, aop, sun, sigma, J, z, H, R, chan):
     if not (math.isfinite(dp) and math.isfinite(dr)):
         return 0  # the two heading roots coincide: the conversion is singular here
     euler_jacobian(C, J)
-    z[0] = _wrap(heading - h)
+    z[0] = wrap_pi(heading - h)
     for j in range(3):
         H[0, X_ATT + j] = J[2, j] - dp * J[0, j] - dr * J[1, j]
     R[0] = (dh_da * sigma) ** 2
@@ -94,47 +97,19 @@ def _point(C, aop, sun, sigma, J, z, H, R, chan):
 
 
 @nb.njit(cache=True)
-def _roll_sensitivity(aops, views, sun, p, roll, h):
-    """``d(pitch, heading)/d(roll)`` of the least-squares imaging solution at fixed AoPs.
-
-    The solver takes the roll from the INS, so a roll error moves the solution; implicit
-    differentiation of the normal equations gives ``-(J^T J)^-1 J^T d aop/d roll``.
-    """
-    a00 = a01 = a11 = b0 = b1 = 0.0
-    # the sun's body-frame partials are the same for every view: computed once, the
-    # per-view partials are those of aop_euler_partials (same operations, same numbers)
-    s, ds_dp, ds_dr, ds_dh = sun_body_partials(sun, p, roll, h)
-    for i in range(aops.size):
-        if not math.isfinite(aops[i]):
-            continue
-        g0, g1, g2 = aop_gradient(views[i], s[0], s[1], s[2])  # the angle is not needed
-        dp, dr, dh = dot3(g0, g1, g2, ds_dp), dot3(g0, g1, g2, ds_dr), dot3(g0, g1, g2, ds_dh)
-        a00 += dp * dp
-        a01 += dp * dh
-        a11 += dh * dh
-        b0 += dp * dr
-        b1 += dh * dr
-    det = a00 * a11 - a01 * a01
-    if not det > 0.0:
-        return math.nan, math.nan
-    return -(a11 * b0 - a01 * b1) / det, -(a00 * b1 - a01 * b0) / det
-
-
-@nb.njit(cache=True)
-def _imaging(C, aops, views, sun, sigma, prior_std, J, z, H, R, chan):
+def _imaging(C, aops, trig, frames, sun, sun_az, sigma, prior_std, z, H, R, chan):
     pitch, roll, heading = _euler(C)
-    p, h, c00, c01, c11, _ = imaging_fit(aops, views, sun, roll, pitch, heading, prior_std[0],
-                                         prior_std[1], sigma)
+    p, h, c00, c01, c11, _, dp_dr, dh_dr = imaging_fit_frames(
+        aops, trig, frames, sun, sun_az, roll, pitch, heading, prior_std[0], prior_std[1], sigma)
     if not (math.isfinite(p) and math.isfinite(h)):
         return 0
-    euler_jacobian(C, J)
-    dp_dr, dh_dr = _roll_sensitivity(aops, views, sun, p, roll, h)
     if not (math.isfinite(dp_dr) and math.isfinite(dh_dr)):
         return 0
-    for j in range(3):  # rows as seen through the solver: d(angle) - d(solution)/d(roll) d(roll)
-        J[0, j] -= dp_dr * J[1, j]
-        J[2, j] -= dh_dr * J[1, j]
-    dh = _wrap(heading - h)
+    jp, jr, jh = euler_rows(C)
+    # rows as seen through the solver: d(angle) - d(solution)/d(roll) d(roll)
+    jp = (jp[0] - dp_dr * jr[0], jp[1] - dp_dr * jr[1], jp[2] - dp_dr * jr[2])
+    jh = (jh[0] - dh_dr * jr[0], jh[1] - dh_dr * jr[1], jh[2] - dh_dr * jr[2])
+    dh = wrap_pi(heading - h)
     if not (0.0 < c00 < _MAX_VAR) or not (0.0 < c11 < _MAX_VAR):
         # degenerate geometry (views nearly in one plane with the sun): keep at most the
         # heading row when it alone is well determined
@@ -142,7 +117,7 @@ def _imaging(C, aops, views, sun, sigma, prior_std, J, z, H, R, chan):
             return 0
         z[0] = dh
         for j in range(3):
-            H[0, X_ATT + j] = J[2, j]
+            H[0, X_ATT + j] = jh[j]
         R[0] = c11
         chan[0] = CH_HEADING
         return 1
@@ -153,8 +128,8 @@ def _imaging(C, aops, views, sun, sigma, prior_std, J, z, H, R, chan):
     z[0] = pitch - p
     z[1] = dh - g * z[0]
     for j in range(3):
-        H[0, X_ATT + j] = J[0, j]
-        H[1, X_ATT + j] = J[2, j] - g * J[0, j]
+        H[0, X_ATT + j] = jp[j]
+        H[1, X_ATT + j] = jh[j] - g * jp[j]
     R[0] = c00
     R[1] = r1
     chan[0], chan[1] = CH_PITCH, CH_HEADING
@@ -162,15 +137,15 @@ def _imaging(C, aops, views, sun, sigma, prior_std, J, z, H, R, chan):
 
 
 @nb.njit(cache=True)
-def _raw(C, aops, views, sun, sigmas, z, H, R, chan):
+def _raw(C, aops, frames, sun, sigmas, z, H, R, chan):
     m = 0
     for i in range(aops.size):
         if not (math.isfinite(aops[i]) and sigmas[i] > 0.0):
             continue
-        pred, jac = ps.aop_attitude_jacobian(C, views[i], sun)
+        pred, jac = ps.aop_attitude_jacobian(C, frames[FRAME * i:FRAME * i + 3], sun)
         if not math.isfinite(pred):
             continue
-        z[m] = _fold(pred - aops[i])
+        z[m] = fold_half_pi(pred - aops[i])
         for j in range(3):
             H[m, X_ATT + j] = jac[j]
         R[m] = sigmas[i] ** 2
@@ -182,21 +157,19 @@ def _raw(C, aops, views, sun, sigmas, z, H, R, chan):
 @nb.njit(MEAS_SIG, cache=True)
 def polarization_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
     kind, k, mode = int(par[0]), int(par[1]), int(par[2])
-    views = np.empty((k, 3))
-    for i in range(k):
-        for j in range(3):
-            views[i, j] = par[_HDR + 3 * i + j]
+    frames = par[_HDR:_HDR + FRAME * k]  # a view of the parameters: nothing copied
     aops = row[0:k]
     sun = row[k:k + 3]
     sig = row[k + 3:2 * k + 3]
-    J = np.empty((3, 3))
     if mode == 1:
-        return _raw(C_bn, aops, views, sun, sig, z, H, R, chan)
+        return _raw(C_bn, aops, frames, sun, sig, z, H, R, chan)
     if kind == 0:
         if not (math.isfinite(aops[0]) and sig[0] > 0.0):
             return 0
+        J = np.empty((3, 3))
         return _point(C_bn, aops[0], sun, sig[0], J, z, H, R, chan)
-    return _imaging(C_bn, aops, views, sun, sig[0], par[3:5], J, z, H, R, chan)
+    return _imaging(C_bn, aops, aop_trig(aops), frames, sun, math.atan2(sun[1], sun[0]),
+                    sig[0], par[3:5], z, H, R, chan)
 
 
 def _pack(data, options) -> np.ndarray:
@@ -208,7 +181,7 @@ def _pack(data, options) -> np.ndarray:
         raise UnknownNameError("polarization measurement mode", mode, MODES)
     prior = np.deg2rad(options.get("prior_std_deg", (5.0, 10.0)))
     return np.concatenate([[float(data.meta.get("sensor_type", 0)), views.shape[0],
-                            MODES[mode], *prior], views.ravel()])
+                            MODES[mode], *prior], view_frames(np.ascontiguousarray(views))])
 
 
 MODEL = register(MeasurementModel(kind="polarization", kernel=polarization_kernel,
