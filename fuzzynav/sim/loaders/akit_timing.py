@@ -156,7 +156,7 @@ def estimate_clock(t_imu, dtheta_b, t_ref, q_ref, lat_rad) -> ClockMap:
     # weighted straight line offset(t) = a + b t through the segment offsets; with fewer
     # than three informative segments the slope is left at zero (the clocks' rates equal)
     b = 0.0
-    if np.count_nonzero(w > 0.05 * w.max(initial=0.0)) >= 3:
+    if np.count_nonzero(w > 1e-3 * w.max(initial=0.0)) >= 3:
         A = np.column_stack([np.ones_like(mids), mids]) * np.sqrt(w)[:, None]
         b = float(np.linalg.lstsq(A, best * np.sqrt(w), rcond=None)[0][1])
     # the offset at the start, refined along the fitted slope over every epoch
