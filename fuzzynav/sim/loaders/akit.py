@@ -167,48 +167,6 @@ def reference_attitude(rpy) -> np.ndarray:
     return np.array([attitude.dcm_to_quat(SWAP @ Cm @ SWAP) for Cm in C_frd_ned])
 
 
-def reference_attitude(rpy) -> np.ndarray:
-    """Quaternions (body RFU -> ENU) of ZYX Euler angles (roll, pitch, yaw) FRD -> NED."""
-    r, p, y = rpy[:, 0], rpy[:, 1], rpy[:, 2]
-    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
-    C = np.array([[cp * cy, sr * sp * cy - cr * sy, cr * sp * cy + sr * sy],
-                  [cp * sy, sr * sp * sy + cr * cy, cr * sp * sy - sr * cy],
-                  [-sp, sr * cp, cr * cp]])
-    C_frd_ned = np.moveaxis(C, -1, 0)
-    return np.array([attitude.dcm_to_quat(SWAP @ Cm @ SWAP) for Cm in C_frd_ned])
-
-
-def _parabola_min(cost) -> float:
-    """Position of the minimum of sampled costs, refined by a parabola through three."""
-    i = int(np.argmin(cost))
-    if 0 < i < len(cost) - 1:
-        c0, c1, c2 = cost[i - 1], cost[i], cost[i + 1]
-        den = c0 - 2.0 * c1 + c2
-        if den > 0.0:
-            return i + 0.5 * (c0 - c2) / den
-    return float(i)
-
-
-def reference_lag(imu, gt) -> float:
-    """Samples (fractional, 0..MAX_LAG) by which the reference yaw rate trails the gyro's.
-
-    The streams are resampled onto grids of about 1 s; a lag of half a sample turns into
-    degrees of heading at the start of a fast turn, so the minimum is refined between the
-    whole-sample shifts.
-    """
-    t = gt[:, 0]
-    yaw_rate = np.gradient(np.unwrap(gt[:, 9]), t)
-    edges = np.concatenate([[t[0] - 0.5 * (t[1] - t[0])], 0.5 * (t[1:] + t[:-1]),
-                            [t[-1] + 0.5 * (t[-1] - t[-2])]])
-    which = np.searchsorted(edges, imu[:, 0]) - 1
-    ok = (which >= 0) & (which < t.size)
-    gz = np.bincount(which[ok], imu[ok, 6], t.size) / np.maximum(np.bincount(which[ok],
-                                                                             None, t.size), 1)
-    gz *= np.cos(gt[:, 7])
-    cost = [np.mean((gz[:t.size - s] - yaw_rate[s:]) ** 2) for s in range(MAX_LAG + 1)]
-    return max(_parabola_min(cost), 0.0)
-
-
 def reference_at(gt, t_new) -> Reference:
     """The reference (columns of a GT file) interpolated at ``t_new`` [s], in our frames."""
     t = gt[:, 0]
