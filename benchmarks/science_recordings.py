@@ -243,7 +243,8 @@ def main(argv=None) -> int:
     csv = ROOT / "docs" / "science_recordings.csv"
     if df is not None and csv.is_file():
         old = pd.read_csv(csv)
-        new = pd.concat([old[old["scenario"] != "akit"], df])
+        # columns only the replaced rows had (an earlier loader's fields) go with them
+        new = pd.concat([old[old["scenario"] != "akit"], df]).dropna(axis=1, how="all")
         write_atomic(csv, lambda tmp: new.to_csv(tmp, index=False))
     return 0
 
