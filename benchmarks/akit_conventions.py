@@ -28,12 +28,12 @@ def _binned(imu, t, col):
 def row(d: Path, n: int) -> list:
     imu = akit.read_table(d / f"IMU_trajectory{n}.csv", "IMU")
     gt = akit.read_table(d / "corrected" / f"GT_trajectory{n}.csv", "GT")
-    t = gt[:, 0]
-    rates = [np.gradient(np.unwrap(gt[:, c]), t) for c in (7, 8, 9)]
     rec = akit.load_trajectory(d, n)
-    s = max(int(round(rec.clock.offset_s / np.median(np.diff(t)))), 0)  # read s samples later
-    corr = [np.corrcoef(_binned(imu, t, 4 + i)[:t.size - s], rates[i][s:])[0, 1]
-            for i in range(3)]
+    # Euler rates of the reference on the IMU clock (its stamps mapped by the loader)
+    t = rec.reference.time_s
+    labels = rec.clock.to_label(t)
+    rates = [np.gradient(np.interp(labels, gt[:, 0], np.unwrap(gt[:, c])), t) for c in (7, 8, 9)]
+    corr = [np.corrcoef(_binned(imu, t, 4 + i), rates[i])[0, 1] for i in range(3)]
     ref, dvl = rec.reference, rec.dvl
     k = np.clip(np.searchsorted(ref.time_s, dvl.time_s - 1e-9), 0, ref.time_s.size - 1)
     C = attitude.quat_to_dcm(ref.q_bn[k])

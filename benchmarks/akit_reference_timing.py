@@ -32,11 +32,13 @@ def heading_rms(imu, ref, shift: float, j0: int, secs: int = SECONDS) -> float:
     gyro integration vs the reference read ``shift`` s later on the IMU clock."""
     dt = float(np.median(np.diff(imu.time_s)))
     k_at = lambda t: int(round((t + shift - imu.time_s[0]) / dt))  # noqa: E731
-    k0, C, err = k_at(ref.time_s[j0]), attitude.quat_to_dcm(ref.q_bn[j0]), []
+    base = k0 = k_at(ref.time_s[j0])
+    C, err = attitude.quat_to_dcm(ref.q_bn[j0]), []
+    inc = attitude.rotvec_to_dcm(imu.dtheta_b[k0:k_at(ref.time_s[j0 + secs])])
     for j in range(j0 + 1, j0 + secs):
         k1 = k_at(ref.time_s[j])
         for k in range(k0, k1):
-            C = C @ attitude.rotvec_to_dcm(imu.dtheta_b[k])
+            C = C @ inc[k - base]
         k0 = k1
         err.append(np.rad2deg(attitude.attitude_error(C, attitude.quat_to_dcm(ref.q_bn[j])))[2])
     return float(np.sqrt(np.mean(np.square(err))))
