@@ -1,8 +1,8 @@
 """The A-KIT conventions, measured: the numbers behind docs/data.md ("A-KIT AUV recordings").
 
 For each trajectory: the accelerometer z mean; the correlation of each gyro column with the
-reference's Euler rates (the file's y column is reversed); the reference lag and the DVL lag
-the loader finds; the reference-point offset; and the DVL against the reference velocity
+reference's Euler rates (the file's y column is reversed); the clock map the loader finds
+(reference offset at the start, its clock rate, the DVL's offset from the reference); the reference-point offset; and the DVL against the reference velocity
 rotated into the body (forward RMS, lateral RMS before/after the offset, forward scale fit).
 Usage: ``python benchmarks/akit_conventions.py [DIR]`` (default ``$FUZZYNAV_DATA/akit``).
 """
@@ -28,12 +28,12 @@ def _binned(imu, t, col):
 def row(d: Path, n: int) -> list:
     imu = akit.read_table(d / f"IMU_trajectory{n}.csv", "IMU")
     gt = akit.read_table(d / "corrected" / f"GT_trajectory{n}.csv", "GT")
-    t = gt[:, 0]
-    rates = [np.gradient(np.unwrap(gt[:, c]), t) for c in (7, 8, 9)]
     rec = akit.load_trajectory(d, n)
-    s = int(round(rec.lag_samples))  # the reference read that many samples later
-    corr = [np.corrcoef(_binned(imu, t, 4 + i)[:t.size - s], rates[i][s:])[0, 1]
-            for i in range(3)]
+    # Euler rates of the reference on the IMU clock (its stamps mapped by the loader)
+    t = rec.reference.time_s
+    labels = rec.clock.to_label(t)
+    rates = [np.gradient(np.interp(labels, gt[:, 0], np.unwrap(gt[:, c])), t) for c in (7, 8, 9)]
+    corr = [np.corrcoef(_binned(imu, t, 4 + i), rates[i])[0, 1] for i in range(3)]
     ref, dvl = rec.reference, rec.dvl
     k = np.clip(np.searchsorted(ref.time_s, dvl.time_s - 1e-9), 0, ref.time_s.size - 1)
     C = attitude.quat_to_dcm(ref.q_bn[k])
@@ -45,7 +45,7 @@ def row(d: Path, n: int) -> list:
     scale = np.dot(vb[:, 1], dvl.z[:, 1]) / np.dot(vb[:, 1], vb[:, 1])
     rms = lambda x: np.sqrt(np.mean(np.square(x)))  # noqa: E731
     return [n, f"{imu[:, 3].mean():.3f}", " / ".join(f"{c:+.2f}" for c in corr),
-            f"{rec.lag_samples:.2f}", f"{(dvl.time_s[0] - 1.0025) / 1.0025:+.0f}",
+            f"{rec.clock.offset_s:+.3f}", f"{rec.clock.rate:.5f}", f"{rec.clock.dvl_offset_s:+.2f}",
             f"{rec.reference_offset_b[1]:.2f}", f"{rms(d_b[:, 1]):.3f}",
             f"{rms(d_b[:, 0]):.3f} → {rms(lat_after):.3f}", f"{rms(d_b[:, 2]):.3f}",
             f"{scale:.4f}"]
@@ -56,7 +56,8 @@ def main(argv=None):
     d = Path(argv[0]) if argv else Path(os.environ.get(
         "FUZZYNAV_DATA", ROOT.parent / "shared" / "datasets")) / "akit"
     head = ["traj", "acc z mean (m/s²)", "corr gyro x,y,z (file) vs roll, pitch, yaw rate",
-            "reference lag (samples)", "DVL lag", "reference point ahead (m)",
+            "reference offset (s)", "reference clock rate", "DVL − reference (s)",
+            "reference point ahead (m)",
             "fwd RMS (m/s)", "lateral RMS (m/s) raw → offset", "vertical RMS (m/s)",
             "fwd scale"]
     print(render(head, [row(d, n) for n in range(1, 9)], markdown=True))

@@ -22,6 +22,7 @@ that lacks its data or its rules is skipped with a sentence on the page saying s
 from __future__ import annotations
 
 import os
+import sys
 import tempfile
 from pathlib import Path
 
@@ -208,3 +209,45 @@ def recordings_section(args, params: Path, systems: dict) -> tuple:
     auv, auv_df = auv_section(root / "akit", args.auv_rules)
     frames = [d for d in (car_df, auv_df) if d is not None]
     return lines + car + auv, (pd.concat(frames) if frames else None)
+
+
+AUV_HEADING = "### The AUV trajectories held out"
+AUV_END = "Every run's metrics:"
+
+
+def splice_auv(page: str, auv_lines: list) -> str:
+    """``page`` (docs/science.md) with its AUV subsection replaced by ``auv_lines``: from its
+    heading up to the closing "Every run's metrics" line, the rest untouched."""
+    a = page.index(AUV_HEADING)
+    b = page.index(AUV_END, a)
+    return page[:a] + "\n".join(auv_lines) + "\n" + page[b:]
+
+
+def main(argv=None) -> int:
+    """``--auv-only``: rerun the AUV subsection of docs/science.md and its rows of
+    docs/science_recordings.csv alone (the simulated sections need hours of tuning;
+    ``science_results.py`` regenerates the whole page)."""
+    import argparse
+
+    from fuzzynav.fileio import write_atomic
+
+    p = argparse.ArgumentParser(description=main.__doc__)
+    p.add_argument("--auv-only", action="store_true", required=True)
+    p.add_argument("--data", help="recordings directory (default $FUZZYNAV_DATA)")
+    p.add_argument("--auv-rules", help="DVL rules tuned on recordings")
+    args = p.parse_args(argv)
+    lines, df = auv_section(data_root(args.data) / "akit", args.auv_rules)
+    page = ROOT / "docs" / "science.md"
+    text = splice_auv(page.read_text(), lines)
+    write_atomic(page, lambda tmp: Path(tmp).write_text(text))
+    csv = ROOT / "docs" / "science_recordings.csv"
+    if df is not None and csv.is_file():
+        old = pd.read_csv(csv)
+        # columns only the replaced rows had (an earlier loader's fields) go with them
+        new = pd.concat([old[old["scenario"] != "akit"], df]).dropna(axis=1, how="all")
+        write_atomic(csv, lambda tmp: new.to_csv(tmp, index=False))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -114,5 +114,5 @@ def run_all(recs, filter_name: str, options=None) -> tuple[pd.DataFrame, dict]:
         res, m = run_trajectory(rec, filter_name, options)
         results[rec.trajectory] = res
         rows.append({"filter": f"traj {rec.trajectory}", "seed": rec.trajectory,
-                     "trajectory": rec.trajectory, "lag_samples": rec.lag_samples, **m})
+                     "trajectory": rec.trajectory, "reference_offset_s": rec.clock.offset_s, **m})
     return pd.DataFrame(rows), results

@@ -37,8 +37,8 @@ def text_summary(spec, recs, filter_name, df) -> str:
              f"filter {filter_name}, DVL-aided from the reference at the start "
              f"(attitude sigma {INIT_OPTIONS['init_att_sigma_deg']} deg, position "
              f"{INIT_OPTIONS['init_pos_sigma_m']} m)",
-             "reference lag [samples] " + ", ".join(f"{r.trajectory}: {r.lag_samples:.2f}"
-                                                    for r in recs)
+             "reference stamps - IMU time [s] at the start " + ", ".join(
+                 f"{r.trajectory}: {r.clock.offset_s:+.3f}" for r in recs)
              + "; reference point " + ", ".join(f"{r.reference_offset_b[1]:.2f}" for r in recs)
              + " m ahead of the IMU",
              "scored against the post-processed reference (Delph INS) at its 1-Hz epochs"
@@ -69,7 +69,9 @@ def json_summary(spec, recs, filter_name, df) -> dict:
                    "filter": filter_name, "trajectories": [r.trajectory for r in recs],
                    "settings": {k: list(v) if isinstance(v, tuple) else v
                                 for k, v in INIT_OPTIONS.items()},
-                   "start": {str(r.trajectory): {"reference_lag_samples": r.lag_samples,
+                   "start": {str(r.trajectory): {"reference_offset_s": r.clock.offset_s,
+                                                 "reference_clock_rate": r.clock.rate,
+                                                 "dvl_offset_s": r.clock.dvl_offset_s,
                                                  "reference_offset_b_m": list(r.reference_offset_b)}
                              for r in recs},
                    "feeds": feeds,

@@ -2,8 +2,9 @@
 
 :func:`write_akit` turns a simulated trajectory into ``IMU_trajectoryN.csv`` (body FRD with
 the y columns reversed, as the real files are) and ``corrected/GT_`` / ``DVL_trajectoryN.csv``
-(NED, ZYX Euler, the reference lagging by ``lag`` samples), so that the loader's conventions
-are checked against a truth we know.
+(NED, ZYX Euler; the reference stamped ``lag`` s late and its clock running ``rate`` times
+the IMU's: fractional and negative lags allowed), so that the loader's conventions and its
+clock map are checked against a truth we know.
 """
 import numpy as np
 
@@ -42,11 +43,30 @@ def _write(path, kind, rows):
     path.write_text("\n".join(lines) + "\n")
 
 
-def write_akit(directory, tr, n=1, lag=1):
-    """Write trajectory ``n``; returns the 1-Hz truth indices of the DVL/GT rows."""
-    dt = np.diff(tr.time_s)[:, None]
-    rates = np.vstack([tr.dtheta_b / dt, tr.dtheta_b[-1:] / dt[-1]])
-    force = np.vstack([tr.dv_b / dt, tr.dv_b[-1:] / dt[-1]])
+def truth_at(tr, t):
+    """The simulated truth at times ``t`` between its samples (clamped to its span):
+    position and velocity linear, attitude along the rotation between the samples."""
+    t = np.clip(t, tr.time_s[0], tr.time_s[-1])
+    k = np.clip(np.searchsorted(tr.time_s, t, side="right") - 1, 0, tr.time_s.size - 2)
+    f = ((t - tr.time_s[k]) / (tr.time_s[k + 1] - tr.time_s[k]))[:, None]
+    rel = attitude.quat_to_rotvec(attitude.quat_multiply(attitude.quat_conj(tr.q_bn[k]),
+                                                         tr.q_bn[k + 1]))
+    q = attitude.quat_multiply(tr.q_bn[k], attitude.rotvec_to_quat(f * rel))
+    return ((1 - f) * tr.lla[k] + f * tr.lla[k + 1], (1 - f) * tr.vel_n[k] + f * tr.vel_n[k + 1],
+            q)
+
+
+def _point_samples(t, inc):
+    """Rates at the sample times from increments over the intervals between them: the mean
+    of the two intervals' rates (an interval's own rate would sit half a sample later)."""
+    r = inc / np.diff(t)[:, None]
+    return np.vstack([r[:1], 0.5 * (r[1:] + r[:-1]), r[-1:]])
+
+
+def write_akit(directory, tr, n=1, lag=1.0, rate=1.0):
+    """Write trajectory ``n``: the GT row stamped ``s`` holds the truth at ``(s - lag) / rate``
+    (the DVL is on the IMU clock); returns the 1-Hz truth indices of the DVL/GT rows."""
+    rates, force = _point_samples(tr.time_s, tr.dtheta_b), _point_samples(tr.time_s, tr.dv_b)
     flip = np.array([1.0, -1.0, 1.0])
     _write(directory / f"IMU_trajectory{n}.csv", "IMU",
            np.column_stack([tr.time_s, (force @ SWAP.T) * flip, (rates @ SWAP.T) * flip]))
@@ -55,8 +75,8 @@ def write_akit(directory, tr, n=1, lag=1):
     v_b = np.einsum("kji,kj->ki", C, tr.vel_n[idx])
     _write(directory / "corrected" / f"DVL_trajectory{n}.csv", "DVL",
            np.column_stack([tr.time_s[idx], v_b @ SWAP.T]))
-    src = np.concatenate([np.repeat(idx[:1], lag), idx[:idx.size - lag]])  # lagging
+    lla, vel, q = truth_at(tr, (tr.time_s[idx] - lag) / rate)
     _write(directory / "corrected" / f"GT_trajectory{n}.csv", "GT",
-           np.column_stack([tr.time_s[idx], tr.lla[src, 1], tr.lla[src, 0], tr.lla[src, 2],
-                            tr.vel_n[src] @ SWAP.T, _euler_frd_ned(tr.q_bn[src])]))
+           np.column_stack([tr.time_s[idx], lla[:, 1], lla[:, 0], lla[:, 2], vel @ SWAP.T,
+                            _euler_frd_ned(q)]))
     return idx

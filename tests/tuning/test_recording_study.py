@@ -27,7 +27,7 @@ def data_dir(tmp_path_factory):
     """A data directory holding two synthetic A-KIT trajectories (``auv/``)."""
     root = tmp_path_factory.mktemp("data")
     for n in (1, 2):
-        write_akit(root / "auv", auv_trajectory(90.0 + 30.0 * n), n=n, lag=1)
+        write_akit(root / "auv", auv_trajectory(90.0 + 30.0 * n), n=n, lag=1.0)
     return root
 
 

@@ -12,10 +12,11 @@ Conventions, established from the data (``docs/data.md``; the numbers come from
   force follow +g sin(pitch) with correlation 0.80-0.96 on all eight trajectories; -0.80 to
   -0.96 with the top-level pitch).  Attitude is ZYX Euler (roll, pitch, yaw) of
   body FRD to NED; velocity NED; altitude is minus the depth;
-* the reference lags the IMU by about one sample on most trajectories: the yaw rate of the
-  reference matches the gyro best when read one sample later (0 on trajectories 5 and 6);
-  the loader measures this lag per trajectory (:func:`reference_lag`) and moves the
-  reference earlier by it.  The DVL is on the IMU's clock;
+* the reference and DVL stamps are not on the IMU's clock: they run 0.25 % slow against it
+  (each stream's samples were spread over 0-400 s) and start offset by a fraction of a
+  second; :func:`~fuzzynav.sim.loaders.akit_timing.estimate_clock` measures the map from
+  the gyros (negative offsets allowed) and the reference and the DVL are moved onto the IMU
+  clock by it (module :mod:`~fuzzynav.sim.loaders.akit_timing`);
 * the DVL velocity is that of the IMU point (the filter's residuals show no lever-arm
   effect), while the reference is given at a point about 1.8 m forward of it: the lateral
   difference between the DVL and the reference velocity rotated into the body is the yaw
@@ -34,6 +35,7 @@ import numpy as np
 
 from fuzzynav.errors import DataMissingError, InputFileError
 from fuzzynav.nav import attitude
+from fuzzynav.sim.loaders.akit_timing import ClockMap, dvl_offset, estimate_clock
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.sim.sensors import SensorData
 
@@ -49,8 +51,6 @@ IMU_FILE_TO_FRD = np.array([1.0, -1.0, 1.0])
 COLUMNS = {"IMU": 7, "DVL": 4, "GT": 10}
 #: the DVL's 1-sigma per axis according to the source [m/s]
 DVL_SIGMA_MPS = 0.02
-#: largest reference lag searched [samples]
-MAX_LAG = 3
 #: accelerometer z mean must be within this of -g (FRD, at sea level) [m/s^2]
 GRAVITY_TOLERANCE = 0.5
 
@@ -74,7 +74,7 @@ class AkitRecording:
     imu: ImuData
     dvl: SensorData
     reference: Reference
-    lag_samples: float
+    clock: ClockMap
     reference_offset_b: np.ndarray  # reference point in body RFU from the IMU [m]
     files: dict = field(default_factory=dict)
     kind = "akit"
@@ -167,37 +167,6 @@ def reference_attitude(rpy) -> np.ndarray:
     return np.array([attitude.dcm_to_quat(SWAP @ Cm @ SWAP) for Cm in C_frd_ned])
 
 
-def _parabola_min(cost) -> float:
-    """Position of the minimum of sampled costs, refined by a parabola through three."""
-    i = int(np.argmin(cost))
-    if 0 < i < len(cost) - 1:
-        c0, c1, c2 = cost[i - 1], cost[i], cost[i + 1]
-        den = c0 - 2.0 * c1 + c2
-        if den > 0.0:
-            return i + 0.5 * (c0 - c2) / den
-    return float(i)
-
-
-def reference_lag(imu, gt) -> float:
-    """Samples (fractional, 0..MAX_LAG) by which the reference yaw rate trails the gyro's.
-
-    The streams are resampled onto grids of about 1 s; a lag of half a sample turns into
-    degrees of heading at the start of a fast turn, so the minimum is refined between the
-    whole-sample shifts.
-    """
-    t = gt[:, 0]
-    yaw_rate = np.gradient(np.unwrap(gt[:, 9]), t)
-    edges = np.concatenate([[t[0] - 0.5 * (t[1] - t[0])], 0.5 * (t[1:] + t[:-1]),
-                            [t[-1] + 0.5 * (t[-1] - t[-2])]])
-    which = np.searchsorted(edges, imu[:, 0]) - 1
-    ok = (which >= 0) & (which < t.size)
-    gz = np.bincount(which[ok], imu[ok, 6], t.size) / np.maximum(np.bincount(which[ok],
-                                                                             None, t.size), 1)
-    gz *= np.cos(gt[:, 7])
-    cost = [np.mean((gz[:t.size - s] - yaw_rate[s:]) ** 2) for s in range(MAX_LAG + 1)]
-    return max(_parabola_min(cost), 0.0)
-
-
 def reference_at(gt, t_new) -> Reference:
     """The reference (columns of a GT file) interpolated at ``t_new`` [s], in our frames."""
     t = gt[:, 0]
@@ -209,17 +178,20 @@ def reference_at(gt, t_new) -> Reference:
                      vel_n=g[:, 3:6] @ SWAP.T, q_bn=reference_attitude(g[:, 6:9]))
 
 
-def dvl_lag(dvl, gt, ref_lag: float) -> int:
-    """Samples by which the DVL trails the IMU: the shift that best matches its forward
-    velocity to the reference's (rotated into the body), minus the reference's own lag."""
-    from fuzzynav.nav import attitude
-
+def forward_velocity(gt) -> np.ndarray:
+    """The reference velocity rotated into the body: its forward component [m/s]."""
     C = attitude.quat_to_dcm(reference_attitude(gt[:, 7:10]))
-    fwd_ref = np.einsum("ki,ki->k", C[:, :, 1], gt[:, 4:7] @ SWAP.T)
-    fwd = dvl[:, 1]
-    n = min(fwd.size, fwd_ref.size)
-    cost = [np.mean((fwd[:n - s] - fwd_ref[s:n]) ** 2) for s in range(MAX_LAG + 1)]
-    return max(int(round(_parabola_min(cost) - ref_lag)), 0)
+    return np.einsum("ki,ki->k", C[:, :, 1], gt[:, 4:7] @ SWAP.T)
+
+
+def reference_clock(imu, gt, dvl) -> ClockMap:
+    """The reference's and the DVL's clock map onto the IMU (:mod:`.akit_timing`)."""
+    inc = imu_increments(imu[:, 0], imu[:, 1:4], imu[:, 4:7])
+    clock = estimate_clock(inc.time_s, inc.dtheta_b, gt[:, 0], reference_attitude(gt[:, 7:10]),
+                           float(np.median(gt[:, 2])))
+    dt = float(np.median(np.diff(imu[:, 0])))
+    delta = dvl_offset(dvl[:, 0], dvl[:, 1], gt[:, 0], forward_velocity(gt), dt)
+    return ClockMap(clock.offset_s, clock.rate, delta)
 
 
 def reference_offset(imu: ImuData, dvl: SensorData, ref: Reference) -> np.ndarray:
@@ -231,8 +203,6 @@ def reference_offset(imu: ImuData, dvl: SensorData, ref: Reference) -> np.ndarra
     ``(v_dvl - C_nb v_ref)_x = omega_z r_y``; fitted by least squares (only ``r_y``: the
     roll and pitch rates are too small to fix the other components).
     """
-    from fuzzynav.nav import attitude
-
     k = np.clip(np.searchsorted(ref.time_s, dvl.time_s - 1e-9), 0, ref.time_s.size - 1)
     C = attitude.quat_to_dcm(ref.q_bn[k])
     lateral = dvl.z[:, 0] - np.einsum("ki,ki->k", C[:, :, 0], ref.vel_n[k])
@@ -240,6 +210,17 @@ def reference_offset(imu: ImuData, dvl: SensorData, ref: Reference) -> np.ndarra
     wz = np.interp(dvl.time_s, 0.5 * (t[1:] + t[:-1]), imu.dtheta_b[:, 2] / np.diff(t))
     r_y = float(np.dot(wz, lateral) / max(np.dot(wz, wz), 1e-30))
     return np.array([0.0, r_y, 0.0])
+
+
+def _reference_on_imu_clock(gt, imu, clock: ClockMap):
+    """The reference resampled at its own rate on the IMU clock from the first IMU sample it
+    covers (IMU samples before that are dropped: the filter starts from the reference)."""
+    t0 = max(imu[0, 0], float(clock.to_imu(gt[0, 0])))
+    imu = imu[np.searchsorted(imu[:, 0], t0 - 1e-9):]
+    period = float(np.median(np.diff(gt[:, 0]))) / clock.rate
+    t_ref = np.arange(imu[0, 0], min(float(clock.to_imu(gt[-1, 0])), imu[-1, 0]) + 1e-9, period)
+    ref = reference_at(gt, clock.to_label(t_ref))
+    return Reference(t_ref, ref.lla, ref.vel_n, ref.q_bn), imu
 
 
 def load_trajectory(directory, n: int) -> AkitRecording:
@@ -253,20 +234,15 @@ def load_trajectory(directory, n: int) -> AkitRecording:
     _check_imu(files["imu"], imu)
     _check_span(files["dvl"], dvl[:, 0], imu[:, 0])
     _check_span(files["reference"], gt[:, 0], imu[:, 0])
-    lag = reference_lag(imu, gt)
-    dt_ref = float(np.median(np.diff(gt[:, 0])))
-    # the reference epochs moved earlier by the lag, resampled on the IMU start's grid
-    t_ref = np.arange(imu[0, 0], gt[-1, 0] - lag * dt_ref + 1e-9, dt_ref)
-    ref = reference_at(gt, t_ref + lag * dt_ref)
-    ref = Reference(t_ref, ref.lla, ref.vel_n, ref.q_bn)
-    # a DVL sample trailing the IMU by k samples describes the motion k samples later
-    t_dvl = dvl[:, 0] + (dvl[1, 0] - dvl[0, 0]) * dvl_lag(dvl, gt, lag)
+    clock = reference_clock(imu, gt, dvl)
+    ref, imu = _reference_on_imu_clock(gt, imu, clock)
+    t_dvl = clock.to_imu(dvl[:, 0], clock.dvl_offset_s)
     inside = (t_dvl > imu[0, 0]) & (t_dvl <= imu[-1, 0])
     z = dvl[inside, 1:4] @ SWAP.T
     sensor = SensorData("dvl", t_dvl[inside], z, np.full(z.shape, DVL_SIGMA_MPS),
                         {"rate_hz": 1.0 / float(np.median(np.diff(dvl[:, 0])))})
     inc = imu_increments(imu[:, 0], imu[:, 1:4], imu[:, 4:7])
-    return AkitRecording(n, d, inc, sensor, ref, lag, reference_offset(inc, sensor, ref),
+    return AkitRecording(n, d, inc, sensor, ref, clock, reference_offset(inc, sensor, ref),
                          {k: str(v) for k, v in files.items()})
 
 

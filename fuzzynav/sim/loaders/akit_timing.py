@@ -1,0 +1,179 @@
+"""The clock map of the A-KIT reference and DVL onto the IMU's clock.
+
+The reference and DVL rows of the A-KIT files are stamped ``k * 400 / 399`` s and the IMU
+rows ``m * 400 / 39999`` s: each stream's samples were spread over 0-400 s whatever their
+number, so the 1-Hz streams run 0.25 % slow against the IMU and drift by about 1 s over a
+trajectory, on top of a constant offset.  Matching the gyros to the reference shows it
+(``docs/data.md``), and this module measures the map from the data instead of assuming it:
+
+* the gyro increments (earth rate removed with the reference attitude) are chained into one
+  body attitude track; between two consecutive reference epochs the reference's body
+  rotation is compared with the track's over the same interval shifted by each candidate
+  offset (IMU-sample steps, negative and positive), giving a misfit per epoch and offset;
+* per segment of the trajectory the best offset (parabola through the three smallest
+  misfits) is found, a straight line through them gives the clock rate, and the offset at
+  the start is refined over all epochs along that line.
+
+A time offset is observable only where the turn rate changes (for a steady rate the shifted
+increments are the same), which the misfit curvature reflects: segments are weighted by it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from fuzzynav.nav import attitude
+
+#: earth rotation rate [rad/s] (WGS-84)
+EARTH_RATE = 7.292115e-5
+#: largest offset searched either side of zero [s]
+MAX_OFFSET_S = 2.0
+#: segments of the trajectory whose best offsets give the clock rate
+SEGMENTS = 10
+
+
+@dataclass(frozen=True)
+class ClockMap:
+    """``label = rate * t_imu + offset_s``: the 1-Hz file stamp of an event at IMU time
+    ``t_imu``.  ``offset_s > 0``: the stream's stamps trail the IMU.  ``dvl_offset_s``: what
+    the DVL's stamps trail the reference's by (the DVL label of an event is
+    ``rate * t_imu + offset_s + dvl_offset_s``)."""
+
+    offset_s: float
+    rate: float
+    dvl_offset_s: float = 0.0
+
+    def to_imu(self, label, extra_s: float = 0.0) -> np.ndarray:
+        """IMU times of file stamps ``label`` (minus ``extra_s`` more offset)."""
+        return (np.asarray(label, float) - self.offset_s - extra_s) / self.rate
+
+    def to_label(self, t_imu) -> np.ndarray:
+        """Reference file stamps of IMU times ``t_imu``."""
+        return self.rate * np.asarray(t_imu, float) + self.offset_s
+
+
+def parabola_min(cost) -> float:
+    """Position of the minimum of sampled costs, refined by a parabola through three."""
+    i = int(np.argmin(cost))
+    if 0 < i < len(cost) - 1:
+        c0, c1, c2 = cost[i - 1], cost[i], cost[i + 1]
+        den = c0 - 2.0 * c1 + c2
+        if den > 0.0:
+            return i + 0.5 * (c0 - c2) / den
+    return float(i)
+
+
+def attitude_track(dtheta_b) -> np.ndarray:
+    """Quaternions of the body at each IMU sample relative to the first, chained from the
+    rotation increments ``dtheta_b`` (K-1, 3): ``q[k] = q[k-1] * exp(dtheta[k-1])``."""
+    inc = attitude.rotvec_to_quat(dtheta_b)
+    q = np.empty((inc.shape[0] + 1, 4))
+    q[0] = w, x, y, z = 1.0, 0.0, 0.0, 0.0
+    # a scalar loop: a cumulative quaternion product has no numpy form
+    for k, (a, b, c, d) in enumerate(inc.tolist()):
+        w, x, y, z = (w * a - x * b - y * c - z * d, w * b + x * a + y * d - z * c,
+                      w * c - x * d + y * a + z * b, w * d + x * c - y * b + z * a)
+        q[k + 1] = w, x, y, z
+    return q
+
+
+def track_at(t_imu, q, dtheta_b, t) -> np.ndarray:
+    """The track ``q`` at times ``t`` (any shape) between samples: the increment of the
+    sample interval taken in proportion (constant rate within a sample)."""
+    k = np.clip(np.searchsorted(t_imu, t, side="right") - 1, 0, dtheta_b.shape[0] - 1)
+    frac = (t - t_imu[k]) / (t_imu[k + 1] - t_imu[k])
+    return attitude.quat_multiply(q[k], attitude.rotvec_to_quat(frac[..., None] * dtheta_b[k]))
+
+
+def without_earth_rate(t_imu, dtheta_b, t_ref, q_ref, lat_rad) -> np.ndarray:
+    """Gyro increments less the earth rate seen in the body (the reference attitude of the
+    nearest epoch is close enough: 0.004 deg/s either way)."""
+    k = np.clip(np.searchsorted(t_ref, t_imu[1:]), 0, t_ref.size - 1)
+    C_bn = np.swapaxes(attitude.quat_to_dcm(q_ref[k]), -1, -2)
+    w_ie = EARTH_RATE * np.array([0.0, np.cos(lat_rad), np.sin(lat_rad)])  # ENU
+    return dtheta_b - (C_bn @ w_ie) * np.diff(t_imu)[:, None]
+
+
+def epoch_misfits(t_imu, dtheta_b, t_ref, q_ref, shifts) -> tuple[np.ndarray, np.ndarray]:
+    """Squared rotation misfit [rad^2], shape (len(shifts), J), between the reference's body
+    rotation from epoch j to j+1 and the gyro track's from ``t_ref - shift``; with the
+    epochs j used (both ends inside the IMU span for every shift)."""
+    q = attitude_track(dtheta_b)
+    j = np.flatnonzero((t_ref[:-1] - shifts.max() >= t_imu[0])
+                       & (t_ref[1:] - shifts.min() <= t_imu[-1]))
+    d_ref = attitude.quat_multiply(attitude.quat_conj(q_ref[j]), q_ref[j + 1])
+    q0 = track_at(t_imu, q, dtheta_b, t_ref[j][None, :] - shifts[:, None])
+    q1 = track_at(t_imu, q, dtheta_b, t_ref[j + 1][None, :] - shifts[:, None])
+    d_gyro = attitude.quat_multiply(attitude.quat_conj(q0), q1)
+    err = attitude.quat_to_rotvec(attitude.quat_multiply(attitude.quat_conj(d_ref)[None], d_gyro))
+    return np.sum(err * err, -1), j
+
+
+def _along(misfit, shifts, lines) -> np.ndarray:
+    """Mean misfit over epochs for each line of shifts (rows of ``lines``, one per epoch),
+    the misfit interpolated between the sampled shifts."""
+    step = shifts[1] - shifts[0]
+    pos = np.clip((lines - shifts[0]) / step, 0.0, shifts.size - 1.000001)
+    i = pos.astype(int)
+    f = pos - i
+    cols = np.arange(misfit.shape[1])
+    return np.mean((1 - f) * misfit[i, cols] + f * misfit[i + 1, cols], axis=-1)
+
+
+def segment_offsets(misfit, shifts, t_epoch) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Best offset of each of :data:`SEGMENTS` segments: (mid times, offsets, weights =
+    misfit curvature at the best offset, zero where the best is at the search's edge)."""
+    mids, best, weight = [], [], []
+    step = shifts[1] - shifts[0]
+    for cols in np.array_split(np.arange(misfit.shape[1]), SEGMENTS):
+        c = misfit[:, cols].mean(axis=1)
+        p = parabola_min(c)
+        i = int(round(p))
+        inside = 0 < i < c.size - 1
+        mids.append(t_epoch[cols].mean())
+        best.append(shifts[0] + p * step)
+        weight.append(max(c[i - 1] - 2 * c[i] + c[i + 1], 0.0) if inside else 0.0)
+    return np.array(mids), np.array(best), np.array(weight)
+
+
+def estimate_clock(t_imu, dtheta_b, t_ref, q_ref, lat_rad) -> ClockMap:
+    """The reference's clock map (:class:`ClockMap`, DVL offset 0) from the gyro track.
+
+    Parameters
+    ----------
+    t_imu, dtheta_b : IMU times (K,) and rotation increments (K-1, 3) in the body frame
+        the reference attitude is given for.
+    t_ref, q_ref : reference file stamps (J,) and attitude quaternions (J, 4) body to ENU.
+    lat_rad : latitude for the earth rate.
+    """
+    dt = float(np.median(np.diff(t_imu)))
+    n = int(round(MAX_OFFSET_S / dt))
+    shifts = np.arange(-n, n + 1) * dt
+    gyro = without_earth_rate(t_imu, dtheta_b, t_ref, q_ref, lat_rad)
+    misfit, j = epoch_misfits(t_imu, gyro, t_ref, q_ref, shifts)
+    mids, best, w = segment_offsets(misfit, shifts, t_ref[j])
+    # weighted straight line offset(t) = a + b t through the segment offsets; with fewer
+    # than three informative segments the slope is left at zero (the clocks' rates equal)
+    b = 0.0
+    if np.count_nonzero(w > 1e-3 * w.max(initial=0.0)) >= 3:
+        A = np.column_stack([np.ones_like(mids), mids]) * np.sqrt(w)[:, None]
+        b = float(np.linalg.lstsq(A, best * np.sqrt(w), rcond=None)[0][1])
+    # the offset at the start, refined along the fitted slope over every epoch
+    c = _along(misfit, shifts, shifts[:, None] + b * t_ref[j][None, :])
+    a = shifts[0] + parabola_min(c) * dt
+    # label = t_ref; the event happened at t_imu = label - (a + b * label)
+    rate = 1.0 / (1.0 - b)
+    return ClockMap(offset_s=float(a * rate), rate=float(rate))
+
+
+def dvl_offset(t_dvl, fwd_dvl, t_ref, fwd_ref, dt: float) -> float:
+    """Seconds by which the DVL's stamps trail the reference's (both 1 Hz): the shift that
+    best matches its forward velocity to the reference's (rotated into the body),
+    searched in steps ``dt`` over +-:data:`MAX_OFFSET_S`, parabola-refined."""
+    n = int(round(MAX_OFFSET_S / dt))
+    shifts = np.arange(-n, n + 1) * dt
+    ok = (t_dvl - MAX_OFFSET_S >= t_ref[0]) & (t_dvl + MAX_OFFSET_S <= t_ref[-1])
+    cost = [np.mean((fwd_dvl[ok] - np.interp(t_dvl[ok] - s, t_ref, fwd_ref)) ** 2)
+            for s in shifts]
+    return float(shifts[0] + parabola_min(np.array(cost)) * dt)
