@@ -90,6 +90,7 @@ def test_seeded_study_reaches_the_same_values(tmp_path, sim_cache, monkeypatch):
     runs = []
     for enabled in (False, True):
         monkeypatch.setattr(tpe, "ENABLED", enabled)
+        (tmp_path / str(enabled)).mkdir()
         cfg = load_study_config(write_study(tmp_path / str(enabled), name="tiny",
                                             study={"sampler": "tpe", "pruner": "wilcoxon"}))
         study = run_study(cfg, trials=14, cache_dir=sim_cache, progress=False)
