@@ -195,9 +195,11 @@ def run_study(cfg, trials=None, workers: int = 1, storage=None, cache_dir=None,
         run_worker(cfg, total, storage, 0, cache_dir,
                    progress=lambda n: (bar.update(min(n, total) - bar.n)), evaluator=evaluator)
     else:
-        supervise(cfg, study, total, workers, storage, cache_dir,
-                  on_poll=lambda: bar.update(min(n_finished(study), total) - bar.n),
-                  evaluator=evaluator)
+        # without a bar the parent only sleeps and reaps: reading the workers' journal
+        # records would take CPU time from them
+        supervise(cfg, study, total, workers, storage, cache_dir, evaluator=evaluator,
+                  on_poll=(lambda: bar.update(min(n_finished(study), total) - bar.n))
+                  if progress else None)
     bar.update(min(n_finished(study), total) - bar.n)
     bar.close()
     return study

@@ -91,10 +91,17 @@ def optimiser_names() -> tuple:
     return tuple(OPTIMISERS.load())
 
 
+def _tpe(cfg, seed):
+    from fuzzynav.tuning import tpe
+
+    # the lazy sampler proposes what Optuna's proposes, sampling only the groups a trial uses
+    cls = tpe.LazyGroupTPESampler if tpe.ENABLED else optuna.samplers.TPESampler
+    return cls(seed=seed, multivariate=True, group=True, constant_liar=True,
+               n_startup_trials=10)
+
+
 register_optimiser(Optimiser(
-    "tpe", lambda cfg, seed: optuna.samplers.TPESampler(
-        seed=seed, multivariate=True, group=True, constant_liar=True, n_startup_trials=10),
-    "multivariate TPE over each structure of the space (group=True)"))
+    "tpe", _tpe, "multivariate TPE over each structure of the space (group=True)"))
 register_optimiser(Optimiser(
     "random", lambda cfg, seed: optuna.samplers.RandomSampler(seed=seed), "uniform sampling"))
 register_optimiser(Optimiser(
