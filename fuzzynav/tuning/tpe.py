@@ -27,12 +27,24 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+import optuna
 from optuna.samplers import TPESampler
-from optuna.search_space.group_decomposed import _GroupDecomposedSearchSpace, _SearchSpaceGroup
 from optuna.trial import TrialState
 
+try:  # Optuna internals: present in the releases of CHECKED_OPTUNA
+    from optuna.search_space.group_decomposed import _GroupDecomposedSearchSpace, \
+        _SearchSpaceGroup
+except ImportError:  # pragma: no cover - another Optuna: the plain sampler is used
+    _GroupDecomposedSearchSpace, _SearchSpaceGroup = object, None
+
+#: Optuna releases (major.minor) whose TPE internals the lazy sampler was checked against
+#: (``tests/tuning/test_tpe.py``); on any other release ``sampler = "tpe"`` falls back to
+#: Optuna's own TPESampler rather than risk proposing something else
+CHECKED_OPTUNA = ("5.0",)
+SUPPORTED = (".".join(optuna.__version__.split(".")[:2]) in CHECKED_OPTUNA
+             and _SearchSpaceGroup is not None)
 #: False: ``sampler = "tpe"`` makes Optuna's own TPESampler (to compare against)
-ENABLED = True
+ENABLED = SUPPORTED
 
 
 def group_draws(n_ei_candidates: int, n_params: int) -> int:
