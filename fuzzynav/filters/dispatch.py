@@ -89,6 +89,6 @@ def memoise_kernel_addresses() -> None:
     would, and fuzzynav never calls it).
     """
     for name in ("_get_wrapper_address", "_get_jit_address"):
-        lookup = getattr(_function_type, name)
-        if not getattr(lookup, "memoised", False):
+        lookup = getattr(_function_type, name, None)  # None: another numba, left as it is
+        if lookup is not None and not getattr(lookup, "memoised", False):
             setattr(_function_type, name, _memoised_address(lookup))
