@@ -91,8 +91,8 @@ def test_real_trajectory_6_starts_on_the_gyros_heading():
 def test_real_dvl_agrees_with_the_reference_at_its_times(n):
     """The DVL's forward velocity against the reference's (rotated into the body) at the
     DVL's times on the IMU clock: RMS below 0.05 m/s on every trajectory (the source's DVL
-    agrees to about 0.02 m/s; paired with the next reference epoch instead, a second
-    away, trajectories 1, 4 and 8 gave 0.06-0.08 m/s)."""
+    agrees to about 0.02 m/s; measured 0.009-0.017; paired with the next reference epoch
+    instead, a second away, trajectories 1, 4 and 8 gave 0.06-0.08 m/s)."""
     rec = load_trajectory(AKIT, n)
     gt = read_table(AKIT / "corrected" / f"GT_trajectory{n}.csv", "GT")
     ref = reference_on_imu_clock(gt, rec.clock, rec.dvl.time_s)
