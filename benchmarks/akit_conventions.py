@@ -2,8 +2,10 @@
 
 For each trajectory: the accelerometer z mean; the correlation of each gyro column with the
 reference's Euler rates (the file's y column is reversed); the clock map the loader finds
-(reference offset at the start, its clock rate, the DVL's offset from the reference); the reference-point offset; and the DVL against the reference velocity
-rotated into the body (forward RMS, lateral RMS before/after the offset, forward scale fit).
+(reference offset at the start, its clock rate, the DVL's offset from the reference); the
+reference-point offset; and the DVL against the reference velocity rotated into the body,
+the reference interpolated at the DVL's times (forward RMS, lateral RMS before/after the
+offset, forward scale fit).
 Usage: ``python benchmarks/akit_conventions.py [DIR]`` (default ``$FUZZYNAV_DATA/akit``).
 """
 from __future__ import annotations
@@ -14,7 +16,6 @@ from pathlib import Path
 
 import numpy as np
 
-from fuzzynav.nav import attitude
 from fuzzynav.report import render
 from fuzzynav.sim.loaders import akit
 
@@ -34,14 +35,11 @@ def row(d: Path, n: int) -> list:
     labels = rec.clock.to_label(t)
     rates = [np.gradient(np.interp(labels, gt[:, 0], np.unwrap(gt[:, c])), t) for c in (7, 8, 9)]
     corr = [np.corrcoef(_binned(imu, t, 4 + i), rates[i])[0, 1] for i in range(3)]
-    ref, dvl = rec.reference, rec.dvl
-    k = np.clip(np.searchsorted(ref.time_s, dvl.time_s - 1e-9), 0, ref.time_s.size - 1)
-    C = attitude.quat_to_dcm(ref.q_bn[k])
-    vb = np.einsum("kji,kj->ki", C, ref.vel_n[k])
+    # the reference interpolated at the DVL's times on the IMU clock (not the next epoch)
+    dvl = rec.dvl
+    vb = akit.body_velocity(akit.reference_on_imu_clock(gt, rec.clock, dvl.time_s))
     d_b = dvl.z - vb
-    tt = rec.imu.time_s
-    wz = np.interp(dvl.time_s, 0.5 * (tt[1:] + tt[:-1]), rec.imu.dtheta_b[:, 2] / np.diff(tt))
-    lat_after = d_b[:, 0] - wz * rec.reference_offset_b[1]
+    lat_after = d_b[:, 0] - akit.yaw_rate_at(rec.imu, dvl.time_s) * rec.reference_offset_b[1]
     scale = np.dot(vb[:, 1], dvl.z[:, 1]) / np.dot(vb[:, 1], vb[:, 1])
     rms = lambda x: np.sqrt(np.mean(np.square(x)))  # noqa: E731
     return [n, f"{imu[:, 3].mean():.3f}", " / ".join(f"{c:+.2f}" for c in corr),

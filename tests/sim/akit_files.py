@@ -28,6 +28,18 @@ def auv_trajectory(duration_s=120.0):
     return generate(START, segs, 100.0, 2.0, 0.5)
 
 
+def varied_auv_trajectory():
+    """120 s of turns while the speed changes (1.5-2.5 m/s): the forward velocity carries
+    timing, and the body velocity changes within a second (a reference epoch a second off
+    the DVL's shows it)."""
+    segs = [Segment("accelerate", 10, speed_change_mps=0.5), Segment("turn", 15, turn_deg=60),
+            Segment("accelerate", 10, speed_change_mps=-1.0), Segment("turn", 15, turn_deg=-90),
+            Segment("accelerate", 10, speed_change_mps=0.8), Segment("turn", 20, turn_deg=120),
+            Segment("accelerate", 10, speed_change_mps=-0.6), Segment("turn", 15, turn_deg=-60),
+            Segment("accelerate", 15, speed_change_mps=0.5)]
+    return generate(START, segs, 100.0, 2.0, 0.5)
+
+
 def _euler_frd_ned(q_bn):
     out = []
     for C in attitude.quat_to_dcm(q_bn):
@@ -63,9 +75,24 @@ def _point_samples(t, inc):
     return np.vstack([r[:1], 0.5 * (r[1:] + r[:-1]), r[-1:]])
 
 
-def write_akit(directory, tr, n=1, lag=1.0, rate=1.0):
+def lever_point(tr, t, lla, vel, q, lever_y):
+    """Position and velocity (ENU) of the point ``lever_y`` m forward of the IMU at times
+    ``t``: ``p + C_bn r``, ``v + C_bn (omega_b x r)`` (earth rate neglected, as the loader)."""
+    w_b = np.column_stack([np.interp(t, tr.time_s, w) for w in
+                           _point_samples(tr.time_s, tr.dtheta_b).T])
+    r_b = np.array([0.0, lever_y, 0.0])
+    C = attitude.quat_to_dcm(q)
+    d_n, dv_n = C @ r_b, np.einsum("kij,kj->ki", C, np.cross(w_b, r_b))
+    radius = 6378137.0 + lla[:, 2]
+    lla = lla + np.column_stack([d_n[:, 1] / radius, d_n[:, 0] / (radius * np.cos(lla[:, 0])),
+                                 d_n[:, 2]])
+    return lla, vel + dv_n
+
+
+def write_akit(directory, tr, n=1, lag=1.0, rate=1.0, lever_y=0.0):
     """Write trajectory ``n``: the GT row stamped ``s`` holds the truth at ``(s - lag) / rate``
-    (the DVL is on the IMU clock); returns the 1-Hz truth indices of the DVL/GT rows."""
+    of a point ``lever_y`` m forward of the IMU (the DVL, the IMU point's, is on the IMU
+    clock); returns the 1-Hz truth indices of the DVL/GT rows."""
     rates, force = _point_samples(tr.time_s, tr.dtheta_b), _point_samples(tr.time_s, tr.dv_b)
     flip = np.array([1.0, -1.0, 1.0])
     _write(directory / f"IMU_trajectory{n}.csv", "IMU",
@@ -75,7 +102,9 @@ def write_akit(directory, tr, n=1, lag=1.0, rate=1.0):
     v_b = np.einsum("kji,kj->ki", C, tr.vel_n[idx])
     _write(directory / "corrected" / f"DVL_trajectory{n}.csv", "DVL",
            np.column_stack([tr.time_s[idx], v_b @ SWAP.T]))
-    lla, vel, q = truth_at(tr, (tr.time_s[idx] - lag) / rate)
+    t_gt = (tr.time_s[idx] - lag) / rate
+    lla, vel, q = truth_at(tr, t_gt)
+    lla, vel = lever_point(tr, np.clip(t_gt, tr.time_s[0], tr.time_s[-1]), lla, vel, q, lever_y)
     _write(directory / "corrected" / f"GT_trajectory{n}.csv", "GT",
            np.column_stack([tr.time_s[idx], lla[:, 1], lla[:, 0], lla[:, 2], vel @ SWAP.T,
                             _euler_frd_ned(q)]))

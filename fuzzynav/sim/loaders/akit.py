@@ -194,22 +194,39 @@ def reference_clock(imu, gt, dvl) -> ClockMap:
     return ClockMap(clock.offset_s, clock.rate, delta)
 
 
-def reference_offset(imu: ImuData, dvl: SensorData, ref: Reference) -> np.ndarray:
+def body_velocity(ref: Reference) -> np.ndarray:
+    """The reference velocity rotated into the body (RFU) at each of its epochs [m/s]."""
+    return np.einsum("kji,kj->ki", attitude.quat_to_dcm(ref.q_bn), ref.vel_n)
+
+
+def yaw_rate_at(imu: ImuData, t) -> np.ndarray:
+    """The body z (up) rate of the IMU increments at times ``t`` [rad/s]."""
+    ti = imu.time_s
+    return np.interp(t, 0.5 * (ti[1:] + ti[:-1]), imu.dtheta_b[:, 2] / np.diff(ti))
+
+
+def reference_offset(imu: ImuData, dvl: SensorData, ref_at_dvl: Reference) -> np.ndarray:
     """Position of the reference point in body RFU relative to the IMU [m].
 
     The DVL agrees with the IMU-point velocity (no lever-arm effect in the filter's
     residuals) but not with the reference velocity rotated into the body: their lateral
     difference is the yaw rate times a forward offset ``r_y``,
     ``(v_dvl - C_nb v_ref)_x = omega_z r_y``; fitted by least squares (only ``r_y``: the
-    roll and pitch rates are too small to fix the other components).
+    roll and pitch rates are too small to fix the other components).  ``ref_at_dvl`` is
+    the reference at the DVL's times (:func:`reference_on_imu_clock`): a reference epoch
+    up to a second away would add the change of the body velocity over that second.
     """
-    k = np.clip(np.searchsorted(ref.time_s, dvl.time_s - 1e-9), 0, ref.time_s.size - 1)
-    C = attitude.quat_to_dcm(ref.q_bn[k])
-    lateral = dvl.z[:, 0] - np.einsum("ki,ki->k", C[:, :, 0], ref.vel_n[k])
-    t = imu.time_s
-    wz = np.interp(dvl.time_s, 0.5 * (t[1:] + t[:-1]), imu.dtheta_b[:, 2] / np.diff(t))
+    lateral = dvl.z[:, 0] - body_velocity(ref_at_dvl)[:, 0]
+    wz = yaw_rate_at(imu, dvl.time_s)
     r_y = float(np.dot(wz, lateral) / max(np.dot(wz, wz), 1e-30))
     return np.array([0.0, r_y, 0.0])
+
+
+def reference_on_imu_clock(gt, clock: ClockMap, t_imu) -> Reference:
+    """The reference (columns of a GT file) interpolated at IMU times ``t_imu`` [s] through
+    the clock map, stamped with those IMU times."""
+    ref = reference_at(gt, clock.to_label(t_imu))
+    return Reference(np.asarray(t_imu, float), ref.lla, ref.vel_n, ref.q_bn)
 
 
 def _reference_on_imu_clock(gt, imu, clock: ClockMap):
@@ -219,8 +236,7 @@ def _reference_on_imu_clock(gt, imu, clock: ClockMap):
     imu = imu[np.searchsorted(imu[:, 0], t0 - 1e-9):]
     period = float(np.median(np.diff(gt[:, 0]))) / clock.rate
     t_ref = np.arange(imu[0, 0], min(float(clock.to_imu(gt[-1, 0])), imu[-1, 0]) + 1e-9, period)
-    ref = reference_at(gt, clock.to_label(t_ref))
-    return Reference(t_ref, ref.lla, ref.vel_n, ref.q_bn), imu
+    return reference_on_imu_clock(gt, clock, t_ref), imu
 
 
 def load_trajectory(directory, n: int) -> AkitRecording:
@@ -242,8 +258,8 @@ def load_trajectory(directory, n: int) -> AkitRecording:
     sensor = SensorData("dvl", t_dvl[inside], z, np.full(z.shape, DVL_SIGMA_MPS),
                         {"rate_hz": 1.0 / float(np.median(np.diff(dvl[:, 0])))})
     inc = imu_increments(imu[:, 0], imu[:, 1:4], imu[:, 4:7])
-    return AkitRecording(n, d, inc, sensor, ref, clock, reference_offset(inc, sensor, ref),
-                         {k: str(v) for k, v in files.items()})
+    r_b = reference_offset(inc, sensor, reference_on_imu_clock(gt, clock, sensor.time_s))
+    return AkitRecording(n, d, inc, sensor, ref, clock, r_b, {k: str(v) for k, v in files.items()})
 
 
 def load_akit(directory, trajectories="1-8") -> list[AkitRecording]:
