@@ -57,6 +57,14 @@ def test_clock_map_is_recovered(tmp_path, lag, rate):
     assert max(ang) < np.deg2rad(0.2)  # 1-Hz epochs interpolated: 0.16 deg in the turns
 
 
+def test_a_reference_that_never_lines_up_with_the_gyros_is_refused(tmp_path):
+    """Stamps 2.6 s off: beyond the +-2 s search, so no clock map is measured; the loader
+    names the file and column instead of loading a reference seconds off the IMU."""
+    write_akit(tmp_path, auv_trajectory(), n=1, lag=2.6)
+    with pytest.raises(InputFileError, match=r"GT_trajectory1.csv.*Time.*line up"):
+        load_trajectory(tmp_path, 1)
+
+
 def test_reference_point_is_fitted_against_the_reference_at_the_dvl_times(tmp_path):
     """Reference 1.85 m ahead of the IMU, its 1-Hz samples half a second off the DVL's
     (the worst case for pairing a DVL row with the next reference epoch: it lands a whole

@@ -35,7 +35,8 @@ import numpy as np
 
 from fuzzynav.errors import DataMissingError, InputFileError
 from fuzzynav.nav import attitude
-from fuzzynav.sim.loaders.akit_timing import ClockMap, dvl_offset, estimate_clock
+from fuzzynav.sim.loaders.akit_timing import MAX_OFFSET_S, ClockMap, dvl_offset, \
+    estimate_clock
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.sim.sensors import SensorData
 
@@ -184,6 +185,27 @@ def forward_velocity(gt) -> np.ndarray:
     return np.einsum("ki,ki->k", C[:, :, 1], gt[:, 4:7] @ SWAP.T)
 
 
+#: largest plausible |rate - 1| of the reference clock against the IMU (measured: 0.25 %)
+MAX_RATE_DEVIATION = 0.01
+
+
+def _check_clock(files, clock: ClockMap, span) -> None:
+    """Stop when the clock map is not a measurement: an offset at the edge of the search
+    (the gyros and the reference never line up within it) anywhere over the reference's
+    ``span`` of stamps, or an implausible rate."""
+    edge = MAX_OFFSET_S - 0.05
+    gap = np.asarray(span, float) - clock.to_imu(span)
+    if not (np.all(np.abs(gap) < edge) and abs(clock.rate - 1.0) < MAX_RATE_DEVIATION):
+        raise InputFileError(files["reference"], "column Time [s]", (
+            f"does not line up with the IMU's gyros (offset {gap[0]:+.2f} s, rate "
+            f"{clock.rate:.4f}; plausible: within +-{edge:.2f} s, rate within "
+            f"{MAX_RATE_DEVIATION:.0%} of 1): wrong trajectory pair or damaged time stamps"))
+    if not abs(clock.dvl_offset_s) < edge:
+        raise InputFileError(files["dvl"], "column Time [s]", (
+            f"its velocity does not line up with the reference's (offset "
+            f"{clock.dvl_offset_s:+.2f} s at the edge of the +-{MAX_OFFSET_S:.0f} s search)"))
+
+
 def reference_clock(imu, gt, dvl) -> ClockMap:
     """The reference's and the DVL's clock map onto the IMU (:mod:`.akit_timing`)."""
     inc = imu_increments(imu[:, 0], imu[:, 1:4], imu[:, 4:7])
@@ -251,6 +273,7 @@ def load_trajectory(directory, n: int) -> AkitRecording:
     _check_span(files["dvl"], dvl[:, 0], imu[:, 0])
     _check_span(files["reference"], gt[:, 0], imu[:, 0])
     clock = reference_clock(imu, gt, dvl)
+    _check_clock(files, clock, gt[[0, -1], 0])
     ref, imu = _reference_on_imu_clock(gt, imu, clock)
     t_dvl = clock.to_imu(dvl[:, 0], clock.dvl_offset_s)
     inside = (t_dvl > imu[0, 0]) & (t_dvl <= imu[-1, 0])
