@@ -21,8 +21,8 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
+from fuzzynav.filters import sized
 from fuzzynav.filters.kalman import diagonal_tail, square_tail
-from fuzzynav.filters.tiles import rows_dots
 from fuzzynav.filters.layout import (BLOCK_KINDS, CORE, COUPLE_ACCEL, COUPLE_GYRO, X_ATT,
                                      X_POS, X_VEL, StateLayout, kind_of)
 from fuzzynav.nav.earth import E2, OMEGA_IE, gravity_nb, radii_nb
@@ -123,36 +123,30 @@ def fill_F(F, nav, C_bn, f_n, blk_start, blk_kind, blk_inv_tau):
     win = (wen[0], wie_n + wen[1], wie_u + wen[2])
     # --- in radian position units (dlat, dlon, dh) first ---
     # d(omega_ie)/dp and d(omega_en)/dp
-    Mp1 = np.zeros((3, 3))
-    Mp1[1, 0] = -wie_u
-    Mp1[2, 0] = wie_n
-    Mp2 = np.zeros((3, 3))
-    Mp2[0, 2] = vn / rmh**2
-    Mp2[1, 2] = -ve / rnh**2
-    Mp2[2, 0] = ve / (rnh * cl * cl)
-    Mp2[2, 2] = -ve * tl / rnh**2
-    Mav = np.zeros((3, 3))
-    Mav[0, 1] = -1.0 / rmh
-    Mav[1, 0] = 1.0 / rnh
-    Mav[2, 0] = tl / rnh
+    # The three 3x3 blocks as row-major tuples (no heap allocation per call); zero entries
+    # kept, so every sum below adds the same terms in the same order as with matrices.
+    Mp1 = (0.0, 0.0, 0.0, -wie_u, 0.0, 0.0, wie_n, 0.0, 0.0)
+    Mp2 = (0.0, 0.0, vn / rmh**2, 0.0, 0.0, -ve / rnh**2,
+           ve / (rnh * cl * cl), 0.0, -ve * tl / rnh**2)
+    Mav = (0.0, -1.0 / rmh, 0.0, 1.0 / rnh, 0.0, 0.0, tl / rnh, 0.0, 0.0)
     # attitude rows: phi' = -win x phi + Mav dv + (Mp1 + Mp2) dp - C_bn eps
     _skew_into(F, X_ATT, X_ATT, -win[0], -win[1], -win[2])
     for i in range(3):
         for j in range(3):
-            F[X_ATT + i, X_VEL + j] = Mav[i, j]
-            F[X_ATT + i, X_POS + j] = Mp1[i, j] + Mp2[i, j]
+            F[X_ATT + i, X_VEL + j] = Mav[3 * i + j]
+            F[X_ATT + i, X_POS + j] = Mp1[3 * i + j] + Mp2[3 * i + j]
     # velocity rows: dv' = f x phi + ([v x] Mav - [(2wie + wen) x]) dv + [v x](2Mp1 + Mp2) dp
     _skew_into(F, X_VEL, X_ATT, f_n[0], f_n[1], f_n[2])
     ax, ay, az = 2.0 * wie[0] + wen[0], 2.0 * wie[1] + wen[1], 2.0 * wie[2] + wen[2]
     for i in range(3):
         for j in range(3):
-            vm = _skew_elem(ve, vn, vu, i, 0) * Mav[0, j] + \
-                _skew_elem(ve, vn, vu, i, 1) * Mav[1, j] + \
-                _skew_elem(ve, vn, vu, i, 2) * Mav[2, j]
+            vm = _skew_elem(ve, vn, vu, i, 0) * Mav[j] + \
+                _skew_elem(ve, vn, vu, i, 1) * Mav[3 + j] + \
+                _skew_elem(ve, vn, vu, i, 2) * Mav[6 + j]
             F[X_VEL + i, X_VEL + j] = vm - _skew_elem(ax, ay, az, i, j)
             vp = 0.0
             for k in range(3):
-                vp += _skew_elem(ve, vn, vu, i, k) * (2.0 * Mp1[k, j] + Mp2[k, j])
+                vp += _skew_elem(ve, vn, vu, i, k) * (2.0 * Mp1[3 * k + j] + Mp2[3 * k + j])
             F[X_VEL + i, X_POS + j] = vp
     # gravity: up component of dg with latitude and height
     F[_VU, _LAT] += -_dgravity_dlat(lat, h)
@@ -242,38 +236,10 @@ def discretize(F, q_diag, dt, Phi, Qd, work):
     """
     n = F.shape[0]
     d = diagonal_tail(F)
-    _transition(F, d, dt, Phi, work)
-    h2 = 0.5 * dt * dt
-    # Qd = Q dt + (F Q + Q F^T) dt^2/2 + F Q F^T dt^3/3 with diagonal Q.  Rows of F from
-    # its diagonal tail on hold only F[j, j], so (F Q F^T)[i, j] = F[i, j] q_j F[j, j]
-    # there; above it the rows are dense (zeros add exact zeros: same sums as skipping).
-    h3 = dt * dt * dt / 3.0
-    FQ = work  # F diag(q), row by row, as the products below group them
-    for i in range(d):
-        for k in range(n):
-            FQ[i, k] = F[i, k] * q_diag[k]
-    for i in range(n):  # Qd[i, j >= i]: the F Q F^T dot products first
-        for j in range(i, n):
-            Qd[i, j] = 0.0
-    i = 0
-    while i < d:  # two rows at a time; row i + 1's entry (i + 1, i) is rewritten below
-        two = i + 1 < d
-        if two:
-            Qd[i + 1, i] = 0.0
-        rows_dots(FQ, i, two, F, i, d, Qd)
-        i += 2
-    for i in range(n):
-        for j in range(i, n):
-            if j < d:
-                acc = Qd[i, j]
-            else:
-                acc = F[i, j] * q_diag[j] * F[j, j]
-            s = (F[i, j] * q_diag[j] + q_diag[i] * F[j, i]) * h2
-            s += acc * h3
-            if i == j:
-                s += q_diag[i] * dt
-            Qd[i, j] = s
-            Qd[j, i] = s
+    if sized.fixed(n, d):  # the 15-state model: a copy compiled with its sizes as constants
+        sized.discretize_sized(F, q_diag, dt, Phi, Qd, work, sized.FIXED_N, sized.FIXED_D)
+    else:
+        sized.discretize_sized(F, q_diag, dt, Phi, Qd, work, n, d)
 
 
 @nb.njit(cache=True)

@@ -17,6 +17,7 @@ import math
 
 import numba as nb
 
+from fuzzynav.filters import sized
 from fuzzynav.filters.tiles import rows_dots, rows_dots_diff
 
 
@@ -41,31 +42,16 @@ def propagate(P, Phi, Qd, work):
     """In place ``P <- Phi P Phi^T + Qd`` (``work`` is an n x n scratch array).
 
     Rows of ``Phi`` from :func:`diagonal_tail` on are scalings; the others are multiplied
-    densely (a zero entry adds an exact zero, so the result is the same as skipping it),
-    two rows at a time in register tiles (:mod:`fuzzynav.filters.tiles`).
+    densely (a zero entry adds an exact zero, so the result is the same as skipping it).
+    The 15-state model runs a copy compiled with its sizes as constants
+    (:mod:`fuzzynav.filters.sized`).
     """
     n = P.shape[0]
     d = diagonal_tail(Phi)
-    _rows_product(Phi, P, d, n, work)  # work[:d] = Phi P
-    for i in range(d, n):
-        a = Phi[i, i]
-        for j in range(n):
-            work[i, j] = a * P[i, j]
-    i = 0
-    while i < n:  # P = work Phi^T + Qd, upper triangle of rows i, i+1 (free now)
-        two = i + 1 < n
-        r_end = i + 2 if two else i + 1
-        for r in range(i, r_end):
-            for j in range(i, n):
-                P[r, j] = Qd[r, j]
-        if i < d:
-            rows_dots(work, i, two, Phi, i, d, P)
-        for r in range(i, r_end):
-            for j in range(max(r, d), n):
-                P[r, j] += work[r, j] * Phi[j, j]
-            for j in range(r + 1, n):
-                P[j, r] = P[r, j]
-        i = r_end
+    if sized.fixed(n, d):
+        sized.propagate_sized(P, Phi, Qd, work, sized.FIXED_N, sized.FIXED_D)
+    else:
+        sized.propagate_sized(P, Phi, Qd, work, n, d)
 
 
 @nb.njit(cache=True)
