@@ -18,7 +18,7 @@ import math
 import numba as nb
 
 from fuzzynav.filters import sized
-from fuzzynav.filters.tiles import rows_dots, rows_dots_diff
+from fuzzynav.filters.tiles import rows_dots
 
 
 @nb.njit(cache=True)
@@ -106,32 +106,17 @@ def square_tail(F, d, out):
 @nb.njit(cache=True)
 def times_Ht(A, H, m, out):
     """``out[:, :m] = A H^T`` for the first ``m`` rows of H, skipping H's zeros."""
-    n = A.shape[0]
-    for r in range(m):
-        for i in range(n):
-            out[i, r] = 0.0
-        for k in range(n):  # a measurement row touches a few states: test each once
-            h = H[r, k]
-            if h != 0.0:
-                for i in range(n):
-                    out[i, r] += A[i, k] * h
+    sized.times_Ht_sized(A, H, m, out, A.shape[0])
 
 
 @nb.njit(cache=True)
 def innovation_cov(P, H, m, PHt, HPH):
     """``PHt[:, :m] = P H^T`` and ``HPH[:m, :m] = H P H^T`` for the first ``m`` rows of H."""
     n = P.shape[0]
-    times_Ht(P, H, m, PHt)
-    for a in range(m):
-        for b in range(a, m):
-            HPH[a, b] = 0.0
-        for k in range(n):
-            h = H[a, k]
-            if h != 0.0:
-                for b in range(a, m):
-                    HPH[a, b] += h * PHt[k, b]
-        for b in range(a + 1, m):
-            HPH[b, a] = HPH[a, b]
+    if n == sized.FIXED_N:
+        sized.innovation_sized(P, H, m, PHt, HPH, sized.FIXED_N)
+    else:
+        sized.innovation_sized(P, H, m, PHt, HPH, n)
 
 
 @nb.njit(cache=True)
@@ -221,36 +206,10 @@ def joseph_update(P, H, R, m, r, PHt, K, x, AP, APHt):
     the upper triangle instead of two ``n x n x m`` products; the result is symmetric.
     """
     n = P.shape[0]
-    for i in range(n):
-        s = 0.0
-        for a in range(m):
-            s += K[i, a] * r[a]
-        x[i] = s
-    S = AP  # S[:m, :m] = H P H^T + R from the sparse rows of H
-    for a in range(m):
-        for b in range(m):
-            S[a, b] = 0.0
-        for k in range(n):
-            h = H[a, k]
-            if h != 0.0:
-                for b in range(m):
-                    S[a, b] += h * PHt[k, b]
-        S[a, a] += R[a]
-    V = APHt
-    for i in range(n):
-        for a in range(m):
-            s = -PHt[i, a]
-            for b in range(m):
-                s += K[i, b] * S[b, a]
-            V[i, a] = s
-    i = 0
-    while i < n:  # rows i, i+1 from the diagonal on; (i + 1, i) is mirrored over below
-        two = i + 1 < n
-        rows_dots_diff(V, K, m, PHt, i, two, i, n, P)
-        for r in range(i, i + 2 if two else i + 1):
-            for j in range(r + 1, n):
-                P[j, r] = P[i + (r - i), j]
-        i += 2
+    if n == sized.FIXED_N:
+        sized.joseph_sized(P, H, R, m, r, PHt, K, x, AP, APHt, sized.FIXED_N)
+    else:
+        sized.joseph_sized(P, H, R, m, r, PHt, K, x, AP, APHt, n)
 
 
 @nb.njit(cache=True)

@@ -121,3 +121,68 @@ def discretize_sized(F, q_diag, dt, Phi, Qd, work, n, d):
                 s += q_diag[i] * dt
             Qd[i, j] = s
             Qd[j, i] = s
+
+
+@nb.njit(inline="always")
+def times_Ht_sized(A, H, m, out, n):
+    """``out[:, :m] = A H^T`` for the first ``m`` rows of H, skipping H's zeros."""
+    for r in range(m):
+        for i in range(n):
+            out[i, r] = 0.0
+        for k in range(n):  # a measurement row touches a few states: test each once
+            h = H[r, k]
+            if h != 0.0:
+                for i in range(n):
+                    out[i, r] += A[i, k] * h
+
+
+@nb.njit(inline="always")
+def innovation_sized(P, H, m, PHt, HPH, n):
+    """``PHt[:, :m] = P H^T`` and ``HPH[:m, :m] = H P H^T`` (:func:`fuzzynav.filters.kalman.
+    innovation_cov`)."""
+    times_Ht_sized(P, H, m, PHt, n)
+    for a in range(m):
+        for b in range(a, m):
+            HPH[a, b] = 0.0
+        for k in range(n):
+            h = H[a, k]
+            if h != 0.0:
+                for b in range(a, m):
+                    HPH[a, b] += h * PHt[k, b]
+        for b in range(a + 1, m):
+            HPH[b, a] = HPH[a, b]
+
+
+@nb.njit(inline="always")
+def joseph_sized(P, H, R, m, r, PHt, K, x, AP, APHt, n):
+    """Gain correction and Joseph-form update (:func:`fuzzynav.filters.kalman.
+    joseph_update`): ``x = K r``, ``P <- P - K (P H^T)^T + V K^T``, ``V = K S - P H^T``."""
+    for i in range(n):
+        s = 0.0
+        for a in range(m):
+            s += K[i, a] * r[a]
+        x[i] = s
+    S = AP  # S[:m, :m] = H P H^T + R from the sparse rows of H
+    for a in range(m):
+        for b in range(m):
+            S[a, b] = 0.0
+        for k in range(n):
+            h = H[a, k]
+            if h != 0.0:
+                for b in range(m):
+                    S[a, b] += h * PHt[k, b]
+        S[a, a] += R[a]
+    V = APHt
+    for i in range(n):
+        for a in range(m):
+            s = -PHt[i, a]
+            for b in range(m):
+                s += K[i, b] * S[b, a]
+            V[i, a] = s
+    for i in range(n):  # upper triangle, then its mirror
+        for j in range(i, n):
+            s = P[i, j]
+            for k in range(m):
+                s += V[i, k] * K[j, k] - K[i, k] * PHt[j, k]
+            P[i, j] = s
+            P[j, i] = s

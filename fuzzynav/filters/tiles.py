@@ -9,7 +9,7 @@ Every entry is still one sum in ascending index order, started from the same val
 results are bit-for-bit those of plain loops computing one dot product after another; only
 the order in which entries are computed changes.  :func:`rows_dots` adds a block of
 ``A B^T``; given a transposed view ``B.T`` it computes ``A B`` (its loads then run along
-the rows of ``B``).  :func:`rows_dots_diff` is the Joseph update's rank-2m correction.
+the rows of ``B``).
 """
 from __future__ import annotations
 
@@ -68,48 +68,4 @@ def rows_dots(A, i, two, B, j0, j1, out):
         for k in range(n):
             a0 += A[i, k] * B[j, k]
         out[i, j] = a0
-        j += 1
-
-
-@nb.njit(cache=True)
-def rows_dots_diff(V, K, m, D, i, two, j0, j1, out):
-    """``out[r, j] += V[r, :m] . K[j, :m] - K[r, :m] . D[j, :m]`` for ``r = i`` (and
-    ``i + 1`` when ``two``), ``j0 <= j < j1`` (the Joseph update's rank-2m correction).
-
-    Each sum starts from ``out``'s entry and adds ``V[r, k] K[j, k] - K[r, k] D[j, k]``
-    in ascending ``k``.
-    """
-    j = j0
-    if not two:
-        while j < j1:
-            s = out[i, j]
-            for k in range(m):
-                s += V[i, k] * K[j, k] - K[i, k] * D[j, k]
-            out[i, j] = s
-            j += 1
-        return
-    while j + 4 <= j1:
-        a0, a1, a2, a3 = out[i, j], out[i, j + 1], out[i, j + 2], out[i, j + 3]
-        b0, b1, b2, b3 = out[i + 1, j], out[i + 1, j + 1], out[i + 1, j + 2], out[i + 1, j + 3]
-        for k in range(m):
-            u, w, p, q = V[i, k], K[i, k], V[i + 1, k], K[i + 1, k]
-            k0, k1, k2, k3 = K[j, k], K[j + 1, k], K[j + 2, k], K[j + 3, k]
-            d0, d1, d2, d3 = D[j, k], D[j + 1, k], D[j + 2, k], D[j + 3, k]
-            a0 += u * k0 - w * d0
-            a1 += u * k1 - w * d1
-            a2 += u * k2 - w * d2
-            a3 += u * k3 - w * d3
-            b0 += p * k0 - q * d0
-            b1 += p * k1 - q * d1
-            b2 += p * k2 - q * d2
-            b3 += p * k3 - q * d3
-        out[i, j], out[i, j + 1], out[i, j + 2], out[i, j + 3] = a0, a1, a2, a3
-        out[i + 1, j], out[i + 1, j + 1], out[i + 1, j + 2], out[i + 1, j + 3] = b0, b1, b2, b3
-        j += 4
-    while j < j1:
-        a0, b0 = out[i, j], out[i + 1, j]
-        for k in range(m):
-            a0 += V[i, k] * K[j, k] - K[i, k] * D[j, k]
-            b0 += V[i + 1, k] * K[j, k] - K[i + 1, k] * D[j, k]
-        out[i, j], out[i + 1, j] = a0, b0
         j += 1

@@ -7,7 +7,7 @@ odd and even row counts, column counts that are and are not multiples of four.
 import numpy as np
 import pytest
 
-from fuzzynav.filters.tiles import rows_dots, rows_dots_diff
+from fuzzynav.filters.tiles import rows_dots
 
 SHAPES = [(1, 1), (2, 3), (3, 4), (5, 7), (9, 15), (10, 19), (15, 15)]
 
@@ -51,20 +51,3 @@ def test_rows_dots_adds_a_b_transpose_to_the_block(two, n, j0, j1):
             expect[r, j] = s
     _close(out, expect)
     np.testing.assert_array_equal(np.delete(out, rows, axis=0), np.delete(out0, rows, axis=0))
-
-
-@pytest.mark.parametrize("two", [False, True])
-@pytest.mark.parametrize("m", [1, 2, 6])
-def test_rows_dots_diff_is_the_rank_2m_joseph_correction(two, m):
-    n = 15
-    rng = np.random.default_rng(m)
-    V, K, D, out0 = (rng.normal(size=(n, 6)), rng.normal(size=(n, 6)),
-                     rng.normal(size=(n, 6)), rng.normal(size=(n, n)))
-    out = out0.copy()
-    rows_dots_diff(V, K, m, D, 4, two, 4, n, out)
-    expect = out0 + V[:, :m] @ K[:, :m].T - K[:, :m] @ D[:, :m].T
-    for r in ([4, 5] if two else [4]):
-        _close(out[r, 4:], expect[r, 4:], rel=1e-12)
-    untouched = np.ones((n, n), bool)
-    untouched[4:6 if two else 5, 4:] = False
-    np.testing.assert_array_equal(out[untouched], out0[untouched])
