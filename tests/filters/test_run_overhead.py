@@ -193,3 +193,31 @@ def test_quat_to_euler_equals_the_angles_of_the_full_dcm():
     att = np.deg2rad([30.0, 10.0, 200.0])
     np.testing.assert_allclose(attitude.quat_to_euler(attitude.euler_to_quat(att)), att,
                                atol=1e-12)
+
+
+def test_a_remembered_initial_state_is_the_draw_itself_in_fresh_arrays():
+    from types import SimpleNamespace
+
+    from fuzzynav import experiment
+    from fuzzynav.filters.config import FilterConfig
+
+    tr = trajectory()
+    log = SimpleNamespace(seed=3, truth=tr)
+    setup = SimpleNamespace(config=FilterConfig())
+    first = experiment.perturbed_initial_state(log, setup)
+    sig = np.sqrt(np.diag(FilterConfig().P0())[:9])
+    drawn = experiment._draw_initial_state(3, tr, sig)
+    for got in (first, experiment.perturbed_initial_state(log, setup)):
+        # the same draw on the same inputs: exact
+        for name in ("lla", "vel_n", "q_bn"):
+            np.testing.assert_array_equal(getattr(got, name), getattr(drawn, name))
+    first.lla[0] += 1.0  # a caller's change stays in its copy
+    np.testing.assert_array_equal(experiment.perturbed_initial_state(log, setup).lla, drawn.lla)
+    # another seed, or other sigmas, is another draw (velocity error ~0.1 m/s)
+    other = experiment.perturbed_initial_state(SimpleNamespace(seed=4, truth=tr), setup)
+    assert np.abs(other.vel_n - drawn.vel_n).max() > 1e-6
+    wide = SimpleNamespace(config=FilterConfig(init_vel_sigma_mps=1.0))
+    assert np.abs(experiment.perturbed_initial_state(log, wide).vel_n - drawn.vel_n).max() \
+        > 1e-6
+    # the draw: the truth plus errors of about the initial sigmas
+    assert np.abs(drawn.vel_n - tr.vel_n[0]).max() < 5 * 0.1
