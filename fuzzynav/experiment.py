@@ -32,11 +32,31 @@ class RunOutcome:
     metrics: dict
 
 
+#: initial states drawn so far, keyed by everything a draw depends on (the seed, the nine
+#: initial sigmas, the truth's first sample): every candidate of a study starts its run on a
+#: log from the same state, and drawing it costs a generator and four small conversions
+_INITIAL = {}
+_INITIAL_MAX = 512
+
+
 def perturbed_initial_state(log: SensorLog, setup: FilterSetup) -> InitialState:
     """Truth at the first sample plus attitude, velocity and position errors from P0."""
     truth = log.truth
     sig = np.sqrt(np.diag(setup.config.P0())[:9])
-    x0 = component_rng(log.seed, "filter-init").normal(0.0, 1.0, 9) * sig
+    first = [np.asarray(a[0], float).tobytes() for a in (truth.lla, truth.vel_n, truth.q_bn)]
+    key = (int(log.seed), sig.tobytes(), float(truth.time_s[0]), *first)
+    got = _INITIAL.get(key)
+    if got is None:
+        if len(_INITIAL) >= _INITIAL_MAX:
+            _INITIAL.clear()
+        got = _INITIAL[key] = _draw_initial_state(log.seed, truth, sig)
+    # fresh arrays: a caller may change its copy
+    return InitialState(got.time_s, got.lla.copy(), got.vel_n.copy(), got.q_bn.copy())
+
+
+def _draw_initial_state(seed, truth, sig) -> InitialState:
+    """The draw of :func:`perturbed_initial_state` (``sig``: its nine initial sigmas)."""
+    x0 = component_rng(seed, "filter-init").normal(0.0, 1.0, 9) * sig
     C0 = (np.eye(3) - attitude.skew(x0[:3])) @ attitude.quat_to_dcm(truth.q_bn[0])
     d = earth.enu_to_delta_lla(x0[6:9], truth.lla[0, 0], truth.lla[0, 2])
     return InitialState(float(truth.time_s[0]), truth.lla[0] + np.array(d),

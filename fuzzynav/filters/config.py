@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from functools import cached_property
 
 import numpy as np
 
@@ -117,16 +118,26 @@ class FilterConfig:
                                      f"needs (sigma > 0, noise density >= 0), got {pair!r}")
         return pairs
 
-    def P0(self) -> np.ndarray:
-        """Initial covariance (n x n, diagonal, SI), assembled from the blocks present."""
+    @cached_property
+    def _noise_arrays(self):
+        # the config is frozen: assembled once per instance (every filter run asks), kept
+        # read-only so that only the copies below ever leave
         noise = self._block_noise()
-        d = [s for nm in self.model.layout.names for s in noise[nm][0]]
-        return np.diag(np.square(d))
+        names = self.model.layout.names
+        P0 = np.diag(np.square([s for nm in names for s in noise[nm][0]]))
+        q = np.array([q for nm in names for q in noise[nm][1]])
+        P0.flags.writeable = q.flags.writeable = False
+        return P0, q
+
+    def P0(self) -> np.ndarray:
+        """Initial covariance (n x n, diagonal, SI), assembled from the blocks present
+        (a fresh array the caller may change)."""
+        return self._noise_arrays[0].copy()
 
     def q_diag(self) -> np.ndarray:
-        """Continuous process-noise spectral densities per state (SI), block by block."""
-        noise = self._block_noise()
-        return np.array([q for nm in self.model.layout.names for q in noise[nm][1]])
+        """Continuous process-noise spectral densities per state (SI), block by block (a
+        fresh array the caller may change)."""
+        return self._noise_arrays[1].copy()
 
 
 def _block_q(sigma, rw, tau):

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numba as nb
 import numpy as np
@@ -66,21 +67,29 @@ class ErrorModel:
         out.update((str(nm), float(tau)) for nm, tau in self.extra)
         return out
 
-    @property
+    # the model is frozen, so what it derives is computed once per instance (a filter run
+    # asks for the layout several times; cached_property stores it in the instance dict,
+    # outside the fields that eq/hash/repr see)
+    @cached_property
     def layout(self) -> StateLayout:
         """The state layout: the core, the gyro blocks, the accelerometer blocks, the extras."""
         return CORE.extended(*[(nm, BLOCK_KINDS.lookup(kind_of(nm)).size)
                                for nm in self.block_taus()])
 
-    @property
+    @cached_property
     def n_states(self) -> int:
         """Total number of error states."""
         return self.layout.n
 
-    def block_arrays(self):
-        """``(start, coupling, inv_tau)`` arrays of the sensor blocks (for the loop)."""
+    @cached_property
+    def _block_arrays(self):
         inv = {nm: 0.0 if math.isinf(t) else 1.0 / t for nm, t in self.block_taus().items()}
         return self.layout.block_arrays(inv)
+
+    def block_arrays(self):
+        """``(start, coupling, inv_tau)`` arrays of the sensor blocks (for the loop; fresh
+        writeable copies, as the compiled loop is typed for writeable arrays)."""
+        return tuple(a.copy() for a in self._block_arrays)
 
     def labels(self):
         """State names for tables and plots."""

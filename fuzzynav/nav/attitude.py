@@ -172,8 +172,17 @@ def euler_to_quat(att_rad):
 
 
 def quat_to_euler(q):
-    """Quaternion of ``C_bn`` to Euler angles ``(pitch, roll, heading)`` [rad]."""
-    return dcm_to_euler(quat_to_dcm(q))
+    """Quaternion of ``C_bn`` to Euler angles ``(pitch, roll, heading)`` [rad].
+
+    Equal to the last bit to ``dcm_to_euler(quat_to_dcm(q))``: the five DCM entries the
+    angles need, each by :func:`quat_to_dcm`'s expression (scoring a filter run converts
+    every output epoch; the other four entries and the stacking are not worth their time).
+    """
+    w, x, y, z = np.moveaxis(np.asarray(q, dtype=float), -1, 0)
+    pitch = np.arcsin(np.clip(2 * (y * z + w * x), -1.0, 1.0))
+    roll = np.arctan2(-(2 * (x * z - w * y)), w * w - x * x - y * y + z * z)
+    heading = wrap_2pi(np.arctan2(2 * (x * y - w * z), w * w - x * x + y * y - z * z))
+    return np.stack([pitch, roll, heading], -1)
 
 
 def attitude_error(C_bn_calc, C_bn_true):

@@ -148,3 +148,76 @@ def _fake_result(tr):
     return FilterResult(time_s=time_s, lla=lla, vel_n=vel_n, q_bn=q_bn,
                         sensor_states=np.zeros((time_s.size, 0)),
                         sigma=np.zeros((time_s.size, 15)), state_labels=())
+
+
+def test_memoised_P0_and_q_diag_are_fresh_copies_of_what_a_new_config_computes():
+    from fuzzynav.filters.config import FilterConfig
+    from fuzzynav.filters.error_model import ErrorModel
+
+    cfg = FilterConfig(model=ErrorModel(gyro_tau_s=(np.inf, 300.0)), gyro_sigma_dph=(5.0, 2.0),
+                       gyro_rw_dph_psh=(0.0, 0.0))
+    P0, q = cfg.P0(), cfg.q_diag()
+    P0[0, 0], q[0] = -1.0, -1.0  # a caller changing its copy changes nothing for the next
+    again = replace(cfg)  # a new instance assembles its arrays afresh
+    np.testing.assert_array_equal(cfg.P0(), again.P0())  # same path, same inputs: exact
+    np.testing.assert_array_equal(cfg.q_diag(), again.q_diag())
+    assert cfg.P0()[0, 0] == (0.1 * np.pi / 180.0) ** 2  # init_att_sigma_deg[0] = 0.1 deg
+    # Gauss-Markov gyro block 2: q = 2 sigma^2 / tau, sigma = 2 deg/h in rad/s
+    sig = 2.0 * np.pi / 180.0 / 3600.0
+    assert cfg.q_diag()[cfg.model.layout.start("gyro_bias:1")] == pytest.approx(
+        2.0 * sig * sig / 300.0, rel=1e-12)
+    assert cfg.P0().flags.writeable and cfg.q_diag().flags.writeable
+
+
+def test_memoised_layout_and_block_arrays_leave_the_model_equal_and_the_arrays_fresh():
+    from fuzzynav.filters.error_model import MODEL_15, ErrorModel
+
+    model = ErrorModel(gyro_tau_s=(np.inf, 100.0))
+    assert model.layout is model.layout and model.n_states == 18
+    start, kind, inv_tau = model.block_arrays()
+    inv_tau[:] = -1.0  # the loop is typed for writeable arrays: each call hands out copies
+    assert model.block_arrays()[2].tolist() == [0.0, 0.01, 0.0]
+    assert all(a.flags.writeable for a in model.block_arrays())
+    MODEL_15.layout  # a cached layout is not a field: equality and hashing are unchanged
+    assert MODEL_15 == ErrorModel() and hash(MODEL_15) == hash(ErrorModel())
+
+
+def test_quat_to_euler_equals_the_angles_of_the_full_dcm():
+    q = attitude.quat_normalize(np.random.default_rng(5).normal(size=(2000, 4)))
+    # the same expressions on the same inputs: equal to rounding (0 in practice; the bound
+    # allows a compiler reassociating a product)
+    want = attitude.dcm_to_euler(attitude.quat_to_dcm(q))
+    np.testing.assert_allclose(attitude.quat_to_euler(q), want, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(attitude.quat_to_euler(q[7]), want[7], rtol=0, atol=1e-15)
+    # a known attitude: 30 deg pitch, 10 deg roll, heading 200 deg
+    att = np.deg2rad([30.0, 10.0, 200.0])
+    np.testing.assert_allclose(attitude.quat_to_euler(attitude.euler_to_quat(att)), att,
+                               atol=1e-12)
+
+
+def test_a_remembered_initial_state_is_the_draw_itself_in_fresh_arrays():
+    from types import SimpleNamespace
+
+    from fuzzynav import experiment
+    from fuzzynav.filters.config import FilterConfig
+
+    tr = trajectory()
+    log = SimpleNamespace(seed=3, truth=tr)
+    setup = SimpleNamespace(config=FilterConfig())
+    first = experiment.perturbed_initial_state(log, setup)
+    sig = np.sqrt(np.diag(FilterConfig().P0())[:9])
+    drawn = experiment._draw_initial_state(3, tr, sig)
+    for got in (first, experiment.perturbed_initial_state(log, setup)):
+        # the same draw on the same inputs: exact
+        for name in ("lla", "vel_n", "q_bn"):
+            np.testing.assert_array_equal(getattr(got, name), getattr(drawn, name))
+    first.lla[0] += 1.0  # a caller's change stays in its copy
+    np.testing.assert_array_equal(experiment.perturbed_initial_state(log, setup).lla, drawn.lla)
+    # another seed, or other sigmas, is another draw (velocity error ~0.1 m/s)
+    other = experiment.perturbed_initial_state(SimpleNamespace(seed=4, truth=tr), setup)
+    assert np.abs(other.vel_n - drawn.vel_n).max() > 1e-6
+    wide = SimpleNamespace(config=FilterConfig(init_vel_sigma_mps=1.0))
+    assert np.abs(experiment.perturbed_initial_state(log, wide).vel_n - drawn.vel_n).max() \
+        > 1e-6
+    # the draw: the truth plus errors of about the initial sigmas
+    assert np.abs(drawn.vel_n - tr.vel_n[0]).max() < 5 * 0.1
