@@ -31,6 +31,9 @@ from _report import machine, write_section  # noqa: E402
 
 #: the revision whose kernels issue 9 measures against
 BASE = "98740c8"
+#: the CPU both workers are pinned to: on this VM one virtual CPU runs the same code up to
+#: 1.8x slower than the other at times, so the two revisions must share one
+CPU = max(os.sched_getaffinity(0))
 #: case -> (runs per request, label)
 CASES = {"ekf": (3, "paper000 `ekf` run (75 500 IMU samples, 4 532 epochs)"),
          "fakf": (3, "paper000 `fakf` run (both fuzzy controllers)"),
@@ -66,7 +69,8 @@ class Worker:
         env = tree_env(tree)
         self.proc = subprocess.Popen(
             [sys.executable, str(HERE / "_ekf_worker.py"), cache_dir, str(minutes)],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env, text=True, cwd=tree)
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env, text=True, cwd=tree,
+            preexec_fn=lambda: os.sched_setaffinity(0, {CPU}))
 
     def ask(self, **req) -> dict:
         if req:
@@ -159,7 +163,7 @@ def section(times, ratios, agree, prof, base, rounds, load0, load1) -> str:
     return "\n".join([
         "## EKF speed against the issue-9 base revision (`benchmarks/bench_ekf.py`)", "",
         f"Base revision `{base}` and this tree timed in the same run, {rounds} alternating "
-        f"rounds per case (wall time, median over all runs; one core each). Machine: "
+        f"rounds per case (wall time, median over all runs; both on CPU {CPU}). Machine: "
         f"{machine()}; load average {load0:.2f} at the start, {load1:.2f} at the end.", "",
         "| case | base (ms) | this tree (ms) | ratio of the medians | per-round ratio, median (IQR) |",
         "|---|---|---|---|---|", *rows, "",
