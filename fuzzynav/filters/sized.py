@@ -15,9 +15,11 @@ from __future__ import annotations
 
 import numba as nb
 
-#: state count and diagonal tail compiled as constants (the 15-state phi model: 9 navigation
-#: error states, then 6 sensor-error states that only decay)
-FIXED_N, FIXED_D = 15, 9
+from fuzzynav.filters.layout import N_CORE
+
+#: state count and diagonal tail compiled as constants: the 15-state phi model, the
+#: navigation error states and then gyro and accelerometer biases (3 each), which only decay
+FIXED_N, FIXED_D = N_CORE + 6, N_CORE
 
 
 @nb.njit(inline="always")
