@@ -47,7 +47,7 @@ def pack(fis, source, binding, model, role: str, floats=()):
     return fp, ip, st
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def evaluate(fp, ip, st, r, HPH, R, chan, m, ctx):
     """Push the window, form the bound statistics (innovation ones from the window, the
     others from the epoch context ``ctx``), evaluate the system.
