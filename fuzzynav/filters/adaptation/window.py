@@ -23,8 +23,8 @@ from __future__ import annotations
 
 import numba as nb
 
-# The kernels below are inline="always": called once per epoch and statistic, their call
-# overhead cost more than their few additions (results are the same bits either way).
+# push, trace_* and statistic* are inline="always": called once per epoch and statistic,
+# their call overhead cost more than their few additions (same bits either way).
 
 
 def window_size(n: int, n_channels: int) -> int:
