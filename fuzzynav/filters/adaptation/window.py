@@ -23,13 +23,16 @@ from __future__ import annotations
 
 import numba as nb
 
+# push, trace_* and statistic* are inline="always": called once per epoch and statistic,
+# their call overhead cost more than their few additions (same bits either way).
+
 
 def window_size(n: int, n_channels: int) -> int:
     """Length of the state slice a window needs."""
     return 2 + n * (n_channels + 1)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def push(st, off, n, n_channels, r, chan, m):
     """Add this epoch's per-channel sums of squared residuals to the window."""
     w = n_channels + 1
@@ -45,7 +48,7 @@ def push(st, off, n, n_channels, r, chan, m):
         st[off] += 1
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def trace_actual(st, off, n, n_channels, c):
     """Window mean of the channel's squared-residual sum (``c = -1``: all rows)."""
     w = n_channels + 1
@@ -59,7 +62,7 @@ def trace_actual(st, off, n, n_channels, c):
     return s / k
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def trace_theory(HPH, R, chan, m, c):
     """The channel's trace of ``H P- H^T + R`` (``c = -1``: all rows)."""
     s = 0.0
@@ -103,7 +106,7 @@ def trend(st, off, n, n_channels, c, th):
     return (new - old) / half / th
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def statistic_of(kind, st, off, n, n_channels, HPH, R, chan, m, c, r):
     """Any statistic ``kind`` (0 dom, 1 ror, 2 nis, 3 trend) of channel ``c``, given this
     epoch's residuals ``r``; NaN if the channel is absent."""
@@ -116,7 +119,7 @@ def statistic_of(kind, st, off, n, n_channels, HPH, R, chan, m, c, r):
     return statistic(kind, st, off, n, n_channels, HPH, R, chan, m, c)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def statistic(kind, st, off, n, n_channels, HPH, R, chan, m, c):
     """Statistic ``kind`` (0 = dom, 1 = ror) of channel ``c``; NaN if the channel is absent."""
     th = trace_theory(HPH, R, chan, m, c)
