@@ -18,7 +18,6 @@ import math
 import numba as nb
 
 from fuzzynav.filters import sized
-from fuzzynav.filters.tiles import rows_dots
 
 
 @nb.njit(cache=True)
@@ -55,18 +54,6 @@ def propagate(P, Phi, Qd, work):
 
 
 @nb.njit(cache=True)
-def _rows_product(A, B, rows, n, out):
-    """``out[:rows, :n] = A[:rows] B``, two rows at a time (sums in ascending ``k`` from 0)."""
-    for i in range(rows):
-        for j in range(n):
-            out[i, j] = 0.0
-    i = 0
-    while i < rows:
-        rows_dots(A, i, i + 1 < rows, B.T, 0, n, out)
-        i += 2
-
-
-@nb.njit(cache=True)
 def sparse_left_mul(A, B, out):
     """``out = A B`` for square ``A``, skipping the zeros of ``A`` (the system matrices)."""
     n = A.shape[0]
@@ -92,15 +79,7 @@ def square_tail(F, d, out):
     The rows above ``d`` are multiplied densely over their first ``d`` columns (the tail
     rows contribute their diagonal entry only, added last).
     """
-    n = F.shape[0]
-    _rows_product(F[:, :d], F[:d, :], d, n, out)
-    for i in range(d):
-        for j in range(d, n):
-            out[i, j] += F[i, j] * F[j, j]
-    for i in range(d, n):
-        for j in range(n):
-            out[i, j] = 0.0
-        out[i, i] = F[i, i] * F[i, i]
+    sized.square_sized(F, d, F.shape[0], out)
 
 
 @nb.njit(cache=True)

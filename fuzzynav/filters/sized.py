@@ -8,6 +8,10 @@ diagonal_tail`) as arguments and are inlined into their callers (numba
 unrolls; for the 15-state model that copy takes about 0.6x the time of the same code with
 run-time sizes (``benchmarks/bench_ekf.py``).  Callers use :func:`fixed` to choose.
 
+Products of two matrices run in register tiles of two rows by four columns
+(:func:`rows_times`): eight independent sums share every load, where one dot product at a
+time waits on each addition.
+
 Every entry is one sum in ascending index order, whichever copy runs, so both give the
 same numbers.
 """
@@ -85,18 +89,26 @@ def propagate_sized(P, Phi, Qd, work, n, d):
 
 
 @nb.njit(inline="always")
+def square_sized(F, d, n, out):
+    """``out = F F`` for ``F`` whose rows from ``d`` on are diagonal: the rows above ``d``
+    from the first ``d`` columns of ``F``, then the diagonal tail's own entries added
+    (:func:`fuzzynav.filters.kalman.square_tail`)."""
+    for i in range(0, d, 2):
+        rows_times(F, F, i, i + 1 if i + 1 < d else i, d, n, out)
+    for i in range(d):
+        for j in range(d, n):
+            out[i, j] += F[i, j] * F[j, j]
+    for i in range(d, n):
+        for j in range(n):
+            out[i, j] = 0.0
+        out[i, i] = F[i, i] * F[i, i]
+
+
+@nb.njit(inline="always")
 def discretize_sized(F, q_diag, dt, Phi, Qd, work, n, d):
     """Second-order ``Phi`` and ``Qd`` over ``dt`` (:func:`fuzzynav.filters.error_model.
     discretize`): ``F`` has rows ``>= d`` diagonal, ``q_diag`` is the diagonal of Q."""
-    for i in range(0, d, 2):  # work = F F: rows < d from the first d columns of F ...
-        rows_times(F, F, i, i + 1 if i + 1 < d else i, d, n, work)
-    for i in range(d):  # ... plus the diagonal tail's own entries
-        for j in range(d, n):
-            work[i, j] += F[i, j] * F[j, j]
-    for i in range(d, n):
-        for j in range(n):
-            work[i, j] = 0.0
-        work[i, i] = F[i, i] * F[i, i]
+    square_sized(F, d, n, work)
     h2 = 0.5 * dt * dt
     for i in range(n):
         for j in range(n):
