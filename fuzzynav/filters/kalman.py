@@ -83,16 +83,10 @@ def square_tail(F, d, out):
 
 
 @nb.njit(cache=True)
-def times_Ht(A, H, m, out):
-    """``out[:, :m] = A H^T`` for the first ``m`` rows of H, skipping H's zeros."""
-    sized.times_Ht_sized(A, H, m, out, A.shape[0])
-
-
-@nb.njit(cache=True)
 def innovation_cov(P, H, m, PHt, HPH):
     """``PHt[:, :m] = P H^T`` and ``HPH[:m, :m] = H P H^T`` for the first ``m`` rows of H."""
     n = P.shape[0]
-    if n == sized.FIXED_N:
+    if sized.fixed_count(n):
         sized.innovation_sized(P, H, m, PHt, HPH, sized.FIXED_N)
     else:
         sized.innovation_sized(P, H, m, PHt, HPH, n)
@@ -185,7 +179,7 @@ def joseph_update(P, H, R, m, r, PHt, K, x, AP, APHt):
     the upper triangle instead of two ``n x n x m`` products; the result is symmetric.
     """
     n = P.shape[0]
-    if n == sized.FIXED_N:
+    if sized.fixed_count(n):
         sized.joseph_sized(P, H, R, m, r, PHt, K, x, AP, APHt, sized.FIXED_N)
     else:
         sized.joseph_sized(P, H, R, m, r, PHt, K, x, AP, APHt, n)

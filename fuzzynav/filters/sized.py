@@ -5,8 +5,9 @@ from which the transition or system matrix is diagonal, :func:`~fuzzynav.filters
 diagonal_tail`) as arguments and are inlined into their callers (numba
 ``inline="always"``).  A caller that passes the constants :data:`FIXED_N` and
 :data:`FIXED_D` gets its own copy in which every loop has a fixed trip count, which LLVM
-unrolls; for the 15-state model that copy takes about 0.6x the time of the same code with
-run-time sizes (``benchmarks/bench_ekf.py``).  Callers use :func:`fixed` to choose.
+unrolls (the per-call costs of a paper000 run, against the base revision, are in the
+breakdown of ``benchmarks/bench_ekf.py`` in docs/benchmarks.md).  Callers use
+:func:`fixed` or :func:`fixed_count` to choose.
 
 Products of two matrices run in register tiles of two rows by four columns
 (:func:`rows_times`): eight independent sums share every load, where one dot product at a
@@ -29,7 +30,13 @@ FIXED_N, FIXED_D = N_CORE + 6, N_CORE
 @nb.njit(inline="always")
 def fixed(n, d):
     """True when an ``n``-state matrix with diagonal tail ``d`` has the fixed copy's sizes."""
-    return n == FIXED_N and d == FIXED_D
+    return fixed_count(n) and d == FIXED_D
+
+
+@nb.njit(inline="always")
+def fixed_count(n):
+    """True when ``n`` states have the fixed copy's size (kernels without a diagonal tail)."""
+    return n == FIXED_N
 
 
 @nb.njit(inline="always")

@@ -47,6 +47,7 @@ def _system(rng):
 def test_fixed_sizes_are_chosen_only_for_the_15_state_shape():
     assert sized.fixed(15, 9)
     assert not sized.fixed(15, 10) and not sized.fixed(16, 9) and not sized.fixed(18, 9)
+    assert sized.fixed_count(15) and not sized.fixed_count(18)
 
 
 def test_propagation_copies_agree_and_match_numpy():
