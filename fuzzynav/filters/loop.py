@@ -115,7 +115,8 @@ class Settings(NamedTuple):
 class Outputs(NamedTuple):
     """Recorded solution (every ``out_stride`` samples): time, nav, sensor states, the
     fused sigma, per local filter its error state ``xl`` and sigma ``sigl`` (K, L, n), and
-    the information shares ``beta`` (K, L)."""
+    the information shares ``beta`` (K, L).  A bank of one writes none of the last three
+    (:func:`_record`): they may be placeholders of any length."""
 
     t: np.ndarray
     nav: np.ndarray
@@ -154,7 +155,12 @@ def _sigma_into(row, P, nav, em):
 @nb.njit(cache=True)
 def _record(j, t, nav, xs, st, P_master, beta, out, em):
     """Record output ``j``; ``P_master`` is the master's covariance (see
-    :func:`~fuzzynav.filters.bank_fusion.master_covariance`)."""
+    :func:`~fuzzynav.filters.bank_fusion.master_covariance`).
+
+    A bank of one records only the master: its local is the master, its error state is
+    zero after every feedback and its share is one, so the runner forms those outputs
+    from the master's (a third of the bytes written per output, which cost more than the
+    arithmetic)."""
     out_t, out_nav, out_xs, out_sig, out_xl, out_sigl, out_beta = out
     out_t[j] = t
     for i in range(NAV_SIZE):
@@ -162,15 +168,14 @@ def _record(j, t, nav, xs, st, P_master, beta, out, em):
     for i in range(xs.size):
         out_xs[j, i] = xs[i]
     P3, X = st.P, st.x
+    _sigma_into(out_sig[j], P_master, nav, em)
+    if X.shape[0] == 1:
+        return
     for k in range(X.shape[0]):
         out_beta[j, k] = beta[k]
         _sigma_into(out_sigl[j, k], P3[k], nav, em)
         for i in range(X.shape[1]):
             out_xl[j, k, i] = X[k, i]
-    if X.shape[0] > 1:
-        _sigma_into(out_sig[j], P_master, nav, em)
-    else:  # the bank of one: its master is its local, whose sigma is formed just above
-        out_sig[j, :] = out_sigl[j, 0]
 
 
 @nb.njit(cache=True)

@@ -151,9 +151,10 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
     E, M = tb["ev_t"].size, tb["M"]
     # the loop writes whole output rows, in order; the time column (NaN until written) tells
     # how many it wrote, so the other arrays need no filling
+    KL = K if NL > 1 else 1  # a bank of one records no local outputs (loop._record)
     out = dict(t=np.full(K, np.nan), nav=np.empty((K, NAV_SIZE)), xs=np.empty((K, n - N_CORE)),
-               sig=np.empty((K, n)), xl=np.empty((K, NL, n)), sigl=np.empty((K, NL, n)),
-               beta=np.empty((K, NL)))
+               sig=np.empty((K, n)), xl=np.empty((KL, NL, n)), sigl=np.empty((KL, NL, n)),
+               beta=np.empty((KL, NL)))
     ev = dict(r=np.full((E, M), np.nan), S=np.full((E, M), np.nan), nis=np.full(E, np.nan),
               flag=np.zeros(E, np.int64), diag=np.full((E, N_DIAG), np.nan))
     nav0 = strapdown.make_nav(init.lla, init.vel_n, init.q_bn)
@@ -167,7 +168,7 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
         bank, state, tb["meas_fns"], adapt_fns,
         loop.Settings(float(config.max_prop_dt_s), int(stride)),
         loop.Outputs(**out), loop.EventOutputs(**ev))
-    return _bundle(out, ev, tb, config, status, done, time_s, state)
+    return _bundle(out, ev, tb, config, status, done, time_s, state, bank.beta)
 
 
 def _bank(config: FilterConfig, names, init: InitialState, em: int):
@@ -194,9 +195,10 @@ def _bank(config: FilterConfig, names, init: InitialState, em: int):
     return loop.Bank(local, b.copy(), int(reset), period, ctl), state
 
 
-def _bundle(out, ev, tb, config, status, done, time_s, state) -> FilterResult:
+def _bundle(out, ev, tb, config, status, done, time_s, state, beta) -> FilterResult:
     # rows are written in order from the first: the written ones are a prefix, kept as views
-    keep = slice(0, int(np.count_nonzero(np.isfinite(out["t"]))))
+    kept = int(np.count_nonzero(np.isfinite(out["t"])))
+    keep = slice(0, kept)
     events = {}
     for i, (nm, mdl, bd) in enumerate(zip(tb["names"], tb["models"], tb["bounds"])):
         # an index array: take() gathers the rows several times faster than a boolean mask
@@ -214,5 +216,14 @@ def _bundle(out, ev, tb, config, status, done, time_s, state) -> FilterResult:
                         q_bn=nav[:, Q_SLICE], sensor_states=out["xs"][keep],
                         sigma=out["sig"][keep], state_labels=layout.labels(), events=events,
                         status=msg, layout=layout,
-                        locals=LocalStates(out["xl"][keep], out["sigl"][keep], state.P,
-                                           state.Pg, out["beta"][keep]))
+                        locals=_locals(out, keep, kept, state, beta))
+
+
+def _locals(out, keep, kept, state, beta) -> LocalStates:
+    """The locals' outputs; a bank of one's are its master's (zero error state after each
+    feedback, the fused sigma, a constant share), which the loop leaves unrecorded."""
+    if beta.size > 1:
+        return LocalStates(out["xl"][keep], out["sigl"][keep], state.P, state.Pg,
+                           out["beta"][keep])
+    return LocalStates(np.zeros((kept, 1, state.x.shape[1])), out["sig"][keep][:, None, :],
+                       state.P, state.Pg, np.full((kept, 1), beta[0]))

@@ -2,7 +2,7 @@
 
 Kernel tables typed once per tuple and their addresses looked up once per kernel and
 signature (:mod:`fuzzynav.filters.dispatch`), output rows kept as
-views of what the loop wrote, and the truth at a result's epochs remembered per trajectory
+views of what the loop wrote (a bank of one's local outputs formed from its master's), and the truth at a result's epochs remembered per trajectory
 (:func:`fuzzynav.metrics.errors_vs_trajectory`).
 """
 import gc
@@ -115,6 +115,18 @@ def test_output_rows_are_all_written(run):
     assert res.time_s.shape == (n,) and np.all(np.diff(res.time_s) > 0)
     for arr in (res.lla, res.vel_n, res.q_bn, res.sigma, res.locals.x, res.locals.sigma):
         assert arr.shape[0] == n and np.isfinite(arr).all()
+
+
+def test_a_bank_of_one_reports_its_master_as_its_local(run):
+    """The loop records only the master of a bank of one; its local outputs are formed from
+    it: the last sigma row against the final covariance (kept apart from the outputs)."""
+    _, res = run
+    loc = res.locals
+    n = res.sigma.shape[1]
+    assert loc.x.shape == loc.sigma.shape == (res.time_s.size, 1, n)
+    assert np.all(loc.x == 0.0) and np.all(loc.beta == 1.0)
+    np.testing.assert_array_equal(loc.sigma[:, 0], res.sigma)
+    np.testing.assert_allclose(res.sigma[-1], np.sqrt(np.diag(loc.P_end[0])), rtol=1e-15)
 
 
 def test_errors_against_the_remembered_truth_equal_the_direct_ones(run):
