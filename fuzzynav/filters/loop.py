@@ -331,8 +331,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
                     ev_flag[e] = EV_BAD_S
                     e += 1
                     continue
-            kalman.gain(L, m, PHt, K, wv)
-            kalman.joseph_update(P, H, R, m, z, PHt, K, dx, AP, APHt)
+            kalman.correct(L, P, H, R, m, z, PHt, K, dx, AP, APHt, wv)
             Qacc[:, :] = 0.0
             for i in range(n):
                 x[i] += dx[i]

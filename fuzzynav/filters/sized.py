@@ -175,6 +175,28 @@ def innovation_sized(P, H, m, PHt, HPH, n):
 
 
 @nb.njit(inline="always")
+def gain_sized(L, m, PHt, K, work, n):
+    """``K = PHt S^-1`` (:func:`fuzzynav.filters.kalman.gain`): the rows of ``PHt`` solved
+    against the Cholesky factor ``L`` of ``S``, all rows one substitution step at a time
+    (the rows are independent, so the steps overlap), with ``1 / L[r, r]`` formed once
+    into ``work[:m]``."""
+    for r in range(m):
+        work[r] = 1.0 / L[r, r]
+    for r in range(m):  # L Y^T = PHt^T
+        for i in range(n):
+            s = PHt[i, r]
+            for k in range(r):
+                s -= L[r, k] * K[i, k]
+            K[i, r] = s * work[r]
+    for r in range(m - 1, -1, -1):  # L^T K^T = Y^T
+        for i in range(n):
+            s = K[i, r]
+            for k in range(r + 1, m):
+                s -= L[k, r] * K[i, k]
+            K[i, r] = s * work[r]
+
+
+@nb.njit(inline="always")
 def joseph_sized(P, H, R, m, r, PHt, K, x, AP, APHt, n):
     """Gain correction and Joseph-form update (:func:`fuzzynav.filters.kalman.
     joseph_update`): ``x = K r``, ``P <- P - K (P H^T)^T + V K^T``, ``V = K S - P H^T``."""

@@ -104,3 +104,38 @@ def test_update_copies_agree_and_match_the_joseph_form(m):
     IKH = np.eye(N) - Km @ Hm
     _close(res["fixed"][0], IKH @ P0 @ IKH.T + Km @ np.diag(R[:m]) @ Km.T, 1e-12)
     _close(res["fixed"][1], Km @ r[:m], 1e-12)
+
+
+@nb.njit
+def _correct_runtime(L, P, H, R, m, r, PHt, K, x, AP, APHt, work, n):
+    sized.gain_sized(L, m, PHt, K, work, n)
+    sized.joseph_sized(P, H, R, m, r, PHt, K, x, AP, APHt, n)
+
+
+@pytest.mark.parametrize("m", [1, 2, 3, 4, 6, 8])
+def test_the_loops_update_copies_agree_and_give_the_optimal_update(m):
+    """``kalman.correct`` has copies with ``m`` a constant (2, 3, 6) besides the 15-state
+    one: each against the copy with run-time sizes, and against the textbook update."""
+    rng = np.random.default_rng(10 + m)
+    A = rng.normal(size=(N, N))
+    P0 = A @ A.T + np.eye(N)
+    H = np.zeros((8, N))
+    H[:m, :9] = rng.normal(size=(m, 9)) * (rng.random((m, 9)) < 0.6)
+    H[np.arange(m), np.arange(m)] = 1.0  # every row sees some state
+    R, r = rng.uniform(0.5, 2.0, 8), rng.normal(size=8)
+    res = {}
+    for name in ("constant", "runtime"):
+        P, PHt, HPH, x, K = P0.copy(), np.zeros((N, 8)), np.zeros((8, 8)), np.zeros(N), \
+            np.zeros((N, 8))
+        kalman.innovation_cov(P, H, m, PHt, HPH)
+        L = np.zeros((8, 8))
+        assert kalman.cholesky(HPH + np.diag(R), m, L)
+        args = (L, P, H, R, m, r, PHt, K, x, np.zeros((N, N)), np.zeros((N, 8)), np.zeros(N))
+        kalman.correct(*args) if name == "constant" else _correct_runtime(*args, N)
+        res[name] = (P, x)
+    for a, b in zip(res["constant"], res["runtime"]):
+        _close(a, b, 1e-14)
+    Hm = H[:m]
+    K = P0 @ Hm.T @ np.linalg.inv(Hm @ P0 @ Hm.T + np.diag(R[:m]))
+    _close(res["constant"][0], (np.eye(N) - K @ Hm) @ P0, 1e-12)
+    _close(res["constant"][1], K @ r[:m], 1e-12)
