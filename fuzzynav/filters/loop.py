@@ -90,8 +90,9 @@ class Events(NamedTuple):
 
 
 class Sensors(NamedTuple):
-    """Per sensor: measurement-kernel id and constants, adapter id and its flat arrays
-    (``afp[afp_off[s]:afp_off[s + 1]]`` ...), chi-square gate per row count."""
+    """Per sensor: measurement-kernel id and constants, adapter id (:data:`NO_ADAPTER` for
+    none) and its flat arrays (``afp[afp_off[s]:afp_off[s + 1]]`` ...), chi-square gate
+    per row count."""
 
     meas: np.ndarray
     mpar: np.ndarray
@@ -137,6 +138,8 @@ class EventOutputs(NamedTuple):
     diag: np.ndarray
 
 
+#: adapter id of a sensor without adaptation (the loop skips the policy's call)
+NO_ADAPTER = -1
 # event flags
 EV_PENDING, EV_ACCEPTED, EV_GATED, EV_EMPTY, EV_BAD_S, EV_BEFORE_START = 0, 1, 2, 3, 4, 5
 # loop status
@@ -155,12 +158,8 @@ def _sigma_into(row, P, nav, em):
 @nb.njit(cache=True)
 def _record(j, t, nav, xs, st, P_master, beta, out, em):
     """Record output ``j``; ``P_master`` is the master's covariance (see
-    :func:`~fuzzynav.filters.bank_fusion.master_covariance`).
-
-    A bank of one records only the master: its local is the master, its error state is
-    zero after every feedback and its share is one, so the runner forms those outputs
-    from the master's (a third of the bytes written per output, which cost more than the
-    arithmetic)."""
+    :func:`~fuzzynav.filters.bank_fusion.master_covariance`).  A bank of one records only
+    the master, its local's outputs are formed from it (the runner's ``_locals``)."""
     out_t, out_nav, out_xs, out_sig, out_xl, out_sigl, out_beta = out
     out_t[j] = t
     for i in range(NAV_SIZE):
@@ -223,12 +222,8 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
     Phi = np.zeros((n, n))
     Qd = np.zeros((n, n))
     Qacc3 = np.zeros((NL, n, n))
-    Qc = np.zeros((n, n))
-    work = np.zeros((n, n))
-    AP = np.zeros((n, n))
-    H = np.zeros((M, n))
-    z = np.zeros(M)
-    R = np.zeros(M)
+    Qc, work, AP = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
+    H, z, R = np.zeros((M, n)), np.zeros(M), np.zeros(M)
     chan = np.zeros(M, dtype=np.int64)
     PHt = np.zeros((n, M))
     APHt = np.zeros((n, M))
@@ -301,14 +296,16 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
             if carry:
                 local_residual(z, H, m, x)
             kalman.innovation_cov(P, H, m, PHt, HPH)
-            context.fill(ctx, nav, aux, R, m, ev_data[e])
-            adapt_fns[a](afp[afp_off[s]:afp_off[s + 1]], aip[aip_off[s]:aip_off[s + 1]],
-                         ast[ast_off[s]:ast_off[s + 1]], z[:m], HPH, R, chan, m, out_a, diag,
-                         ctx)
-            for i in range(qd.size):
-                qd[i] *= out_a[1]
-            for i in range(m):
-                R[i] *= out_a[2 + i]
+            out_a[0] = 1.0
+            if a != NO_ADAPTER:  # what the plain EKF's policy would return: ones, no diag
+                context.fill(ctx, nav, aux, R, m, ev_data[e])
+                adapt_fns[a](afp[afp_off[s]:afp_off[s + 1]], aip[aip_off[s]:aip_off[s + 1]],
+                             ast[ast_off[s]:ast_off[s + 1]], z[:m], HPH, R, chan, m, out_a,
+                             diag, ctx)
+                for i in range(qd.size):
+                    qd[i] *= out_a[1]
+                for i in range(m):
+                    R[i] *= out_a[2 + i]
             for i in range(diag.size):
                 ev_diag[e, i] = diag[i]
             ok = _innovation(HPH, R, m, S, L, z, wv, ev_r, ev_S, ev_nis, e)

@@ -111,7 +111,7 @@ def _sensor_tables(sensors, adapters, options, gate_probability):
                 s_mpar=s_mpar, ev_t=np.ascontiguousarray(ev_t[order]),
                 ev_s=np.ascontiguousarray(ev_s[order].astype(np.int64)),
                 ev_data=np.ascontiguousarray(ev_data[order]), order=order,
-                s_adapt=np.array([b.kernel_id for b in bounds] or [0], np.int64),
+                s_adapt=_adapter_ids(bounds),
                 afp=afp, afp_off=afp_off, aip=aip, aip_off=aip_off, ast=ast, ast_off=ast_off,
                 gate=gate)
 
@@ -169,6 +169,14 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
         loop.Settings(float(config.max_prop_dt_s), int(stride)),
         loop.Outputs(**out), loop.EventOutputs(**ev))
     return _bundle(out, ev, tb, config, status, done, time_s, state, bank.beta)
+
+
+def _adapter_ids(bounds) -> np.ndarray:
+    """The loop's adapter id per sensor: :data:`~fuzzynav.filters.loop.NO_ADAPTER` where the
+    plain EKF's policy is bound (its call, all ones, is skipped)."""
+    none = adaptation.kernel_table()[1][NoAdaptation.name]
+    ids = [loop.NO_ADAPTER if b.kernel_id == none else b.kernel_id for b in bounds]
+    return np.array(ids or [0], np.int64)
 
 
 def _bank(config: FilterConfig, names, init: InitialState, em: int):

@@ -129,6 +129,24 @@ def test_a_bank_of_one_reports_its_master_as_its_local(run):
     np.testing.assert_allclose(res.sigma[-1], np.sqrt(np.diag(loc.P_end[0])), rtol=1e-15)
 
 
+def test_the_skipped_call_of_the_plain_ekf_is_a_policy_of_ones():
+    """The loop does not call the plain EKF's policy (``loop.NO_ADAPTER``); a policy that
+    returns the same ones, called, gives the same run to the last bit."""
+    from fuzzynav.filters import loop
+    from fuzzynav.filters.adaptation.classical import ConstantScale
+    from fuzzynav.filters.runner import _adapter_ids, _sensor_tables
+
+    tr = trajectory(1)
+    imu, gnss, init, _, _ = run_inputs(tr, 6)
+    tables = _sensor_tables({"gnss": gnss}, {}, {}, None)
+    assert _adapter_ids(tables["bounds"]).tolist() == [loop.NO_ADAPTER]
+    plain = run_filter(imu, {"gnss": gnss}, init, CONFIG)
+    called = run_filter(imu, {"gnss": gnss}, init, CONFIG, {"gnss": ConstantScale()})
+    for a, b in ((plain.lla, called.lla), (plain.sigma, called.sigma),
+                 (plain.events["gnss"].nis, called.events["gnss"].nis)):
+        np.testing.assert_array_equal(a, b)
+
+
 def test_errors_against_the_remembered_truth_equal_the_direct_ones(run):
     tr, res = run
     _check(res, tr)
