@@ -57,6 +57,15 @@ def _measurement(reps, fns, idx, nav, C, aux, row, par, z, H, R, chan):
     return m
 
 
+if hasattr(kalman, "correct"):  # this tree: gain and update in one call, as the loop runs them
+    _correct = kalman.correct
+else:  # the base revision
+    @nb.njit(cache=True)
+    def _correct(L, P, H, R, m, z, PHt, K, x, AP, APHt, wv):
+        kalman.gain(L, m, PHt, K, wv)
+        kalman.joseph_update(P, H, R, m, z, PHt, K, x, AP, APHt)
+
+
 @nb.njit(cache=True)
 def _update(reps, P0, H, R, m, z):
     n, M = P0.shape[0], H.shape[0]
@@ -70,8 +79,7 @@ def _update(reps, P0, H, R, m, z):
             S[i, i] += R[i]
         kalman.cholesky(S, m, L)
         kalman.nis(L, m, z, wv)
-        kalman.gain(L, m, PHt, K, wv)
-        kalman.joseph_update(P, H, R, m, z, PHt, K, x, AP, APHt)
+        _correct(L, P, H, R, m, z, PHt, K, x, AP, APHt, wv)
         kalman.covariance_ok(P)
         P[:, :] = P0
     return P
