@@ -156,6 +156,8 @@ def supervise(cfg, study, total, workers, storage=None, cache_dir=None, on_poll=
                     continue
                 del procs[i]
                 if code == 0:
+                    if procs:  # a CPU is free until the others end: read the journal now,
+                        n_finished(study)  # so the final count reads only their last trials
                     continue
                 reap_stale(study, cfg.stale_after_s)  # its RUNNING trial: FAIL + retry
                 if code != USER_ERROR and restarts[i] < MAX_RESTARTS \
