@@ -1,28 +1,27 @@
-"""The baseline's runs of a study's start-up, shared among as many processes as it has workers.
+"""A study's start-up done by as many processes as it has workers.
 
-Before a study forks its workers, the parent loads every training log and runs the baseline
-filter on each (:func:`fuzzynav.tuning.run.warm_evaluator`), so that the workers start with
-everything a trial needs.  Done serially, that start-up is about a second -- 7 % of a
-60-trial study with two workers, during which the second CPU idles.  :func:`prepare_shared`
-forks helper processes once the kernels are loaded (they load none): each runs the baseline
-on its share of the runs and sends the metrics back, pickled -- bit for bit what the parent
-would have computed, by the same code on the same data.  The parent meanwhile runs its own,
-smaller share and loads the helpers' logs, which the workers forked after it need.
+Before a study forks its workers, the parent loads the kernels, every training log and the
+baseline filter's metrics on each (:func:`fuzzynav.tuning.run.warm_evaluator`), so that the
+workers start with everything a trial needs.  Done serially, that start-up is over a second
+-- 7 % of a 60-trial study with two workers, during which the second CPU idles.  With
+several processes (:func:`warm_shared`):
+
+* the logs load in a thread while the kernels load (reading and checksumming a log's file
+  releases the GIL; loading kernels mostly holds it);
+* then helper processes are forked (the kernels and logs loaded: they load none) and each
+  runs the baseline on its share of the runs and sends the metrics back, pickled -- bit
+  for bit what the parent would have computed, by the same code on the same data -- while
+  the parent runs its own share.
 """
 from __future__ import annotations
 
 import multiprocessing
+import threading
 
 
 def split(runs: list, processes: int) -> tuple:
-    """``(the parent's share, [each helper's share])`` of ``runs`` among ``processes``.
-
-    The parent also loads the helpers' logs (about half the time of a baseline run with
-    its log): it takes one share in ``processes + 1``, the helpers the rest, in turn.
-    """
-    n_own = round(len(runs) / (processes + 1))
-    rest = runs[n_own:]
-    return runs[:n_own], [rest[i::processes - 1] for i in range(processes - 1)]
+    """``(the parent's share, [each helper's share])`` of ``runs``, dealt in turn."""
+    return runs[::processes], [runs[i::processes] for i in range(1, processes)]
 
 
 def _send_baselines(evaluator, share, conn) -> None:
@@ -60,22 +59,52 @@ class Helper:
 
 def prepare_shared(evaluator, runs, processes: int = 1):
     """Load the logs of ``runs`` into ``evaluator`` and run the baseline on each, those
-    runs shared with ``processes - 1`` forked helpers (only where workers are forked too:
-    the caller passes 1 elsewhere).  Returns ``evaluator``.
+    runs shared with ``processes - 1`` forked helpers.  Returns ``evaluator``.
 
-    Call it after the kernels are loaded (:func:`fuzzynav.tuning.warmup.compile_by_running`):
-    a helper forked before would load them again.  A helper that fails delivers nothing;
-    what is missing is computed here, and its error raised here, as without helpers.
+    Call it with the kernels loaded (a helper forked before would load them again) and no
+    other thread running (a fork copies only this one).  A helper that fails delivers
+    nothing: what is missing is computed here, and its error raised here, as without
+    helpers.
     """
     todo = evaluator.pending(runs)
     if processes < 2 or len(todo) < 2:
         return evaluator.prepare(runs)
-    own, shares = split(todo, min(processes, len(todo)))
-    helpers = [Helper(evaluator, share) for share in shares if share]
-    evaluator.prepare(own)
-    for run in todo:  # the helpers' logs, which the workers inherit
+    for run in todo:  # (loaded already by warm_shared's thread, unless it failed)
         evaluator.log(*run)
+    own, shares = split(todo, min(processes, len(todo)))
+    helpers = [Helper(evaluator, share) for share in shares]
+    evaluator.prepare(own)
     known = {}
     for helper in helpers:
         known.update(helper.collect())
     return evaluator.prepare(runs, known)
+
+
+def _load_logs(evaluator, runs) -> None:
+    try:
+        for run in runs:
+            evaluator.log(*run)
+    except Exception:  # noqa: BLE001 -- loaded again (and the error raised) by the caller
+        pass
+
+
+def warm_shared(cfg, cache_dir=None, processes: int = 1):
+    """A warm :class:`~fuzzynav.tuning.objective.Evaluator` of ``cfg``'s training runs
+    (:func:`fuzzynav.tuning.run.warm_evaluator`), made by ``processes`` processes: the
+    kernels loaded with the logs loading alongside (a thread), then the baseline runs
+    shared (:func:`prepare_shared`).  Pass 1 where workers are not forked."""
+    from fuzzynav.tuning.objective import Evaluator
+    from fuzzynav.tuning.warmup import compile_by_running
+
+    evaluator = Evaluator(cfg, cache_dir)
+    loader = None
+    if processes > 1:
+        loader = threading.Thread(target=_load_logs, args=(evaluator, cfg.train[1:]),
+                                  daemon=True)
+        loader.start()
+    try:
+        compile_by_running(cfg, cache_dir, evaluator)  # loads the kernels on train[0]
+    finally:
+        if loader is not None:
+            loader.join()  # before any fork
+    return prepare_shared(evaluator, cfg.train, processes)

@@ -24,10 +24,10 @@ import warnings
 from tqdm.auto import tqdm
 
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.tuning.prefetch import prepare_shared
+from fuzzynav.tuning.prefetch import warm_shared
 from fuzzynav.tuning.samplers import get_optimiser
 from fuzzynav.tuning.study import n_finished, open_study, reap_stale, run_worker
-from fuzzynav.tuning.warmup import compile_by_running, warm_up
+from fuzzynav.tuning.warmup import warm_up
 
 #: a worker is started with this program instead of ``python -m``, which would put the
 #: current directory first on its import path (a stray ``inspect.py`` there broke workers)
@@ -234,4 +234,4 @@ def warm_evaluator(cfg, cache_dir=None, processes: int = 1):
     baseline's metrics on each, and the kernels of a candidate's run loaded.  ``processes``
     share the baseline runs (forked helpers, :mod:`fuzzynav.tuning.prefetch`: pass 1 where
     workers are not forked)."""
-    return prepare_shared(compile_by_running(cfg, cache_dir), cfg.train, processes)
+    return warm_shared(cfg, cache_dir, processes)

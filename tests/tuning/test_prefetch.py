@@ -48,13 +48,14 @@ def same_metrics(a: dict, b: dict) -> bool:
         for k in a)
 
 
-def test_split_gives_every_run_once_and_the_parent_the_smaller_share():
+def test_split_gives_every_run_once_in_shares_of_equal_size():
     runs = [("s", k) for k in range(8)]
-    own, shares = prefetch.split(runs, 2)
-    assert sorted(own + [r for s in shares for r in s]) == runs
-    assert len(shares) == 1 and 0 < len(own) < len(shares[0])
-    own, shares = prefetch.split(runs, 3)
-    assert sorted(own + [r for s in shares for r in s]) == runs and len(shares) == 2
+    for processes in (2, 3):
+        own, shares = prefetch.split(runs, processes)
+        assert sorted(own + [r for s in shares for r in s]) == runs
+        assert len(shares) == processes - 1
+        sizes = [len(own)] + [len(s) for s in shares]
+        assert max(sizes) - min(sizes) <= 1
 
 
 def test_shared_baselines_equal_the_serial_ones(cfg, sim_cache, counted_runs):
@@ -67,6 +68,18 @@ def test_shared_baselines_equal_the_serial_ones(cfg, sim_cache, counted_runs):
         assert same_metrics(shared.baseline(*run), serial.baseline(*run)), run
         assert shared.log(*run) is not None
     assert len(counted_runs) == len(own)  # nothing recomputed on asking
+
+
+def test_the_warm_start_with_two_processes_equals_the_serial_one(cfg, sim_cache,
+                                                                 counted_runs):
+    serial = Evaluator(cfg, sim_cache).prepare(cfg.train)
+    del counted_runs[:]
+    warm = prefetch.warm_shared(cfg, sim_cache, 2)
+    baselines = [name for name in counted_runs if name == cfg.baseline]
+    assert 0 < len(baselines) < len(cfg.train)  # the rest came from the helper
+    for run in cfg.train:
+        assert same_metrics(warm.baseline(*run), serial.baseline(*run)), run
+    assert len([name for name in counted_runs if name == cfg.baseline]) == len(baselines)
 
 
 def test_a_failing_helper_leaves_its_runs_to_the_parent(cfg, sim_cache, monkeypatch):
