@@ -8,12 +8,14 @@ import multiprocessing
 import os
 import sys
 
+import optuna
 import pytest
+from optuna.trial import TrialState
 
 from fuzzynav.tuning import objective, prefetch
 from fuzzynav.tuning.config import load_study_config
-from fuzzynav.tuning.objective import Evaluator
-from fuzzynav.tuning.run import wait_for_exit
+from fuzzynav.tuning.objective import Evaluator, Objective
+from fuzzynav.tuning.run import run_study, wait_for_exit
 from tests.tuning.studies import TINY, write_study
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"),
@@ -23,7 +25,7 @@ SEEDS = [0, 1, 2, 3]
 
 @pytest.fixture
 def cfg(tmp_path):
-    return load_study_config(write_study(
+    return load_study_config(write_study(  # (random sampler, no pruner: every run scored)
         tmp_path, train={"scenarios": [str(TINY)], "seeds": SEEDS}))
 
 
@@ -95,6 +97,19 @@ def test_a_failing_helper_leaves_its_runs_to_the_parent(cfg, sim_cache, monkeypa
     shared = prefetch.prepare_shared(Evaluator(cfg, sim_cache), cfg.train, 2)
     for run in cfg.train:
         assert same_metrics(shared.baseline(*run), serial.baseline(*run)), run
+
+
+def test_a_two_worker_study_scores_as_a_serial_evaluator_does(cfg, sim_cache):
+    """Every trial of a two-worker study (baselines from the shared start-up) has the value
+    its parameters get from an evaluator that ran every baseline itself."""
+    total = 4
+    study = run_study(cfg, trials=total, workers=2, cache_dir=sim_cache, progress=False)
+    done = study.get_trials(states=(TrialState.COMPLETE,))
+    assert len(done) == total
+    assert {t.user_attrs["worker"] for t in done} <= {0, 1}
+    for t in done:
+        value = Objective(cfg, sim_cache)(optuna.trial.FixedTrial(t.params))
+        assert math.isclose(t.value, value, rel_tol=1e-12), t.number
 
 
 def test_the_parent_wakes_when_a_forked_worker_ends():
