@@ -28,8 +28,8 @@ def _send_baselines(evaluator, share, conn) -> None:
     """A helper's body: the baseline's metrics on ``share``, sent through ``conn``."""
     try:
         conn.send({run: evaluator.baseline(*run) for run in share})
-    except Exception:  # noqa: BLE001 -- the parent computes (and reports) what is missing
-        pass
+    except BaseException:  # noqa: BLE001 -- the parent computes (and reports) what is
+        pass  # missing; on Ctrl-C (sent to the helper too) it stops itself, no traceback here
     finally:
         conn.close()
 
@@ -80,9 +80,11 @@ def prepare_shared(evaluator, runs, processes: int = 1):
     return evaluator.prepare(runs, known)
 
 
-def _load_logs(evaluator, runs) -> None:
+def _load_logs(evaluator, runs, stop) -> None:
     try:
         for run in runs:
+            if stop.is_set():  # the start-up failed or was interrupted
+                return
             evaluator.log(*run)
     except Exception:  # noqa: BLE001 -- loaded again (and the error raised) by the caller
         pass
@@ -97,13 +99,16 @@ def warm_shared(cfg, cache_dir=None, processes: int = 1):
     from fuzzynav.tuning.warmup import compile_by_running
 
     evaluator = Evaluator(cfg, cache_dir)
-    loader = None
+    loader, stop = None, threading.Event()
     if processes > 1:
-        loader = threading.Thread(target=_load_logs, args=(evaluator, cfg.train[1:]),
+        loader = threading.Thread(target=_load_logs, args=(evaluator, cfg.train[1:], stop),
                                   daemon=True)
         loader.start()
     try:
         compile_by_running(cfg, cache_dir, evaluator)  # loads the kernels on train[0]
+    except BaseException:  # an error or Ctrl-C: the loader stops after the log it is on
+        stop.set()
+        raise
     finally:
         if loader is not None:
             loader.join()  # before any fork

@@ -7,6 +7,8 @@ import math
 import multiprocessing
 import os
 import sys
+import threading
+import time
 
 import optuna
 import pytest
@@ -97,6 +99,32 @@ def test_a_failing_helper_leaves_its_runs_to_the_parent(cfg, sim_cache, monkeypa
     shared = prefetch.prepare_shared(Evaluator(cfg, sim_cache), cfg.train, 2)
     for run in cfg.train:
         assert same_metrics(shared.baseline(*run), serial.baseline(*run)), run
+
+
+def test_a_failed_start_up_stops_the_log_loader(cfg, sim_cache, monkeypatch):
+    """The kernels fail to load while the thread loads logs: the error is raised, the thread
+    ends after the log it was loading (not after every log: a cold cache simulates them)."""
+    from fuzzynav.errors import FuzzynavError
+    from fuzzynav.tuning import warmup
+
+    started, loaded = threading.Event(), []
+
+    def slow_log(self, scenario, seed):
+        loaded.append(seed)
+        started.set()
+        time.sleep(1.0)  # still loading when the start-up fails
+
+    def failing_compile(cfg, cache_dir, evaluator):
+        started.wait(30)
+        raise FuzzynavError("no kernels")
+
+    monkeypatch.setattr(Evaluator, "log", slow_log)
+    monkeypatch.setattr(warmup, "compile_by_running", failing_compile)
+    threads = threading.active_count()
+    with pytest.raises(FuzzynavError, match="no kernels"):
+        prefetch.warm_shared(cfg, sim_cache, 2)
+    assert threading.active_count() == threads
+    assert len(loaded) == 1 < len(cfg.train) - 1
 
 
 def test_a_two_worker_study_scores_as_a_serial_evaluator_does(cfg, sim_cache):
