@@ -151,11 +151,21 @@ class Evaluator:
                                              t_start_s=self.config.t_start_s).metrics
         return self._baseline[key]
 
-    def prepare(self, runs) -> "Evaluator":
-        """Load the logs of ``runs`` and run the baseline on each now; returns self."""
+    def prepare(self, runs, known=None) -> "Evaluator":
+        """Load the logs of ``runs`` and run the baseline on each now; returns self.
+
+        ``known``: baseline metrics computed elsewhere ((scenario, seed) -> metrics, by
+        this same code in a process forked from this one), taken instead of running them.
+        """
+        self._baseline.update(known or {})
         for scenario, seed in runs:
+            self.log(scenario, seed)
             self.baseline(scenario, seed)
         return self
+
+    def pending(self, runs) -> list:
+        """The runs of ``runs`` (each once, in order) whose baseline is not computed yet."""
+        return [run for run in dict.fromkeys(runs) if run not in self._baseline]
 
     # -- candidates -------------------------------------------------------------------------
     def run_systems(self, systems: dict, scenario: str, seed: int):

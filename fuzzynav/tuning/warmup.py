@@ -39,16 +39,16 @@ def is_cold(cache=None) -> bool:
     return cache is not None and compiled_count(cache) == 0
 
 
-def compile_by_running(cfg, cache_dir=None):
+def compile_by_running(cfg, cache_dir=None, evaluator=None):
     """Run one candidate (the templates' own rules) and the baseline on the first training
     run: the code path of every trial, so every kernel a trial needs gets compiled (or
     loaded from the cache).  Returns the :class:`~fuzzynav.tuning.objective.Evaluator`
-    used, its log and baseline of that run kept."""
+    used (``evaluator``, or a new one), its log and baseline of that run kept."""
     from fuzzynav.fuzzy import load_fis
     from fuzzynav.tuning.objective import Evaluator
 
     systems = {c.name: load_fis(c.template) for c in cfg.controllers}
-    ev = Evaluator(cfg, cache_dir)
+    ev = evaluator if evaluator is not None else Evaluator(cfg, cache_dir)
     ev.score_systems(systems, *cfg.train[0])
     return ev
 
