@@ -1,8 +1,8 @@
 """Where a paper000 EKF run spends its time: per-part costs times their counts.
 
 numba code cannot be sampled by a Python profiler, so each part is timed on its own in a
-compiled loop (the kernels the filter loop calls, on the state of the run at 300 s) and
-multiplied by how often a run calls it; the mechanization is the run without sensors
+compiled loop (the kernels the filter loop calls, on the true state at 300 s and each
+sensor's data row of that time) and multiplied by how often a run calls it; the mechanization is the run without sensors
 (which still propagates once per ``max_prop_dt_s``) less those propagations.  Parts:
 mechanization per IMU sample, covariance propagation (``fill_F`` + ``discretize`` +
 ``kalman.propagate``), the measurement models, the update (innovation covariance,
@@ -141,7 +141,8 @@ def profile(cache_dir=None) -> dict:
         n_prop)}
     aux = np.array([0.01, 0.02, 0.01, 0.1, 0.2, 9.8])
     for s, nm in enumerate(tb["names"]):
-        e = int(np.nonzero(tb["ev_s"] == s)[0][len(ev_times) // 20])
+        mine = np.flatnonzero(tb["ev_s"] == s)  # its epoch nearest the state's time
+        e = int(mine[np.argmin(np.abs(tb["ev_t"][mine] - tr.time_s[k0]))])
         z, H, R, chan = np.zeros(M), np.zeros((M, n)), np.zeros(M), np.zeros(M, np.int64)
         margs = (tb["meas_fns"], tb["s_meas"][s], nav, C, aux, tb["ev_data"][e], tb["s_mpar"][s],
                  z, H, R, chan)
