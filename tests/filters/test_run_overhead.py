@@ -192,7 +192,8 @@ def test_memoised_P0_and_q_diag_are_fresh_copies_of_what_a_new_config_computes()
     again = replace(cfg)  # a new instance assembles its arrays afresh
     np.testing.assert_array_equal(cfg.P0(), again.P0())  # same path, same inputs: exact
     np.testing.assert_array_equal(cfg.q_diag(), again.q_diag())
-    assert cfg.P0()[0, 0] == (0.1 * np.pi / 180.0) ** 2  # init_att_sigma_deg[0] = 0.1 deg
+    # init_att_sigma_deg[0] = 0.1 deg, converted here by another path: to rounding
+    assert cfg.P0()[0, 0] == pytest.approx((0.1 * np.pi / 180.0) ** 2, rel=1e-14)
     # Gauss-Markov gyro block 2: q = 2 sigma^2 / tau, sigma = 2 deg/h in rad/s
     sig = 2.0 * np.pi / 180.0 / 3600.0
     assert cfg.q_diag()[cfg.model.layout.start("gyro_bias:1")] == pytest.approx(
