@@ -12,7 +12,7 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.filters import kalman
-from fuzzynav.filters.error_model import block_end, discretize, fill_F
+from fuzzynav.filters.error_model import block_end, discretize_tail, fill_F
 from fuzzynav.filters.error_st import EM_ST, discretize_dense, st_process_noise, st_system
 from fuzzynav.filters.layout import N_CORE
 
@@ -205,13 +205,15 @@ def fusion_work(n):
 
 
 @nb.njit(cache=True)
-def propagate_locals(state, Qacc3, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd, work,
-                     dx, blk_start, blk_kind, blk_inv_tau, em, Qc):
+def propagate_locals(state, Qacc3, keep_q, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd,
+                     work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc):
     """Propagate every local's P (and, with ``carry``, its x) over the accumulated interval
     and decay the shared Gauss-Markov estimates.
 
     One ``F`` for all locals (one mechanization); each local its own noise densities.
-    ``em`` selects the error model; the ST model maps the phi model's F and noise."""
+    ``em`` selects the error model; the ST model maps the phi model's F and noise.  With
+    ``keep_q`` each local's discrete noise is summed into ``Qacc3`` (the noise since its last
+    update, which a policy that scales the predicted covariance needs)."""
     P3, X, QD = state.P, state.x, state.qd
     for i in range(3):
         fm[i] = sumf[i] / tau
@@ -223,17 +225,19 @@ def propagate_locals(state, Qacc3, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, P
     if em == EM_ST:
         st_system(F, nav)
     n = F.shape[0]
+    d = kalman.diagonal_tail(F)  # the sensor blocks only decay: Phi keeps F's diagonal tail
     for b in range(X.shape[0]):
         if em == EM_ST:
             st_process_noise(Qc, QD[b], nav)
             discretize_dense(F, Qc, tau, Phi, Qd, work)
         else:
-            discretize(F, QD[b], tau, Phi, Qd, work)
-        kalman.propagate(P3[b], Phi, Qd, work)
-        Qacc = Qacc3[b]
-        for i in range(n):
-            for j in range(n):
-                Qacc[i, j] += Qd[i, j]
+            discretize_tail(F, QD[b], tau, Phi, Qd, work, d)
+        kalman.propagate_tail(P3[b], Phi, Qd, work, d)
+        if keep_q:
+            Qacc = Qacc3[b]
+            for i in range(n):
+                for j in range(n):
+                    Qacc[i, j] += Qd[i, j]
         if carry:
             propagate_state(Phi, X[b], dx)
     for b in range(blk_start.size):

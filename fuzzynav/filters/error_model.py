@@ -26,7 +26,7 @@ from fuzzynav.filters import sized
 from fuzzynav.filters.kalman import diagonal_tail, square_tail
 from fuzzynav.filters.layout import (BLOCK_KINDS, CORE, COUPLE_ACCEL, COUPLE_GYRO, X_ATT,
                                      X_POS, X_VEL, StateLayout, kind_of)
-from fuzzynav.nav.earth import E2, OMEGA_IE, gravity_nb, radii_nb
+from fuzzynav.nav.earth import E2, OMEGA_IE, gravity_sin_nb, radii_sin_nb
 from fuzzynav.nav.layout import NAV_H, NAV_LAT, NAV_VEL
 
 # velocity error components, and the position error's rows/columns: in radians
@@ -101,9 +101,9 @@ MODEL_15 = ErrorModel()
 
 
 @nb.njit(cache=True)
-def _dgravity_dlat(lat, h):
-    """Derivative of normal gravity with latitude [m/s^2/rad] (height factor neglected)."""
-    s, c = math.sin(lat), math.cos(lat)
+def _dgravity_dlat(s, c):
+    """Derivative of normal gravity with latitude [m/s^2/rad] (height factor neglected), from
+    the sine and cosine of the latitude."""
     s2 = s * s
     w = 1.0 - E2 * s2
     ge, k = 9.7803253359, 0.00193185265241
@@ -121,9 +121,9 @@ def fill_F(F, nav, C_bn, f_n, blk_start, blk_kind, blk_inv_tau):
     F[:, :] = 0.0
     ve, vn, vu = nav[NAV_VEL], nav[NAV_VEL + 1], nav[NAV_VEL + 2]
     lat, h = nav[NAV_LAT], nav[NAV_H]
-    rm, rn = radii_nb(lat)
+    sl, cl = math.sin(lat), math.cos(lat)  # once for the radii, gravity and the rates
+    rm, rn = radii_sin_nb(sl)
     rmh, rnh = rm + h, rn + h
-    sl, cl = math.sin(lat), math.cos(lat)
     tl = sl / cl
     wie_n, wie_u = OMEGA_IE * cl, OMEGA_IE * sl
     # omega_in = omega_ie + omega_en
@@ -158,8 +158,8 @@ def fill_F(F, nav, C_bn, f_n, blk_start, blk_kind, blk_inv_tau):
                 vp += _skew_elem(ve, vn, vu, i, k) * (2.0 * Mp1[3 * k + j] + Mp2[3 * k + j])
             F[X_VEL + i, X_POS + j] = vp
     # gravity: up component of dg with latitude and height
-    F[_VU, _LAT] += -_dgravity_dlat(lat, h)
-    F[_VU, _HGT] += -(gravity_nb(lat, h + 0.5) - gravity_nb(lat, h - 0.5))
+    F[_VU, _LAT] += -_dgravity_dlat(sl, cl)
+    F[_VU, _HGT] += -(gravity_sin_nb(sl, h + 0.5) - gravity_sin_nb(sl, h - 0.5))
     # position rows (dlat, dlon, dh)
     F[_LAT, _VN] = 1.0 / rmh
     F[_LAT, _HGT] = -vn / rmh**2
@@ -243,8 +243,14 @@ def discretize(F, q_diag, dt, Phi, Qd, work):
     Phi, Qd : (n, n) outputs.
     work : (n, n) scratch.
     """
+    discretize_tail(F, q_diag, dt, Phi, Qd, work, diagonal_tail(F))
+
+
+@nb.njit(cache=True)
+def discretize_tail(F, q_diag, dt, Phi, Qd, work, d):
+    """:func:`discretize` for an ``F`` whose rows from ``d`` on are diagonal; ``Phi`` then
+    has the same tail (:func:`~fuzzynav.filters.kalman.propagate_tail`)."""
     n = F.shape[0]
-    d = diagonal_tail(F)
     if sized.fixed(n, d):  # the 15-state model: a copy compiled with its sizes as constants
         sized.discretize_sized(F, q_diag, dt, Phi, Qd, work, sized.FIXED_N, sized.FIXED_D)
     else:

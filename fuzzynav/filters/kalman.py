@@ -1,6 +1,7 @@
 """Kalman-filter kernels as pure numba functions on plain arrays.
 
-* :func:`propagate` — ``P <- Phi P Phi^T + Qd``, the diagonal tail of ``Phi`` as scalings;
+* :func:`propagate` — ``P <- Phi P Phi^T + Qd``, the diagonal tail of ``Phi`` as scalings
+  (:func:`propagate_tail` when the caller knows the tail);
 * :func:`innovation_cov` — ``PHt = P H^T``, ``HPH = H P H^T`` for ``m`` rows;
 * :func:`cholesky`, :func:`chol_solve`, :func:`nis` — small dense solves on ``S``;
 * :func:`joseph_update` — ``x = K r`` and the Joseph-form covariance
@@ -46,8 +47,14 @@ def propagate(P, Phi, Qd, work):
     The 15-state model runs a copy compiled with its sizes as constants
     (:mod:`fuzzynav.filters.sized`).
     """
+    propagate_tail(P, Phi, Qd, work, diagonal_tail(Phi))
+
+
+@nb.njit(cache=True)
+def propagate_tail(P, Phi, Qd, work, d):
+    """:func:`propagate` for a ``Phi`` whose rows from ``d`` on are diagonal (a caller that
+    knows the tail, e.g. from ``F``, spares the scan; a ``d`` past the true tail is exact)."""
     n = P.shape[0]
-    d = diagonal_tail(Phi)
     if sized.fixed(n, d):
         sized.propagate_sized(P, Phi, Qd, work, sized.FIXED_N, sized.FIXED_D)
     else:

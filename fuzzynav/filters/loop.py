@@ -207,6 +207,10 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
     # a local's estimate survives between updates only in a bank of several locals that
     # does not reset to the fused solution after every update
     carry = NL > 1 and (reset == 0 or period > 0.0)
+    # only a policy may scale the predicted covariance by the noise since the last update
+    keep_q = False
+    for a_id in s_adapt:
+        keep_q = keep_q or a_id != NO_ADAPTER
     nav = nav0.copy()
     prev = np.zeros(PREV_SIZE)
     init_prev(nav, prev)
@@ -271,8 +275,8 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
         t = time_s[k + 1]
         while e < E and ev_t[e] <= t + 1e-9:
             if tau > 0.0:
-                propagate_locals(state, Qacc3, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi,
-                                 Qd, work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
+                propagate_locals(state, Qacc3, keep_q, carry, xs, nav, sumC, sumf, tau, Cm, fm,
+                                 F, Phi, Qd, work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
                 tau = 0.0
                 fstate = after_propagation(fstate, reset)
                 bias_totals(xs, blk_start, blk_kind, bg, ba)
@@ -329,7 +333,8 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
                     e += 1
                     continue
             kalman.correct(L, P, H, R, m, z, PHt, K, dx, AP, APHt, wv)
-            Qacc[:, :] = 0.0
+            if keep_q:
+                Qacc[:, :] = 0.0
             for i in range(n):
                 x[i] += dx[i]
             ev_flag[e] = EV_ACCEPTED
@@ -365,8 +370,8 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
             if not ok:
                 return ST_COVARIANCE, k + 1
         if tau >= max_prop_dt - 1e-12:
-            propagate_locals(state, Qacc3, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd,
-                             work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
+            propagate_locals(state, Qacc3, keep_q, carry, xs, nav, sumC, sumf, tau, Cm, fm, F,
+                             Phi, Qd, work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
             tau = 0.0
             fstate = after_propagation(fstate, reset)
             bias_totals(xs, blk_start, blk_kind, bg, ba)  # Gauss-Markov decay of xs

@@ -51,6 +51,27 @@ def radii_sin_nb(sin_lat):
     return r_n * (1.0 - E2) / w2, r_n
 
 
+#: the height term's coefficient 3 / a^2 of :func:`gravity_sin_nb`, formed once
+_G_H2 = 3.0 / (A * A)
+
+
+@nb.njit(cache=True)
+def radii_gravity_sin_nb(sin_lat, h_m):
+    """``R_M, R_N`` (:func:`radii_sin_nb`) and normal gravity (:func:`gravity_sin_nb`) at
+    once, for the strapdown step that needs all three at every IMU sample.
+
+    One square root and one division where the two functions take two and four: the same
+    formulas with ``1 / sqrt(1 - e^2 sin^2 L)`` formed once, so the values differ from
+    theirs in the last digits only (rounding).
+    """
+    s2 = sin_lat * sin_lat
+    inv_w = 1.0 / math.sqrt(1.0 - E2 * s2)
+    r_n = A * inv_w
+    g0 = GAMMA_E * (1.0 + K_SOMIGLIANA * s2) * inv_w
+    g = g0 * (1.0 - 2.0 / A * (1.0 + F + M_RATIO - 2.0 * F * s2) * h_m + _G_H2 * h_m * h_m)
+    return r_n * (1.0 - E2) * (inv_w * inv_w), r_n, g
+
+
 @nb.njit(cache=True)
 def gravity_nb(lat_rad, h_m):
     """Magnitude of WGS-84 normal gravity [m/s^2] at latitude and height (numba scalar)."""

@@ -14,6 +14,8 @@ into the compiled code), Python code the slices.
     PREV_DTH 3  angle increment [rad]       PREV_DV  3  velocity increment [m/s]
     PREV_VEL 3  velocity [m/s]              PREV_LLA 3  latitude, longitude, height
     PREV_FLAG   0 before the first step, 1 after
+    PREV_TRIG 4 midpoint latitude of the last step [rad], its sine and cosine, and the
+                steps since they were last evaluated exactly (strapdown.sin_cos_lat)
 """
 from __future__ import annotations
 
@@ -34,4 +36,5 @@ PREV_DV = 3
 PREV_VEL = 6
 PREV_LLA = 9
 PREV_FLAG = 12
-PREV_SIZE = 13
+PREV_TRIG = 13
+PREV_SIZE = 17

@@ -30,6 +30,11 @@ _FOLD_SLACK = 0.05
 #: Gauss-Newton stops when the step [rad] (|pitch| + |heading|), or the change it makes to
 #: the fitted AoPs (root sum of squares), is below this
 _STEP_TOL = 1e-12
+#: an undamped step below this [rad] is taken without evaluating the residuals after it:
+#: Gauss-Newton converges at least linearly there, so the fit ends within a fraction of it
+#: of the minimum (AoP noise is ~1e-3 rad), and J^T J from before the step differs from
+#: the one after it in the tenth digit
+_STEP_LAST = 1e-10
 #: relative round-off of the cost: how much a nearly undamped step may raise it
 _COST_RTOL = 1e-10
 #: Levenberg damping (relative to the mean diagonal of J^T J): start, floor, give-up, and
@@ -332,6 +337,8 @@ def _gauss_newton(aops, trig, frames, sun_n, c_roll, s_roll, p, h):
         moved = step_p * (n00 * step_p + 2.0 * n01 * step_h) + n11 * step_h * step_h
         if abs(step_p) + abs(step_h) < _STEP_TOL or moved < _STEP_TOL * _STEP_TOL:
             break
+        if abs(step_p) + abs(step_h) < _STEP_LAST and lam <= _LAM_UNDAMPED:
+            return p + step_p, h + step_h, n00, n01, n11, b0, b1
         trial = _normal_equations(aops, trig, frames, sun_n, c_roll, s_roll, p + step_p,
                                   h + step_h)
         slack = _COST_RTOL if lam <= _LAM_UNDAMPED else 0.0

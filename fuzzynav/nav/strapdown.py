@@ -27,9 +27,10 @@ import math
 import numba as nb
 import numpy as np
 
-from fuzzynav.nav.earth import OMEGA_IE, gravity_sin_nb, radii_sin_nb
+from fuzzynav.nav.earth import OMEGA_IE, radii_gravity_sin_nb
 from fuzzynav.nav.layout import (LLA_SLICE, NAV_H, NAV_LAT, NAV_LON, NAV_Q, NAV_SIZE, NAV_VEL,
-                                 PREV_DTH, PREV_DV, PREV_FLAG, PREV_LLA, PREV_SIZE, PREV_VEL,
+                                 PREV_DTH, PREV_DV, PREV_FLAG, PREV_LLA, PREV_SIZE, PREV_TRIG,
+                                 PREV_VEL,
                                  Q_SLICE, VEL_SLICE)
 
 
@@ -84,10 +85,43 @@ def dcm_into(w, x, y, z, C):
     C[2, 2] = w * w - x * x - y * y + z * z
 
 
+#: largest change of the midpoint latitude between steps that :func:`sin_cos_lat` follows
+#: by the angle-addition formulas [rad] (~6 m; a step moves it by ~1e-8 rad); and how many
+#: steps it follows so before an exact evaluation bounds the accumulated rounding
+_TRIG_MAX_STEP, _TRIG_STEPS = 1e-6, 64.0
+
+
+@nb.njit(inline="always")
+def sin_cos_lat(lat, prev):
+    """Sine and cosine of the midpoint latitude ``lat``, from those of the last step.
+
+    ``sin(a + d) = sin a (1 - d^2/2) + cos a d`` (and cosine alike) is exact to rounding for
+    ``|d| < 1e-6`` (the next terms, d^3/6 and d^4/24, are below 2e-19) and takes a few
+    products where ``sin`` and ``cos`` take two library calls, and the latitude's chain
+    from one step to the next runs through them.  Every :data:`_TRIG_STEPS` steps, after
+    a larger jump (a position feedback) and at the first step they are evaluated exactly,
+    which keeps them within ~10 ulp of ``math.sin``/``math.cos``.
+    """
+    d = lat - prev[PREV_TRIG]
+    n = prev[PREV_TRIG + 3]
+    if n > 0.0 and abs(d) < _TRIG_MAX_STEP:
+        s0, c0 = prev[PREV_TRIG + 1], prev[PREV_TRIG + 2]
+        hd2 = 0.5 * d * d
+        sl, cl = s0 + (c0 * d - s0 * hd2), c0 - (s0 * d + c0 * hd2)
+        n -= 1.0
+    else:
+        sl, cl = math.sin(lat), math.cos(lat)
+        n = _TRIG_STEPS
+    prev[PREV_TRIG], prev[PREV_TRIG + 1], prev[PREV_TRIG + 2] = lat, sl, cl
+    prev[PREV_TRIG + 3] = n
+    return sl, cl
+
+
 @nb.njit(cache=True)
 def init_prev(nav, prev):
     """Prepare the work array for the first step (no previous increments)."""
     prev[PREV_FLAG] = 0.0
+    prev[PREV_TRIG + 3] = 0.0  # the first step evaluates sin and cos of its latitude
     for i in range(3):
         prev[PREV_VEL + i] = nav[NAV_VEL + i]
         prev[PREV_LLA + i] = nav[NAV_LAT + i]
@@ -150,14 +184,13 @@ def mech_step(nav, prev, dth, dv, dt, f_n, C):
     vmu = 1.5 * vu - 0.5 * prev[PREV_VEL + 2]
     latm = 1.5 * lat - 0.5 * prev[PREV_LLA]
     hm = 1.5 * h - 0.5 * prev[PREV_LLA + 2]
-    sl, cl = math.sin(latm), math.cos(latm)  # once for radii, gravity and the rates
-    rm, rn = radii_sin_nb(sl)
+    sl, cl = sin_cos_lat(latm, prev)  # once for radii, gravity and the rates
+    rm, rn, g = radii_gravity_sin_nb(sl, hm)
     wie_n, wie_u = OMEGA_IE * cl, OMEGA_IE * sl
     wen_e = -vmn / (rm + hm)
     wen_n = vme / (rn + hm)
     wen_u = wen_n * (sl / cl)  # v_E tan(L) / (R_N + h)
     wine, winn, winu = wen_e, wie_n + wen_n, wie_u + wen_u
-    g = gravity_sin_nb(sl, hm)
     # body -> navigation with the attitude at the start of the interval (C on entry)
     ne = C[0, 0] * sx + C[0, 1] * sy + C[0, 2] * sz
     nn = C[1, 0] * sx + C[1, 1] * sy + C[1, 2] * sz

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from fuzzynav.filters import kalman, sized
-from fuzzynav.filters.error_model import discretize
+from fuzzynav.filters.error_model import discretize, discretize_tail
 
 N, D = sized.FIXED_N, sized.FIXED_D
 
@@ -76,6 +76,30 @@ def test_discretization_copies_agree_and_match_the_series():
     Qd = Q * dt + (F @ Q + Q @ F.T) * dt**2 / 2 + F @ Q @ F.T * dt**3 / 3
     _close(out["fixed"][0], Phi, 1e-12)
     _close(out["fixed"][1], Qd, 1e-12)
+
+
+def test_a_tail_given_by_the_caller_is_the_scanned_one_or_dense():
+    """The loop passes F's diagonal tail to discretize_tail and propagate_tail: the same
+    kernels as the scanning entry points (identical), and a tail past the true one (rows
+    treated as dense) agrees to rounding."""
+    rng = np.random.default_rng(9)
+    F, q, dt = _system(rng), rng.uniform(0, 1e-4, N), 0.2
+    A = rng.normal(size=(N, N))
+    P0 = A @ A.T
+    res = {}
+    for d in (None, D, N):
+        Phi, Qd, work, P = np.zeros((N, N)), np.zeros((N, N)), np.zeros((N, N)), P0.copy()
+        if d is None:
+            discretize(F, q, dt, Phi, Qd, work)
+            kalman.propagate(P, Phi, Qd, work)
+        else:
+            discretize_tail(F, q, dt, Phi, Qd, work, d)
+            kalman.propagate_tail(P, Phi, Qd, work, d)
+        res[d] = (Phi, Qd, P)
+    for a, b in zip(res[None], res[D]):
+        np.testing.assert_array_equal(a, b)  # same kernel, same tail: the same path
+    for a, b in zip(res[None], res[N]):
+        _close(a, b, 1e-14)
 
 
 @pytest.mark.parametrize("m", [1, 2, 6])

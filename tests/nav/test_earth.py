@@ -74,3 +74,14 @@ def test_transport_rate_of_a_northbound_vehicle():
     np.testing.assert_allclose(w, [-10.0 / rm, 0.0, 0.0])
     w = earth.omega_en_n(lat, h, np.array([10.0, 0.0, 0.0]))
     np.testing.assert_allclose(w, [0.0, 10.0 / rn, 10.0 * np.tan(lat) / rn])
+
+
+def test_radii_and_gravity_at_once_agree_with_the_separate_functions():
+    """The strapdown step's combined Earth model (one sqrt, one division) against the two
+    separate functions: the same formulas, so equal to rounding (a few ulp)."""
+    for lat, h in zip(LAT, H):
+        s = np.sin(lat)
+        rm, rn, g = earth.radii_gravity_sin_nb(s, h)
+        rm_ref, rn_ref = earth.radii_sin_nb(s)
+        assert rm == pytest.approx(rm_ref, rel=1e-15) and rn == pytest.approx(rn_ref, rel=1e-15)
+        assert g == pytest.approx(earth.gravity_sin_nb(s, h), rel=1e-15)
