@@ -2,14 +2,16 @@
 
 The numba kernel :func:`imaging_pitch_heading` (re-exported by :mod:`fuzzynav.nav.polarization`,
 whose docstring states the measurement model) runs at every imaging epoch inside the compiled
-filter (as :func:`imaging_fit_frames`), so it works on plain floats and allocates nothing but
-the AoPs' cosines and sines (:func:`aop_trig`, computed once and used by every iterate): the
-views' reference frames computed once per run (:func:`view_frames`), the smallest
-eigenvector of a symmetric 3x3 in closed form, candidates skipped before their trigonometry
-when they cannot win, the roll rotation computed once per fit and the sun's body direction
-and its partials once per Gauss-Newton iterate (shared by all views), a stop as soon as the
-step falls below :data:`_STEP_TOL`, and the solution's roll sensitivity from the sums of the
-fit's last evaluation.
+filter as :func:`imaging_fit_sun` (the data rows carry the AoPs' cosines and sines and the
+sun's body direction of :func:`sun_from_aops`,
+:mod:`fuzzynav.filters.measurements.polarization_rows`), so it works on plain floats and
+allocates nothing: the views' reference frames computed once per run (:func:`view_frames`),
+the smallest eigenvector of a symmetric 3x3 in closed form, candidates skipped before their
+trigonometry when they cannot win, the roll rotation computed once per fit and the sun's body
+direction and its partials once per Gauss-Newton iterate (shared by all views), a stop as
+soon as the step falls below :data:`_STEP_TOL` (the last undamped step below
+:data:`_STEP_LAST` taken without evaluating after it), and the solution's roll sensitivity
+from the sums of the fit's last evaluation.
 """
 from __future__ import annotations
 
@@ -240,18 +242,41 @@ def imaging_fit(aops, views_b, sun_n, roll, pitch_prior, heading_prior, pitch_pr
 def imaging_fit_frames(aops, trig, frames, sun_n, sun_azimuth, roll, pitch_prior,
                        heading_prior, pitch_prior_std, heading_prior_std, sigma_aop):
     """:func:`imaging_fit` on precomputed :func:`view_frames` and :func:`aop_trig`, without
-    allocation (the filter's measurement model), and how the solution moves with the roll.
+    allocation, and how the solution moves with the roll.
 
     Returns ``pitch, heading, c_pp, c_ph, c_hh, n_used, dpitch_droll, dheading_droll``; the
     last two by implicit differentiation of the normal equations at fixed AoPs,
     ``-(J^T J)^-1 J^T d aop/d roll``, from the sums of the fit's last evaluation.
-    ``sun_azimuth`` is ``atan2(sun_n[1], sun_n[0])``.
+    ``sun_azimuth`` is ``atan2(sun_n[1], sun_n[0])``.  :func:`sun_from_aops` and
+    :func:`imaging_fit_sun` are its two halves.
     """
-    nan = np.nan
+    sx, sy, sz, k = sun_from_aops(aops, trig, frames)
+    return imaging_fit_sun(aops, trig, frames, sun_n, sun_azimuth, sx, sy, sz, k, roll,
+                           pitch_prior, heading_prior, pitch_prior_std, heading_prior_std,
+                           sigma_aop)
+
+
+@nb.njit(cache=True)
+def sun_from_aops(aops, trig, frames):
+    """The sun's body direction (sign arbitrary) from the AoPs alone, and the views used:
+    ``sx, sy, sz, n_used`` (NaN direction with fewer than two views).  It depends on the
+    data only, so the filter's data rows carry it (:mod:`fuzzynav.filters.measurements.
+    polarization_rows`)."""
     m00, m01, m02, m11, m12, m22, k = _e_vector_scatter(aops, trig, frames)
     if k < 2:
-        return nan, nan, nan, nan, nan, k, nan, nan
+        return np.nan, np.nan, np.nan, k
     sx, sy, sz = _smallest_eigenvector(m00, m01, m02, m11, m12, m22)
+    return sx, sy, sz, k
+
+
+@nb.njit(cache=True)
+def imaging_fit_sun(aops, trig, frames, sun_n, sun_azimuth, sx, sy, sz, k, roll, pitch_prior,
+                    heading_prior, pitch_prior_std, heading_prior_std, sigma_aop):
+    """:func:`imaging_fit_frames` from the sun's body direction ``sx, sy, sz`` and the view
+    count ``k`` of :func:`sun_from_aops`: the candidates nearest the prior, then the fit."""
+    nan = np.nan
+    if k < 2:
+        return nan, nan, nan, nan, nan, k, nan, nan
     c_roll, s_roll = math.cos(-roll), math.sin(-roll)  # fixed for the whole fit
     p, h = _nearest_candidate(sx, sy, sz, sun_n, sun_azimuth, c_roll, s_roll, pitch_prior,
                               heading_prior, pitch_prior_std, heading_prior_std)

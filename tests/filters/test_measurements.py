@@ -89,11 +89,14 @@ def test_polarization_residual_and_jacobian(kw, mode):
     data, tr = _polarization_row(kw)
     model = get("polarization")
     par = model.pack(data, {"mode": mode})
-    row = default_rows(data)[0]
+    row = model.rows(data)[0]  # the filter's rows (an imaging row carries data-only columns)
     k = int(round(data.time_s[0] * tr.imu_rate_hz))
     nav = strapdown.make_nav(tr.lla[k], tr.vel_n[k], tr.q_bn[k])
     m, z, H, R, chan = _call(model, nav, row, par)
     assert m >= 1 and np.all(R > 0)
+    # a bare [z, sigma] row: the kernel forms those columns itself (another code path)
+    for got, want in zip(_call(model, nav, default_rows(data)[0], par), (m, z, H, R, chan)):
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(z, 0.0, atol=1e-7)
     Hn = _numeric_H(model, nav, row, par, m, [1e-5] * 3 + [1e-3] * 6)
     np.testing.assert_allclose(H[:, :3], Hn[:, :3], atol=2e-4 * max(1.0, np.abs(Hn).max()))

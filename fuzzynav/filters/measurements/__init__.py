@@ -38,7 +38,7 @@ MEAS_SIG = types.int64(types.float64[:], types.float64[:, :], types.float64[:],
 
 def default_rows(data) -> np.ndarray:
     """Data rows ``[z..., sigma...]`` of a :class:`~fuzzynav.sim.sensors.SensorData`."""
-    return np.hstack([data.z, data.sigma]).astype(float)
+    return np.hstack([data.z, data.sigma]).astype(float, copy=False)
 
 
 @dataclass(frozen=True)

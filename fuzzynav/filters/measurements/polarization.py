@@ -1,9 +1,9 @@
 """Skylight-polarization compass: heading (and pitch) residuals against the INS.
 
 Data row (:mod:`fuzzynav.sim.sensors.polarization`): ``[aop_1..aop_k, sun_e, sun_n, sun_u,
-sigma_1..sigma_k, 0, 0, 0]``.  (Tabulating the AoPs' cosines and sines in the rows would
-cost more per run, in numpy, than computing them at each epoch: they are computed once per
-epoch, into one small array, and serve the E-vectors and every residual of the fit.)
+sigma_1..sigma_k, 0, 0, 0]``, and for an imaging sensor the AoPs' cosines and sines, the sun's
+azimuth and its body direction from the AoPs: what the fit needs from the data alone,
+computed once per recording (:mod:`fuzzynav.filters.measurements.polarization_rows`).
 Parameters: ``[sensor_type, k, mode, prior_pitch_std, prior_heading_std, frames (k x 9)]``,
 the frames (view direction and the reference axes of its AoP,
 :func:`~fuzzynav.nav.polarization_imaging.view_frames`) computed once per run.
@@ -40,8 +40,8 @@ from fuzzynav.filters.layout import X_ATT
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.nav import polarization as ps
 from fuzzynav.nav.polarization_geometry import TWO_PI, fold_half_pi, mod_pos, wrap_pi
-from fuzzynav.nav.polarization_imaging import (FRAME, aop_trig, imaging_fit_frames,
-                                               view_frames)
+from fuzzynav.filters.measurements.polarization_rows import fill_extra, rows
+from fuzzynav.nav.polarization_imaging import FRAME, imaging_fit_sun, view_frames
 
 MODES = {"angles": 0, "aop": 1}
 CH_HEADING, CH_PITCH, CH_AOP = 0, 1, 2
@@ -97,10 +97,13 @@ def _point(C, aop, sun, sigma, J, z, H, R, chan):
 
 
 @nb.njit(cache=True)
-def _imaging(C, aops, trig, frames, sun, sun_az, sigma, prior_std, z, H, R, chan):
+def _imaging(C, aops, extra, frames, sun, sigma, prior_std, z, H, R, chan):
+    k = aops.size  # extra: the row's columns from polarization_rows
     pitch, roll, heading = _euler(C)
-    p, h, c00, c01, c11, _, dp_dr, dh_dr = imaging_fit_frames(
-        aops, trig, frames, sun, sun_az, roll, pitch, heading, prior_std[0], prior_std[1], sigma)
+    p, h, c00, c01, c11, _, dp_dr, dh_dr = imaging_fit_sun(
+        aops, extra[:2 * k], frames, sun, extra[2 * k], extra[2 * k + 1], extra[2 * k + 2],
+        extra[2 * k + 3], int(extra[2 * k + 4]), roll, pitch, heading, prior_std[0],
+        prior_std[1], sigma)
     if not (math.isfinite(p) and math.isfinite(h)):
         return 0
     if not (math.isfinite(dp_dr) and math.isfinite(dh_dr)):
@@ -168,8 +171,11 @@ def polarization_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
             return 0
         J = np.empty((3, 3))
         return _point(C_bn, aops[0], sun, sig[0], J, z, H, R, chan)
-    return _imaging(C_bn, aops, aop_trig(aops), frames, sun, math.atan2(sun[1], sun[0]),
-                    sig[0], par[3:5], z, H, R, chan)
+    extra = row[2 * k + 6:4 * k + 11]
+    if extra.size < 2 * k + 5:  # a row without polarization_rows' columns: form them here
+        extra = np.empty(2 * k + 5)
+        fill_extra(aops, sun, frames, extra)
+    return _imaging(C_bn, aops, extra, frames, sun, sig[0], par[3:5], z, H, R, chan)
 
 
 def _pack(data, options) -> np.ndarray:
@@ -185,4 +191,5 @@ def _pack(data, options) -> np.ndarray:
 
 
 MODEL = register(MeasurementModel(kind="polarization", kernel=polarization_kernel,
-                                  max_rows=9, channels=("heading", "pitch", "aop"), pack=_pack))
+                                  max_rows=9, channels=("heading", "pitch", "aop"), pack=_pack,
+                                  rows=rows))
