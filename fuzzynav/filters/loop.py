@@ -219,7 +219,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
     quat_to_dcm_into(nav, C)
     sumC = np.zeros((3, 3))
     sumf = np.zeros(3)
-    f_n = np.zeros(3)
+    dv_sf = np.zeros(3)
     Cm = np.zeros((3, 3))
     fm = np.zeros(3)
     F = np.zeros((n, n))
@@ -266,9 +266,9 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
         for i in range(3):
             dth_c[i] = dth[k, i] - bg[i] * dt
             dv_c[i] = dv[k, i] - ba[i] * dt
-        mech_step(nav, prev, dth_c, dv_c, dt, f_n, C)  # C follows the new attitude
+        mech_step(nav, prev, dth_c, dv_c, dt, dv_sf, C)  # C follows the new attitude
         for i in range(3):
-            sumf[i] += f_n[i] * dt
+            sumf[i] += dv_sf[i]  # the interval's mean force is sumf / tau
             for j in range(3):
                 sumC[i, j] += C[i, j] * dt
         tau += dt

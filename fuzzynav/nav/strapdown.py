@@ -128,7 +128,7 @@ def init_prev(nav, prev):
 
 
 @nb.njit(cache=True)
-def mech_step(nav, prev, dth, dv, dt, f_n, C):
+def mech_step(nav, prev, dth, dv, dt, dv_sf_n, C):
     """Advance ``nav`` in place by one IMU interval.
 
     Parameters
@@ -141,9 +141,9 @@ def mech_step(nav, prev, dth, dv, dt, f_n, C):
         Angle [rad] and velocity [m/s] increments of this interval (bias-corrected).
     dt : float
         Interval [s].
-    f_n : float64[3]
-        Output: mean specific force of the interval in the navigation frame [m/s^2]
-        (for the error model).
+    dv_sf_n : float64[3]
+        Output: the specific-force velocity increment of the interval in the navigation
+        frame [m/s] (its mean specific force times ``dt``, for the error model).
     C : float64[3, 3]
         ``C_bn`` of the attitude in ``nav`` on entry (:func:`quat_to_dcm_into`); the step
         replaces it with that of the new attitude.  The caller keeps it current (after a
@@ -200,8 +200,7 @@ def mech_step(nav, prev, dth, dv, dt, f_n, C):
     dse = ne - hdt * (winn * nu - winu * nn)
     dsn = nn - hdt * (winu * ne - wine * nu)
     dsu = nu - hdt * (wine * nn - winn * ne)
-    rdt = 1.0 / dt
-    f_n[0], f_n[1], f_n[2] = dse * rdt, dsn * rdt, dsu * rdt
+    dv_sf_n[0], dv_sf_n[1], dv_sf_n[2] = dse, dsn, dsu
     # Coriolis and gravity at the midpoint: -(2 w_ie + w_en) x v + g
     ae, an, au = wen_e, 2.0 * wie_n + wen_n, 2.0 * wie_u + wen_u
     cor_e = -(an * vmu - au * vmn)
@@ -247,13 +246,13 @@ def _integrate(nav0, dtheta_b, dv_b, dt, stride):
     nav = nav0.copy()
     prev = np.zeros(PREV_SIZE)
     init_prev(nav, prev)
-    f_n = np.zeros(3)
+    dv_sf = np.zeros(3)
     C = np.zeros((3, 3))
     quat_to_dcm_into(nav, C)
     out = np.empty((n // stride + 1, NAV_SIZE))
     out[0] = nav
     for k in range(n):
-        mech_step(nav, prev, dtheta_b[k], dv_b[k], dt, f_n, C)
+        mech_step(nav, prev, dtheta_b[k], dv_b[k], dt, dv_sf, C)
         if (k + 1) % stride == 0:
             out[(k + 1) // stride] = nav
     return out
