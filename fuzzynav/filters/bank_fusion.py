@@ -225,14 +225,14 @@ def propagate_locals(state, Qacc3, keep_q, carry, xs, nav, sumC, sumf, tau, Cm, 
     if em == EM_ST:
         st_system(F, nav)
     n = F.shape[0]
-    d = kalman.diagonal_tail(F)  # the sensor blocks only decay: Phi keeps F's diagonal tail
+    tail = kalman.diagonal_tail(F)  # the sensor blocks only decay: Phi keeps F's tail
     for b in range(X.shape[0]):
         if em == EM_ST:
             st_process_noise(Qc, QD[b], nav)
             discretize_dense(F, Qc, tau, Phi, Qd, work)
         else:
-            discretize_tail(F, QD[b], tau, Phi, Qd, work, d)
-        kalman.propagate_tail(P3[b], Phi, Qd, work, d)
+            discretize_tail(F, QD[b], tau, Phi, Qd, work, tail)
+        kalman.propagate_tail(P3[b], Phi, Qd, work, tail)
         if keep_q:
             Qacc = Qacc3[b]
             for i in range(n):

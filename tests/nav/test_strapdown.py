@@ -84,3 +84,23 @@ def test_latitude_trig_followed_across_steps_stays_at_rounding():
         s, c = strapdown.sin_cos_lat(lat, prev)
         worst = max(worst, abs(s - np.sin(lat)), abs(c - np.cos(lat)))
     assert worst < 1e-15
+
+
+def test_step_hands_back_the_specific_force_increment_in_the_navigation_frame():
+    """At rest the specific-force increment of a step is gravity's reaction times dt, up in
+    ENU (the loop divides the summed increments by the interval for the error model)."""
+    tr = generate(START, [Segment("static", 1)], 100.0)
+    nav = strapdown.make_nav(tr.lla[0], tr.vel_n[0], tr.q_bn[0])
+    prev, dv_sf, C = np.zeros(PREV_SIZE), np.zeros(3), np.zeros((3, 3))
+    strapdown.init_prev(nav, prev)
+    strapdown.quat_to_dcm_into(nav, C)
+    strapdown.mech_step(nav, prev, tr.dtheta_b[0], tr.dv_b[0], 0.01, dv_sf, C)
+    g = earth.gravity(START[0], START[2])
+    np.testing.assert_allclose(dv_sf, [0.0, 0.0, g * 0.01], atol=1e-7)
+
+
+def test_quaternion_renormalisation_is_the_inverse_square_root_to_rounding():
+    """inv_norm's Newton step near 1 and its exact branch beyond the switch, against numpy."""
+    for e in np.concatenate([[0.0], np.geomspace(1e-16, 1e-3, 60)]):
+        for s in (1.0 + e, 1.0 - e):
+            assert abs(strapdown.inv_norm(s) - 1.0 / np.sqrt(s)) <= 2 * np.spacing(1.0), s

@@ -2,7 +2,7 @@
 
 Data row (:mod:`fuzzynav.sim.sensors.polarization`): ``[aop_1..aop_k, sun_e, sun_n, sun_u,
 sigma_1..sigma_k, 0, 0, 0]``, and for an imaging sensor the AoPs' cosines and sines, the sun's
-azimuth and its body direction from the AoPs: what the fit needs from the data alone,
+azimuth, its body direction from the AoPs and the views used: what the fit needs from the data alone,
 computed once per recording (:mod:`fuzzynav.filters.measurements.polarization_rows`).
 Parameters: ``[sensor_type, k, mode, prior_pitch_std, prior_heading_std, frames (k x 9)]``,
 the frames (view direction and the reference axes of its AoP,
@@ -172,7 +172,8 @@ def polarization_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
         J = np.empty((3, 3))
         return _point(C_bn, aops[0], sun, sig[0], J, z, H, R, chan)
     extra = row[2 * k + 6:4 * k + 11]
-    if extra.size < 2 * k + 5:  # a row without polarization_rows' columns: form them here
+    # a row without polarization_rows' columns (or zero-padded: no view counted) forms them
+    if extra.size < 2 * k + 5 or extra[2 * k + 4] == 0.0:
         extra = np.empty(2 * k + 5)
         fill_extra(aops, sun, frames, extra)
     return _imaging(C_bn, aops, extra, frames, sun, sig[0], par[3:5], z, H, R, chan)

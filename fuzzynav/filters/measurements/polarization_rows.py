@@ -2,7 +2,7 @@
 
 A row is ``[z..., sigma...]`` (:func:`~fuzzynav.filters.measurements.default_rows`; the
 columns of :mod:`fuzzynav.sim.sensors.polarization`).  An imaging sensor's rows go on with
-the columns of :data:`EXTRA` per view count ``k``: the cosines and sines of the ``k`` AoPs,
+:func:`extra_columns` columns for ``k`` views: the cosines and sines of the ``k`` AoPs,
 the sun's azimuth ``atan2(sun_n, sun_e)``, and the sun's body direction and the number of
 views from the AoPs alone (:func:`~fuzzynav.nav.polarization_imaging.sun_from_aops`).  They
 depend on the measurements only, never on the filter, and a study runs the same recording
@@ -84,6 +84,6 @@ def rows(data) -> np.ndarray:
     columns of :func:`imaging_columns` after them."""
     base = [data.z, data.sigma]
     if int(data.meta.get("sensor_type", 0)) != 0:
-        views = np.asarray(data.meta["views_b"], float).reshape(-1, 3)
+        views = np.asarray(data.meta.get("views_b", [[0.0, 0.0, 1.0]]), float).reshape(-1, 3)
         base.append(imaging_columns(data.z, views))
     return np.hstack(base).astype(float, copy=False)
