@@ -116,7 +116,7 @@ def share_control(n_local: int, cf=None, codes=(), out_index: int = 0,
                         np.zeros(n_local), np.zeros(n_local))
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def push_innovation(st, nis, m, z, S):
     """Add one epoch of a local (NIS, rows ``m``, residual ``z``, ``S``) to its ring ``st``."""
     n = (st.size - _HEAD) // _W
@@ -136,7 +136,7 @@ def push_innovation(st, nis, m, z, S):
         st[0] += 1
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def window_stat(st, code):
     """Statistic ``code`` (:data:`STATISTICS`) of a local's ring; 1 if it is empty."""
     num, den = 0.0, 0.0
@@ -147,7 +147,7 @@ def window_stat(st, code):
     return num / den if den > 0.0 else 1.0
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def floor_shares(w, floor, out):
     """``out = w / sum w``, each at least ``floor``, summing to 1 (``L floor < 1``).
 
@@ -176,7 +176,7 @@ def floor_shares(w, floor, out):
         out[i] = floor if fixed[i] else mass * w[i] / wsum
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def update_shares(ctl, beta, qd):
     """Set the shares from the locals' statistics; rescale each local's noise ``qd``.
 

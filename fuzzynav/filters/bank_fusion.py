@@ -21,7 +21,7 @@ from fuzzynav.filters.layout import N_CORE
 REF_LOCAL = 0
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def lower_inverse(L, n, W):
     """``W = L^-1`` for a lower-triangular ``L`` (n x n), by columns; ``W``'s strict upper
     triangle is not touched (nothing here reads it)."""
@@ -34,7 +34,7 @@ def lower_inverse(L, n, W):
             W[i, j] = -s / L[i, i]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def add_gram(W, n, Y):
     """``Y += W^T W`` on the lower triangle, ``W`` lower triangular: with ``A = L L^T`` and
     ``W = L^-1``, ``A^-1 = W^T W`` (the triangular inverse costs a third of ``n`` solves)."""
@@ -46,7 +46,7 @@ def add_gram(W, n, Y):
             Y[i, j] += s
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def add_information_vector(W, n, v, y, tmp):
     """``y += W^T W v`` (``W`` lower triangular), through ``tmp = W v``."""
     for i in range(n):
@@ -61,7 +61,7 @@ def add_information_vector(W, n, v, y, tmp):
         y[i] += s
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def spd_inverse(A, out, L, W):
     """``out = A^-1`` for a symmetric positive-definite ``A`` (n x n, its lower triangle
     read); False if not PD.  ``L`` receives the Cholesky factor, ``W`` its inverse; ``out``
@@ -80,7 +80,7 @@ def spd_inverse(A, out, L, W):
     return True
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def fuse(P, x, Pg, xg, work):
     """Information fusion ``Pg = (sum P_i^-1)^-1``, ``xg = Pg sum P_i^-1 x_i``; False if a
     covariance is not positive definite.
@@ -127,7 +127,7 @@ def fuse(P, x, Pg, xg, work):
 FUSED_NOW, SHARED, STALE = 0, 1, 2
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def after_propagation(fstate, reset):
     """The fusion state once every local has been propagated with ``Q / beta_i``."""
     if fstate == STALE or (fstate == FUSED_NOW and not reset):
@@ -135,7 +135,7 @@ def after_propagation(fstate, reset):
     return SHARED
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def master_covariance(P, x, beta, Pg, fstate, Pf, xf, work):
     """The master's covariance now: ``Pg``, ``beta_1 P_1`` or a fusion into ``Pf`` (NaN if
     that fails)."""
@@ -151,7 +151,7 @@ def master_covariance(P, x, beta, Pg, fstate, Pf, xf, work):
     return Pf
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def share(P, x, Qacc, Pg, xg, beta, reset):
     """After feeding ``xg`` back to the shared navigation state: every local's error shifts
     by ``-xg``; in reset mode the locals restart from the fused solution (``x_i = xg``, so
@@ -170,7 +170,7 @@ def share(P, x, Qacc, Pg, xg, beta, reset):
                 x[k, i] -= xg[i]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def propagate_state(Phi, x, tmp):
     """``x <- Phi x`` (a local's error estimate carried between fusions)."""
     n = x.size
@@ -185,7 +185,7 @@ def propagate_state(Phi, x, tmp):
         x[i] = tmp[i]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def local_residual(z, H, m, x):
     """``z <- z - H x``: the innovation of a local whose estimate ``x`` is not fed back yet."""
     for r in range(m):
@@ -197,14 +197,14 @@ def local_residual(z, H, m, x):
         z[r] -= s
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def fusion_work(n):
     """Scratch arrays of :func:`fuse`: ``(d, Y, y, A, W, L, col, v)``."""
     return (np.zeros(n), np.zeros((n, n)), np.zeros(n), np.zeros((n, n)), np.zeros((n, n)),
             np.zeros((n, n)), np.zeros(n), np.zeros(n))
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def propagate_locals(state, Qacc3, keep_q, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd,
                      work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc):
     """Propagate every local's P (and, with ``carry``, its x) over the accumulated interval

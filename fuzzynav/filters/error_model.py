@@ -100,7 +100,7 @@ class ErrorModel:
 MODEL_15 = ErrorModel()
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _dgravity_dlat(s, c):
     """Derivative of normal gravity with latitude [m/s^2/rad] (height factor neglected), from
     the sine and cosine of the latitude."""
@@ -111,7 +111,7 @@ def _dgravity_dlat(s, c):
     return dg_du * 2.0 * s * c
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def fill_F(F, nav, C_bn, f_n, blk_start, blk_kind, blk_inv_tau):
     """Write the continuous system matrix into ``F`` (n x n, overwritten).
 
@@ -183,13 +183,13 @@ def fill_F(F, nav, C_bn, f_n, blk_start, blk_kind, blk_inv_tau):
             F[i, i] = -blk_inv_tau[b]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def block_end(blk_start, b, n):
     """One past the last state of sensor block ``b`` (blocks are contiguous up to ``n``)."""
     return blk_start[b + 1] if b + 1 < blk_start.size else n
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _to_metric(F, lat, rmh, rnh, vn, vu, tl, cl):
     """Convert the position columns/rows from (dlat, dlon, dh) to ENU metres in place."""
     n = F.shape[0]
@@ -209,7 +209,7 @@ def _to_metric(F, lat, rmh, rnh, vn, vu, tl, cl):
     F[_N, _N] += vu / rmh
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _skew_elem(x, y, z, i, j):
     """Element (i, j) of [v x] for v = (x, y, z)."""
     if i == j:
@@ -221,7 +221,7 @@ def _skew_elem(x, y, z, i, j):
     return -y if j == 0 else x
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _skew_into(F, r0, c0, x, y, z):
     F[r0, c0 + 1] += -z
     F[r0, c0 + 2] += y
@@ -231,7 +231,7 @@ def _skew_into(F, r0, c0, x, y, z):
     F[r0 + 2, c0 + 1] += x
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def discretize(F, q_diag, dt, Phi, Qd, work):
     """Second-order transition matrix and process noise over ``dt``.
 
@@ -246,7 +246,7 @@ def discretize(F, q_diag, dt, Phi, Qd, work):
     discretize_tail(F, q_diag, dt, Phi, Qd, work, diagonal_tail(F))
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def discretize_tail(F, q_diag, dt, Phi, Qd, work, d):
     """:func:`discretize` for an ``F`` whose rows from ``d`` on are diagonal; ``Phi`` then
     has the same tail (:func:`~fuzzynav.filters.kalman.propagate_tail`)."""
@@ -257,13 +257,13 @@ def discretize_tail(F, q_diag, dt, Phi, Qd, work, d):
         sized.discretize_sized(F, q_diag, dt, Phi, Qd, work, n, d)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def transition(F, dt, Phi, work):
     """Second-order transition matrix ``Phi = I + F dt + (F dt)^2 / 2`` (``work``: scratch)."""
     _transition(F, diagonal_tail(F), dt, Phi, work)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _transition(F, d, dt, Phi, work):
     """:func:`transition` for ``F`` with rows diagonal from ``d`` on."""
     n = F.shape[0]

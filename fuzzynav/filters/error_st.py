@@ -46,7 +46,7 @@ def error_model_code(name: str) -> int:
                              f"must be one of {', '.join(ERROR_MODELS)}, got {name!r}") from None
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _vel_skew(nav, S):
     """``S = [v x]`` of the computed velocity."""
     ve, vn, vu = nav[NAV_VEL], nav[NAV_VEL + 1], nav[NAV_VEL + 2]
@@ -55,7 +55,7 @@ def _vel_skew(nav, S):
     S[2, 0], S[2, 1], S[2, 2] = -vn, ve, 0.0
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def st_system(F, nav):
     """Map the phi-model ``F`` (from ``fill_F``) to the ST model in place.
 
@@ -87,7 +87,7 @@ def st_system(F, nav):
     F[X_VEL + 1, X_ATT] += g
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def st_process_noise(Qc, q_diag, nav):
     """``Qc = A diag(q) A^T``: the attitude noise also drives ``u`` through ``-[v x]``."""
     n = Qc.shape[0]
@@ -107,7 +107,7 @@ def st_process_noise(Qc, q_diag, nav):
             Qc[X_VEL + i, X_VEL + j] += acc
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def discretize_dense(F, Qc, dt, Phi, Qd, work):
     """As :func:`~fuzzynav.filters.error_model.discretize`, for a full noise density ``Qc``.
 
@@ -129,7 +129,7 @@ def discretize_dense(F, Qc, dt, Phi, Qd, work):
             Qd[j, i] = s
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def st_measurement(H, m, nav):
     """``H <- H A^-1`` for the first ``m`` rows: attitude columns gain ``H[:, vel] [v x]``."""
     S = np.empty((3, 3))
@@ -141,7 +141,7 @@ def st_measurement(H, m, nav):
                 H[r, X_ATT + j] += b0 * S[0, j] + b1 * S[1, j] + b2 * S[2, j]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def st_to_phi(x, nav):
     """Turn an ST estimate into the phi model's in place: ``dv = u + [v x] phi``."""
     S = np.empty((3, 3))
@@ -151,7 +151,7 @@ def st_to_phi(x, nav):
         x[X_VEL + i] += S[i, 0] * p0 + S[i, 1] * p1 + S[i, 2] * p2
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def st_reset(P, x):
     """Re-express ``P_ST`` about the corrected velocity (``x``: the phi-model correction).
 
@@ -173,7 +173,7 @@ def st_reset(P, x):
             P[i, X_VEL + j] += D[j, 0] * a0 + D[j, 1] * a1 + D[j, 2] * a2
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def st_velocity_variance(P, nav, i):
     """Variance of the phi-model velocity error ``dv_i = u_i + ([v x] phi)_i`` from ``P_ST``."""
     S = np.empty((3, 3))
@@ -196,7 +196,7 @@ def st_covariance(P, vel_n) -> np.ndarray:
     return A @ P @ A.T
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def st_fused(xg, Pg, nav, xphi):
     """The master's fused ST estimate as the phi-model correction ``xphi`` it feeds back, and
     ``Pg`` re-expressed about the corrected velocity (:func:`st_reset`); returns ``xphi``.
@@ -213,7 +213,7 @@ def st_fused(xg, Pg, nav, xphi):
     return xphi
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def st_regauge(P3, X, xphi):
     """Re-express every local of a no-reset bank about the corrected velocity.
 

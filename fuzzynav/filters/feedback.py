@@ -12,7 +12,7 @@ from fuzzynav.nav.layout import NAV_H, NAV_LAT, NAV_LON, NAV_Q, NAV_VEL, PREV_LL
 from fuzzynav.nav.strapdown import quat_mul, rv2q, set_quat
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def feedback(nav, prev, xs, x):
     """Apply the error-state estimate to the navigation and sensor estimates (then x = 0)."""
     a0, a1, a2, a3 = rv2q(x[X_ATT], x[X_ATT + 1], x[X_ATT + 2])
@@ -37,7 +37,7 @@ def feedback(nav, prev, xs, x):
         xs[j] += x[N_CORE + j]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def bias_totals(xs, blk_start, blk_kind, bg, ba):
     """Sum the sensor-error blocks into total gyro and accelerometer bias estimates."""
     for i in range(3):

@@ -22,7 +22,7 @@ import numba as nb
 from fuzzynav.filters import sized
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def diagonal_tail(A):
     """First row ``d`` from which every row of square ``A`` is zero off the diagonal.
 
@@ -38,7 +38,7 @@ def diagonal_tail(A):
     return 0
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def propagate(P, Phi, Qd, work):
     """In place ``P <- Phi P Phi^T + Qd`` (``work`` is an n x n scratch array).
 
@@ -50,7 +50,7 @@ def propagate(P, Phi, Qd, work):
     propagate_tail(P, Phi, Qd, work, diagonal_tail(Phi))
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def propagate_tail(P, Phi, Qd, work, d):
     """:func:`propagate` for a ``Phi`` whose rows from ``d`` on are diagonal (a caller that
     knows the tail, e.g. from ``F``, spares the scan; a ``d`` past the true tail is exact)."""
@@ -61,7 +61,7 @@ def propagate_tail(P, Phi, Qd, work, d):
         sized.propagate_sized(P, Phi, Qd, work, n, d)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def sparse_left_mul(A, B, out):
     """``out = A B`` for square ``A``, skipping the zeros of ``A`` (the system matrices)."""
     n = A.shape[0]
@@ -70,7 +70,7 @@ def sparse_left_mul(A, B, out):
         _add_rows(A, i, B, n, out)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _add_rows(A, i, B, k_end, out):
     """``out[i] += sum_k A[i, k] B[k]`` over ``k < k_end``, skipping the zeros of ``A``."""
     for k in range(k_end):
@@ -80,7 +80,7 @@ def _add_rows(A, i, B, k_end, out):
                 out[i, j] += a * B[k, j]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def square_tail(F, d, out):
     """``out = F F`` for ``F`` whose rows from ``d`` on are diagonal (:func:`diagonal_tail`).
 
@@ -90,7 +90,7 @@ def square_tail(F, d, out):
     sized.square_sized(F, d, F.shape[0], out)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def innovation_cov(P, H, m, PHt, HPH):
     """``PHt[:, :m] = P H^T`` and ``HPH[:m, :m] = H P H^T`` for the first ``m`` rows of H."""
     n = P.shape[0]
@@ -100,7 +100,7 @@ def innovation_cov(P, H, m, PHt, HPH):
         sized.innovation_sized(P, H, m, PHt, HPH, n)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def cholesky(S, m, L):
     """Lower Cholesky factor of ``S[:m, :m]`` into ``L``; False if not positive definite."""
     for j in range(m):
@@ -121,7 +121,7 @@ def cholesky(S, m, L):
     return True
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def chol_solve_vec(L, m, b, out):
     """Solve ``L L^T out = b`` for a vector (first ``m`` entries); ``out`` may be ``b``."""
     for i in range(m):
@@ -136,7 +136,7 @@ def chol_solve_vec(L, m, b, out):
         out[i] = s / L[i, i]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def nis(L, m, r, work):
     """Normalised innovation squared ``r^T S^-1 r`` from the Cholesky factor of S."""
     acc = 0.0
@@ -149,7 +149,7 @@ def nis(L, m, r, work):
     return acc
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def gain(L, m, PHt, K, work):
     """``K = PHt S^-1`` (rows of PHt solved against the Cholesky factor ``L`` of S); see
     :func:`~fuzzynav.filters.sized.gain_sized`."""
@@ -160,7 +160,7 @@ def gain(L, m, PHt, K, work):
         sized.gain_sized(L, m, PHt, K, work, n)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def joseph_update(P, H, R, m, r, PHt, K, x, AP, APHt):
     """State correction ``x = K r`` and Joseph-form covariance update, in place.
 
@@ -179,7 +179,7 @@ def joseph_update(P, H, R, m, r, PHt, K, x, AP, APHt):
         sized.joseph_sized(P, H, R, m, r, PHt, K, x, AP, APHt, n)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def correct(L, P, H, R, m, r, PHt, K, x, AP, APHt, work):
     """:func:`gain`, then :func:`joseph_update`: the filter loop's update.
 
@@ -205,7 +205,7 @@ def correct(L, P, H, R, m, r, PHt, K, x, AP, APHt, work):
         sized.joseph_sized(P, H, R, m, r, PHt, K, x, AP, APHt, sized.FIXED_N)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def covariance_ok(P):
     """True when P is finite with a positive diagonal and |correlations| <= 1 (+1e-9)."""
     n = P.shape[0]
@@ -220,7 +220,7 @@ def covariance_ok(P):
     return ok
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def scale_predicted(P, Qacc, factor, H, m, d):
     """Weight the propagated part of P on the states the measurement sees directly.
 

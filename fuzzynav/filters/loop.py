@@ -146,7 +146,7 @@ EV_PENDING, EV_ACCEPTED, EV_GATED, EV_EMPTY, EV_BAD_S, EV_BEFORE_START = 0, 1, 2
 ST_OK, ST_COVARIANCE = 0, 1
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _sigma_into(row, P, nav, em):
     for i in range(P.shape[0]):
         row[i] = math.sqrt(max(P[i, i], 0.0))
@@ -155,7 +155,7 @@ def _sigma_into(row, P, nav, em):
             row[X_VEL + i] = math.sqrt(max(st_velocity_variance(P, nav, i), 0.0))
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _record(j, t, nav, xs, st, P_master, beta, out, em):
     """Record output ``j``; ``P_master`` is the master's covariance (see
     :func:`~fuzzynav.filters.bank_fusion.master_covariance`).  A bank of one records only
@@ -177,7 +177,7 @@ def _record(j, t, nav, xs, st, P_master, beta, out, em):
             out_xl[j, k, i] = X[k, i]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fns, settings,
              out, evout):
     """Run the filter bank over all IMU samples; returns ``(status, samples_done)``.
@@ -383,7 +383,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
     return ST_OK, N
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _form_S(HPH, R, m, S):
     """``S[:m, :m] = HPH + diag(R)``."""
     for i in range(m):
@@ -392,7 +392,7 @@ def _form_S(HPH, R, m, S):
         S[i, i] += R[i]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _innovation(HPH, R, m, S, L, z, wv, ev_r, ev_S, ev_nis, e):
     """Form S = HPH + R, factor it and log the residual, S diagonal and NIS."""
     _form_S(HPH, R, m, S)

@@ -27,19 +27,19 @@ from fuzzynav.filters.layout import N_CORE
 FIXED_N, FIXED_D = N_CORE + 6, N_CORE
 
 
-@nb.njit(inline="always")
+@nb.njit(inline="always", error_model="numpy")
 def fixed(n, d):
     """True when an ``n``-state matrix with diagonal tail ``d`` has the fixed copy's sizes."""
     return fixed_count(n) and d == FIXED_D
 
 
-@nb.njit(inline="always")
+@nb.njit(inline="always", error_model="numpy")
 def fixed_count(n):
     """True when ``n`` states have the fixed copy's size (kernels without a diagonal tail)."""
     return n == FIXED_N
 
 
-@nb.njit(inline="always")
+@nb.njit(inline="always", error_model="numpy")
 def rows_times(A, B, i, i1, K, n, out):
     """``out[r, :n] = A[r, :K] B[:K, :n]`` for rows ``r = i, i1``, two rows by four columns
     at a time (``i1 == i`` for a single row); sums from zero in ascending ``k``."""
@@ -70,7 +70,7 @@ def rows_times(A, B, i, i1, K, n, out):
         out[i, j], out[i1, j] = a0, b0
 
 
-@nb.njit(inline="always")
+@nb.njit(inline="always", error_model="numpy")
 def propagate_sized(P, Phi, Qd, work, n, d):
     """``P <- Phi P Phi^T + Qd`` in place (:func:`fuzzynav.filters.kalman.propagate`)."""
     for i in range(0, d, 2):  # work[:d] = Phi[:d] P
@@ -95,7 +95,7 @@ def propagate_sized(P, Phi, Qd, work, n, d):
             P[j, r] = P[r, j]
 
 
-@nb.njit(inline="always")
+@nb.njit(inline="always", error_model="numpy")
 def square_sized(F, d, n, out):
     """``out = F F`` for ``F`` whose rows from ``d`` on are diagonal: the rows above ``d``
     from the first ``d`` columns of ``F``, then the diagonal tail's own entries added
@@ -111,7 +111,7 @@ def square_sized(F, d, n, out):
         out[i, i] = F[i, i] * F[i, i]
 
 
-@nb.njit(inline="always")
+@nb.njit(inline="always", error_model="numpy")
 def discretize_sized(F, q_diag, dt, Phi, Qd, work, n, d):
     """Second-order ``Phi`` and ``Qd`` over ``dt`` (:func:`fuzzynav.filters.error_model.
     discretize`): ``F`` has rows ``>= d`` diagonal, ``q_diag`` is the diagonal of Q."""
@@ -144,7 +144,7 @@ def discretize_sized(F, q_diag, dt, Phi, Qd, work, n, d):
             Qd[j, i] = s
 
 
-@nb.njit(inline="always")
+@nb.njit(inline="always", error_model="numpy")
 def times_Ht_sized(A, H, m, out, n):
     """``out[:, :m] = A H^T`` for the first ``m`` rows of H, skipping H's zeros."""
     for r in range(m):
@@ -157,7 +157,7 @@ def times_Ht_sized(A, H, m, out, n):
                     out[i, r] += A[i, k] * h
 
 
-@nb.njit(inline="always")
+@nb.njit(inline="always", error_model="numpy")
 def innovation_sized(P, H, m, PHt, HPH, n):
     """``PHt[:, :m] = P H^T`` and ``HPH[:m, :m] = H P H^T`` (:func:`fuzzynav.filters.kalman.
     innovation_cov`)."""
@@ -174,7 +174,7 @@ def innovation_sized(P, H, m, PHt, HPH, n):
             HPH[b, a] = HPH[a, b]
 
 
-@nb.njit(inline="always")
+@nb.njit(inline="always", error_model="numpy")
 def gain_sized(L, m, PHt, K, work, n):
     """``K = PHt S^-1`` (:func:`fuzzynav.filters.kalman.gain`): the rows of ``PHt`` solved
     against the Cholesky factor ``L`` of ``S``, all rows one substitution step at a time
@@ -196,7 +196,7 @@ def gain_sized(L, m, PHt, K, work, n):
             K[i, r] = s * work[r]
 
 
-@nb.njit(inline="always")
+@nb.njit(inline="always", error_model="numpy")
 def joseph_sized(P, H, R, m, r, PHt, K, x, AP, APHt, n):
     """Gain correction and Joseph-form update (:func:`fuzzynav.filters.kalman.
     joseph_update`): ``x = K r``, ``P <- P - K (P H^T)^T + V K^T``, ``V = K S - P H^T``."""

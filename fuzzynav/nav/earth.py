@@ -37,13 +37,13 @@ K_SOMIGLIANA = 0.00193185265241
 M_RATIO = OMEGA_IE**2 * A**2 * B / GM
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def radii_nb(lat_rad):
     """Meridian and prime-vertical radii of curvature ``(R_M, R_N)`` [m] (numba scalar)."""
     return radii_sin_nb(math.sin(lat_rad))
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def radii_sin_nb(sin_lat):
     """:func:`radii_nb` from the sine of the latitude (for callers that already have it)."""
     w2 = 1.0 - E2 * sin_lat * sin_lat
@@ -55,7 +55,7 @@ def radii_sin_nb(sin_lat):
 _G_H2 = 3.0 / (A * A)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def radii_gravity_sin_nb(sin_lat, h_m):
     """``R_M, R_N`` (:func:`radii_sin_nb`) and normal gravity (:func:`gravity_sin_nb`) at
     once, for the strapdown step that needs all three at every IMU sample.
@@ -72,13 +72,13 @@ def radii_gravity_sin_nb(sin_lat, h_m):
     return r_n * (1.0 - E2) * (inv_w * inv_w), r_n, g
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def gravity_nb(lat_rad, h_m):
     """Magnitude of WGS-84 normal gravity [m/s^2] at latitude and height (numba scalar)."""
     return gravity_sin_nb(math.sin(lat_rad), h_m)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def gravity_sin_nb(sin_lat, h_m):
     """:func:`gravity_nb` from the sine of the latitude (for callers that already have it)."""
     s2 = sin_lat * sin_lat

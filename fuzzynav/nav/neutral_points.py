@@ -40,7 +40,7 @@ PAIR_ARAGO_BABINET, PAIR_BREWSTER_BABINET = 0, 1
 _PAIRS = ((2, 0), (1, 0))
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def neutral_points_n(sun_n, delta, out):
     """Unit ENU directions of (Babinet, Brewster, Arago, fourth) into ``out`` (4, 3)."""
     h = math.asin(max(-1.0, min(1.0, sun_n[2])))
@@ -55,7 +55,7 @@ def neutral_points_n(sun_n, delta, out):
         out[k, 2] = math.sin(elev[k])
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def image_point(C_bn, v_n):
     """Fisheye image ``(x, y, theta)`` of direction ``v_n`` for attitude ``C_bn``."""
     vx = C_bn[0, 0] * v_n[0] + C_bn[1, 0] * v_n[1] + C_bn[2, 0] * v_n[2]
@@ -68,7 +68,7 @@ def image_point(C_bn, v_n):
     return theta * vx / rho, theta * vy / rho, theta
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def pair_beta(C_bn, sun_n, delta, pair, pts):
     """Angle ``beta`` [rad] of the image line A -> B of point pair ``pair`` (``pts``: (4, 3))."""
     neutral_points_n(sun_n, delta, pts)

@@ -41,7 +41,7 @@ __all__ = ["aop_attitude_jacobian", "aop_euler_partials", "heading_from_zenith_a
            "zenith_heading_tilt_partials"]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def view_aop(view_b, sun_b):
     """Angle of polarization [rad] in [-pi/2, pi/2) of a unit view direction.
 
@@ -55,7 +55,7 @@ def view_aop(view_b, sun_b):
     return aop_and_gradient(view_b, sun_b[0], sun_b[1], sun_b[2])[0]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def zenith_aop(C_bn, sun_n):
     """Angle of polarization [rad] seen by a body-fixed zenith sensor.
 
@@ -79,7 +79,7 @@ def zenith_aop(C_bn, sun_n):
     return fold_half_pi(math.atan2(sx, -sy))
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def aop_attitude_jacobian(C_bn, view_b, sun_n):
     """AoP of a body view direction and its Jacobian on the attitude error.
 
@@ -112,7 +112,7 @@ def aop_attitude_jacobian(C_bn, view_b, sun_n):
     return aop, H
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def aop_euler_partials(view_b, sun_n, pitch, roll, heading):
     """AoP of a body view direction and its partials on the Euler angles.
 
@@ -126,7 +126,7 @@ def aop_euler_partials(view_b, sun_n, pitch, roll, heading):
     return aop, dot3(g0, g1, g2, ds_dp), dot3(g0, g1, g2, ds_dr), dot3(g0, g1, g2, ds_dh)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def zenith_heading_roots(aop, sun_n, pitch, roll):
     """Both headings [rad] that make a zenith sensor read ``aop`` at the given tilt.
 
@@ -152,7 +152,7 @@ def zenith_heading_roots(aop, sun_n, pitch, roll):
     return (h0 + d) % TWO_PI, (h0 - d) % TWO_PI
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def heading_from_zenith_aop(aop, sun_n, pitch, roll, heading_prior):
     """Heading from a zenith sensor's AoP, the INS tilt and the INS heading prediction.
 
@@ -186,7 +186,7 @@ def heading_from_zenith_aop(aop, sun_n, pitch, roll, heading_prior):
     return h, (1.0 / dh if dh != 0.0 else np.inf)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def zenith_heading_tilt_partials(sun_n, pitch, roll, heading):
     """How the zenith-sensor heading moves with the tilt used to convert it.
 

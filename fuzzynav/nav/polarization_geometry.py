@@ -22,7 +22,7 @@ _ATAN_SERIES = 0.05
 _R3, _R7, _R9, _R11 = 1.0 / 3.0, 1.0 / 7.0, 1.0 / 9.0, 1.0 / 11.0
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def atan_small(t):
     """``atan(t)``, by its Taylor series through ``t^11`` for ``|t| <`` :data:`_ATAN_SERIES`.
 
@@ -35,7 +35,7 @@ def atan_small(t):
     return math.atan(t)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def mod_pos(a, m):
     """``a % m`` (``m > 0``) without the ``fmod`` when ``a`` already lies in ``(0, m)``.
 
@@ -47,68 +47,68 @@ def mod_pos(a, m):
     return a % m
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def fold_half_pi(a):
     """Axial angle folded into [-pi/2, pi/2)."""
     return mod_pos(a + HALF_PI, math.pi) - HALF_PI
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def wrap_pi(a):
     """Angle wrapped into [-pi, pi)."""
     return mod_pos(a + math.pi, TWO_PI) - math.pi
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def rot_z(ang, x, y, z):
     """Active rotation by ``ang`` about z (R3)."""
     c, s = math.cos(ang), math.sin(ang)
     return c * x - s * y, s * x + c * y, z
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def rot_x(ang, x, y, z):
     """Active rotation by ``ang`` about x (R1)."""
     return rot_x_cs(math.cos(ang), math.sin(ang), x, y, z)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def rot_y(ang, x, y, z):
     """Active rotation by ``ang`` about y (R2)."""
     return rot_y_cs(math.cos(ang), math.sin(ang), x, y, z)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def rot_x_cs(c, s, x, y, z):
     """:func:`rot_x` by the angle of cosine ``c`` and sine ``s`` (shared by several calls)."""
     return x, c * y - s * z, s * y + c * z
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def rot_y_cs(c, s, x, y, z):
     """:func:`rot_y` by the angle of cosine ``c`` and sine ``s`` (shared by several calls)."""
     return c * x + s * z, y, -s * x + c * z
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _num_den(v, sx, sy, sz):
     """Numerator and denominator of the AoP ``atan2`` of view ``v`` for sun ``s``."""
     return _num_den3(v[0], v[1], v[2], sx, sy, sz)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _num_den3(vx, vy, vz, sx, sy, sz):
     c = vx * sx + vy * sy + vz * sz
     return sx - vx * c, vy * sz - vz * sy
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _gradient(v, num, den):
     """d aop / d s from the ``atan2`` arguments (``num`` and ``den`` not both zero)."""
     return _gradient3(v[0], v[1], v[2], num, den)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _gradient3(vx, vy, vz, num, den):
     inv_q = 1.0 / (num * num + den * den)
     # d num/ds = e_x - v_x v ; d den/ds = (0, -v_z, v_y)
@@ -118,7 +118,7 @@ def _gradient3(vx, vy, vz, num, den):
     return g0, g1, g2
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def aop_unfolded_and_gradient(v, sx, sy, sz):
     """AoP of view ``v`` for sun ``s`` (body frame) in (-pi, pi] and d aop / d s.
 
@@ -127,7 +127,7 @@ def aop_unfolded_and_gradient(v, sx, sy, sz):
     return aop_unfolded_and_gradient3(v[0], v[1], v[2], sx, sy, sz)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def aop_unfolded_and_gradient3(vx, vy, vz, sx, sy, sz):
     """:func:`aop_unfolded_and_gradient` of the view ``(vx, vy, vz)`` given as scalars."""
     num, den = _num_den3(vx, vy, vz, sx, sy, sz)
@@ -137,7 +137,7 @@ def aop_unfolded_and_gradient3(vx, vy, vz, sx, sy, sz):
     return math.atan2(num, den), g0, g1, g2
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def aop_residual_and_gradient3(c_meas, s_meas, vx, vy, vz, sx, sy, sz):
     """Residual ``aop_meas - aop`` folded into [-pi/2, pi/2] and d aop / d s.
 
@@ -154,7 +154,7 @@ def aop_residual_and_gradient3(c_meas, s_meas, vx, vy, vz, sx, sy, sz):
     return r, g0, g1, g2
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def aop_gradient(v, sx, sy, sz):
     """d aop / d s alone (no ``atan2``: callers that only need the slope skip its cost)."""
     num, den = _num_den(v, sx, sy, sz)
@@ -163,14 +163,14 @@ def aop_gradient(v, sx, sy, sz):
     return _gradient(v, num, den)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def aop_and_gradient(v, sx, sy, sz):
     """AoP of view ``v`` for sun ``s`` (body frame) in [-pi/2, pi/2) and d aop / d s."""
     a, g0, g1, g2 = aop_unfolded_and_gradient(v, sx, sy, sz)
     return fold_half_pi(a), g0, g1, g2
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def sun_body_partials(sun_n, pitch, roll, heading):
     """Sun in the body frame and its partials on pitch, roll and heading (four 3-tuples).
 
@@ -179,7 +179,7 @@ def sun_body_partials(sun_n, pitch, roll, heading):
     return sun_body_partials_cs(sun_n, pitch, math.cos(-roll), math.sin(-roll), heading)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def sun_body_partials_cs(sun_n, pitch, c_roll, s_roll, heading):
     """:func:`sun_body_partials` with ``c_roll, s_roll = cos(-roll), sin(-roll)`` given.
 
@@ -196,7 +196,7 @@ def sun_body_partials_cs(sun_n, pitch, c_roll, s_roll, heading):
     return s, ds_dp, ds_dr, ds_dh
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def dot3(g0, g1, g2, d):
     """``(g0, g1, g2) . d`` for a 3-tuple ``d``."""
     return g0 * d[0] + g1 * d[1] + g2 * d[2]

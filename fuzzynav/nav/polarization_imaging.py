@@ -45,7 +45,7 @@ _LAM_START, _LAM_MIN, _LAM_MAX, _LAM_UNDAMPED = 1e-9, 1e-12, 1e10, 1e-6
 _MAX_ITER = 200
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def view_frames(views_b):
     """Per-view constants of a sensor, flat: ``[v, x_ref, y_ref]`` (9 entries a view).
 
@@ -68,7 +68,7 @@ def view_frames(views_b):
     return out
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def aop_trig(aops):
     """``[cos aop_1..k, sin aop_1..k]`` of one epoch (NaN where the AoP is NaN).
 
@@ -82,7 +82,7 @@ def aop_trig(aops):
     return out
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _e_vector_scatter(aops, trig, frames):
     """``sum e e^T`` (6 entries) of the measured body-frame E-vectors; count used (no NaN)."""
     m00 = m01 = m02 = m11 = m12 = m22 = 0.0
@@ -105,7 +105,7 @@ def _e_vector_scatter(aops, trig, frames):
     return m00, m01, m02, m11, m12, m22, k
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _smallest_eigenvector(m00, m01, m02, m11, m12, m22):
     """Unit eigenvector (sign arbitrary) of a symmetric 3x3 for its smallest eigenvalue.
 
@@ -141,7 +141,7 @@ def _smallest_eigenvector(m00, m01, m02, m11, m12, m22):
     return best_x * inv, best_y * inv, best_z * inv
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _nearest_candidate(sx, sy, sz, sun_n, sun_azimuth, c_roll, s_roll, pitch_prior,
                        heading_prior, pitch_prior_std, heading_prior_std):
     """Of the up to four attitudes with ``C_bn (+-s_b) = sun_n``, the nearest to the prior.
@@ -179,7 +179,7 @@ def _nearest_candidate(sx, sy, sz, sun_n, sun_azimuth, c_roll, s_roll, pitch_pri
     return best_p, best_h
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def imaging_pitch_heading(aops, views_b, sun_n, roll, pitch_prior, heading_prior,
                           pitch_prior_std, heading_prior_std, sigma_aop):
     """Pitch and heading from the AoPs of several view directions, given the roll.
@@ -227,7 +227,7 @@ def imaging_pitch_heading(aops, views_b, sun_n, roll, pitch_prior, heading_prior
     return p, h, cov, k
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def imaging_fit(aops, views_b, sun_n, roll, pitch_prior, heading_prior, pitch_prior_std,
                 heading_prior_std, sigma_aop):
     """:func:`imaging_pitch_heading` with the covariance as three scalars:
@@ -238,7 +238,7 @@ def imaging_fit(aops, views_b, sun_n, roll, pitch_prior, heading_prior, pitch_pr
                               sigma_aop)[:6]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def imaging_fit_frames(aops, trig, frames, sun_n, sun_azimuth, roll, pitch_prior,
                        heading_prior, pitch_prior_std, heading_prior_std, sigma_aop):
     """:func:`imaging_fit` on precomputed :func:`view_frames` and :func:`aop_trig`, without
@@ -256,7 +256,7 @@ def imaging_fit_frames(aops, trig, frames, sun_n, sun_azimuth, roll, pitch_prior
                            sigma_aop)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def sun_from_aops(aops, trig, frames):
     """The sun's body direction (sign arbitrary) from the AoPs alone, and the views used:
     ``sx, sy, sz, n_used`` (NaN direction with fewer than two views).  It depends on the
@@ -269,7 +269,7 @@ def sun_from_aops(aops, trig, frames):
     return sx, sy, sz, k
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def imaging_fit_sun(aops, trig, frames, sun_n, sun_azimuth, sx, sy, sz, k, roll, pitch_prior,
                     heading_prior, pitch_prior_std, heading_prior_std, sigma_aop):
     """:func:`imaging_fit_frames` from the sun's body direction ``sx, sy, sz`` and the view
@@ -297,7 +297,7 @@ def imaging_fit_sun(aops, trig, frames, sun_n, sun_azimuth, sx, sy, sz, k, roll,
     return p, h_out, s2 * n11, -s2 * n01, s2 * n00, k, dp_dr, dh_dr
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _roll_sensitivity(a00, a01, a11, b0, b1):
     """``d(pitch, heading)/d(roll)`` from ``J^T J`` and ``J^T d aop/d roll``; NaN if singular."""
     det = a00 * a11 - a01 * a01
@@ -306,7 +306,7 @@ def _roll_sensitivity(a00, a01, a11, b0, b1):
     return -(a11 * b0 - a01 * b1) / det, -(a00 * b1 - a01 * b0) / det
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _normal_equations(aops, trig, frames, sun_n, c_roll, s_roll, p, h):
     """``J^T J`` (3 entries), ``J^T r``, the cost ``r^T r`` of the AoP residuals and
     ``J^T d aop/d roll`` (2 entries; a few products a view, spares a separate pass)."""
@@ -334,7 +334,7 @@ def _normal_equations(aops, trig, frames, sun_n, c_roll, s_roll, p, h):
     return n00, n01, n11, g0, g1, cost, b0, b1
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _gauss_newton(aops, trig, frames, sun_n, c_roll, s_roll, p, h):
     """Least-squares (pitch, heading) of the AoP residuals; ``J^T J``, ``J^T d aop/d roll``.
 

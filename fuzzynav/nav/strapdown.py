@@ -34,7 +34,7 @@ from fuzzynav.nav.layout import (LLA_SLICE, NAV_H, NAV_LAT, NAV_LON, NAV_Q, NAV_
                                  Q_SLICE, VEL_SLICE)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def quat_mul(a0, a1, a2, a3, b0, b1, b2, b3):
     """Hamilton product of two quaternions given as scalars; returns a 4-tuple."""
     return (a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3,
@@ -48,7 +48,7 @@ def quat_mul(a0, a1, a2, a3, b0, b1, b2, b3):
 _R6, _R12, _R48, _R384, _R3840 = 1.0 / 6.0, 1.0 / 12.0, 1.0 / 48.0, 1.0 / 384.0, 1.0 / 3840.0
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def rv2q(x, y, z):
     """Rotation vector to quaternion, with a series for small angles (full precision)."""
     a2 = x * x + y * y + z * z
@@ -65,13 +65,13 @@ def rv2q(x, y, z):
     return c, s * x, s * y, s * z
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def quat_to_dcm_into(nav, C):
     """Write ``C_bn`` of the quaternion of ``nav`` into the 3x3 array ``C``."""
     dcm_into(nav[NAV_Q], nav[NAV_Q + 1], nav[NAV_Q + 2], nav[NAV_Q + 3], C)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def dcm_into(w, x, y, z, C):
     """Write ``C_bn`` of the quaternion ``(w, x, y, z)`` into the 3x3 array ``C``."""
     C[0, 0] = w * w + x * x - y * y - z * z
@@ -91,7 +91,7 @@ def dcm_into(w, x, y, z, C):
 _TRIG_MAX_STEP, _TRIG_STEPS = 1e-6, 64.0
 
 
-@nb.njit(inline="always")
+@nb.njit(inline="always", error_model="numpy")
 def sin_cos_lat(lat, prev):
     """Sine and cosine of the midpoint latitude ``lat``, from those of the last step.
 
@@ -122,7 +122,7 @@ def sin_cos_lat(lat, prev):
 _NORM_NEWTON = 1e-8
 
 
-@nb.njit(inline="always")
+@nb.njit(inline="always", error_model="numpy")
 def inv_norm(s):
     """``1 / sqrt(s)`` for the squared norm ``s`` of a quaternion that was unit a step ago.
 
@@ -136,7 +136,7 @@ def inv_norm(s):
     return 1.0 / math.sqrt(s)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def init_prev(nav, prev):
     """Prepare the work array for the first step (no previous increments)."""
     prev[PREV_FLAG] = 0.0
@@ -146,7 +146,7 @@ def init_prev(nav, prev):
         prev[PREV_LLA + i] = nav[NAV_LAT + i]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def mech_step(nav, prev, dth, dv, dt, dv_sf_n, C):
     """Advance ``nav`` in place by one IMU interval.
 
@@ -253,13 +253,13 @@ def mech_step(nav, prev, dth, dv, dt, dv_sf_n, C):
     nav[NAV_LAT], nav[NAV_LON], nav[NAV_H] = lat1, lon1, h1
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def set_quat(nav, q0, q1, q2, q3):
     """Store the attitude quaternion ``(q0, q1, q2, q3)`` in ``nav``."""
     nav[NAV_Q], nav[NAV_Q + 1], nav[NAV_Q + 2], nav[NAV_Q + 3] = q0, q1, q2, q3
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _integrate(nav0, dtheta_b, dv_b, dt, stride):
     n = dtheta_b.shape[0]
     nav = nav0.copy()

@@ -253,3 +253,29 @@ def test_a_remembered_initial_state_is_the_draw_itself_in_fresh_arrays():
         > 1e-6
     # the draw: the truth plus errors of about the initial sigmas
     assert np.abs(drawn.vel_n - tr.vel_n[0]).max() < 5 * 0.1
+
+
+def test_loop_kernels_divide_without_a_zero_test_and_a_zero_divisor_gives_inf():
+    """Every kernel of the filter loop and the navigation maths is compiled with numba's
+    numpy error model: a division is one instruction, with no test for a zero divisor and
+    no ZeroDivisionError (a zero gives inf or NaN, which the loop's covariance check turns
+    into a stopped run).  A kernel added without it would silently be slower."""
+    import importlib
+    import pkgutil
+
+    from numba.core.registry import CPUDispatcher
+
+    import fuzzynav.filters
+    import fuzzynav.nav
+    from fuzzynav.nav import strapdown
+
+    missing = []
+    for pkg in (fuzzynav.filters, fuzzynav.nav):
+        for info in pkgutil.walk_packages(pkg.__path__, pkg.__name__ + "."):
+            mod = importlib.import_module(info.name)
+            for name, obj in vars(mod).items():
+                own = isinstance(obj, CPUDispatcher) and obj.__module__ == mod.__name__
+                if own and obj.targetoptions.get("error_model") != "numpy":
+                    missing.append(f"{mod.__name__}.{name}")
+    assert not missing, missing
+    assert strapdown.inv_norm(0.0) == np.inf  # 1 / sqrt(0): inf, not an exception

@@ -77,7 +77,7 @@ class Adapter:
                      np.ascontiguousarray(st, dtype=float), tuple(self.diag_names))
 
 
-@nb.njit(ADAPT_SIG, cache=True)
+@nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
 def none_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     out[0] = 1.0
     out[1] = 1.0

@@ -26,7 +26,7 @@ from fuzzynav.filters.adaptation import ADAPT_SIG, Adapter, register
 _MAXROWS = 16
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _ones(out, m):
     out[0] = 1.0
     out[1] = 1.0
@@ -34,7 +34,7 @@ def _ones(out, m):
         out[2 + i] = 1.0
 
 
-@nb.njit(ADAPT_SIG, cache=True)
+@nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
 def constant_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     out[0] = 1.0
     out[1] = 1.0
@@ -61,7 +61,7 @@ class ConstantScale(Adapter):
         return fp, np.zeros(1, np.int64), np.zeros(1)
 
 
-@nb.njit(ADAPT_SIG, cache=True)
+@nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
 def sage_husa_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     b, floor, cap = fp[0], fp[1], fp[2]
     k = st[0]
@@ -99,7 +99,7 @@ class SageHusa(Adapter):
                 np.zeros(1 + _MAXROWS))
 
 
-@nb.njit(ADAPT_SIG, cache=True)
+@nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
 def huber_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     gamma = fp[0]
     out[0] = 1.0
@@ -129,7 +129,7 @@ class Huber(Adapter):
         return np.array([self.gamma]), np.zeros(1, np.int64), np.zeros(1)
 
 
-@nb.njit(ADAPT_SIG, cache=True)
+@nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
 def fading_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     rho, beta, lam_max = fp[0], fp[1], fp[2]
     trv, trr, trh = 0.0, 0.0, 0.0
@@ -172,7 +172,7 @@ class FadingMemory(Adapter):
                 np.zeros(2 + _MAXROWS))
 
 
-@nb.njit(ADAPT_SIG, cache=True)
+@nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
 def vb_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     rho, n_iter = fp[0], int(fp[1])
     a = st[1:1 + _MAXROWS]

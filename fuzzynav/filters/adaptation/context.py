@@ -50,13 +50,13 @@ STATISTICS = {**window.STATISTICS, **MOTION, **CLAIM, **QUALITY}
 _RAD_TO_DEG = 1.0 / units.DPS
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def size(M, W):
     """Length of ``ctx`` for ``M`` rows at most and data rows of width ``W``."""
     return CTX_R + M + W
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def fill(ctx, nav, aux, R, m, row):
     """Write the epoch's motion state, nominal variances ``R[:m]`` and data ``row``."""
     ctx[CTX_SPEED] = math.sqrt(nav[NAV_VEL] ** 2 + nav[NAV_VEL + 1] ** 2
@@ -72,7 +72,7 @@ def fill(ctx, nav, aux, R, m, row):
         ctx[CTX_R + M + j] = row[j]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def statistic(kind, ctx, chan, m, c):
     """Context statistic ``kind`` (codes 4-9 of :data:`STATISTICS`); ``c`` is the channel
     (``reported_sigma``, -1 all rows) or the data-row column (``fix_type``, ``n_sat``)."""

@@ -26,7 +26,7 @@ from fuzzynav.filters.adaptation.fuzzy_common import IP_OUT, evaluate, log_input
 from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
 
 
-@nb.njit(ADAPT_SIG, cache=True)
+@nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
 def alpha_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     status, x, y = evaluate(fp, ip, st, r, HPH, R, chan, m, ctx)
     alpha = y[ip[IP_OUT]]

@@ -49,7 +49,7 @@ def pack(fis, source, binding, model, role: str, floats=()):
 
 # inlined into each policy kernel: the call and its nine array arguments cost ~0.2 us per
 # epoch, a fifth of the adapter (benchmarks: alternating A/B of the adapter call)
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy")
 def evaluate(fp, ip, st, r, HPH, R, chan, m, ctx):
     """Push the window, form the bound statistics (innovation ones from the window, the
     others from the epoch context ``ctx``), evaluate the system.
@@ -72,13 +72,13 @@ def evaluate(fp, ip, st, r, HPH, R, chan, m, ctx):
     return status, x, y
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def scalars(st):
     """The policy's persistent scalars (a view of the last entries of ``st``)."""
     return st[st.size - N_SCALARS:]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def log_inputs(diag, first, x):
     """Write the fuzzy inputs into ``diag`` from index ``first`` (as many as fit)."""
     for j in range(min(x.size, diag.size - first)):

@@ -17,7 +17,7 @@ from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
 S_MIN, S_MAX = 1e-3, 1e3
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def r_step(fp, ip, st, r, HPH, R, chan, m, ctx):
     """Evaluate the system on statistics that see ``R(k-1)`` and step the running factor.
 
@@ -41,7 +41,7 @@ def r_step(fp, ip, st, r, HPH, R, chan, m, ctx):
     return status, x, y, s, t
 
 
-@nb.njit(ADAPT_SIG, cache=True)
+@nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
 def rscale_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     status, x, y, s, t = r_step(fp, ip, st, r, HPH, R, chan, m, ctx)
     out[0] = 1.0

@@ -24,7 +24,7 @@ Q_MIN, Q_MAX = 1e-2, 1e2
 IP_QOUT = 6
 
 
-@nb.njit(ADAPT_SIG, cache=True)
+@nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
 def rq_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     status, x, y, s, t = r_step(fp, ip, st, r, HPH, R, chan, m, ctx)
     sc = scalars(st)

@@ -34,7 +34,7 @@ _MAXROWS = 16
 _FP_HQH = 3
 
 
-@nb.njit(ADAPT_SIG, cache=True)
+@nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
 def strong_tracking_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     rho, beta, lam_max = fp[0], fp[1], fp[2]
     first = st[0] == 0.0

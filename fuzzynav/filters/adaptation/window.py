@@ -32,7 +32,7 @@ def window_size(n: int, n_channels: int) -> int:
     return 2 + n * (n_channels + 1)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy")
 def push(st, off, n, n_channels, r, chan, m):
     """Add this epoch's per-channel sums of squared residuals to the window."""
     w = n_channels + 1
@@ -48,7 +48,7 @@ def push(st, off, n, n_channels, r, chan, m):
         st[off] += 1
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy")
 def trace_actual(st, off, n, n_channels, c):
     """Window mean of the channel's squared-residual sum (``c = -1``: all rows)."""
     w = n_channels + 1
@@ -62,7 +62,7 @@ def trace_actual(st, off, n, n_channels, c):
     return s / k
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy")
 def trace_theory(HPH, R, chan, m, c):
     """The channel's trace of ``H P- H^T + R`` (``c = -1``: all rows)."""
     s = 0.0
@@ -72,7 +72,7 @@ def trace_theory(HPH, R, chan, m, c):
     return s
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def nis_now(r, HPH, R, chan, m, c):
     """This epoch's mean normalised innovation square ``r_i^2 / (H P- H^T + R)_ii`` over
     the channel's rows (``c = -1``: all rows); 1 on average when the filter is consistent."""
@@ -84,7 +84,7 @@ def nis_now(r, HPH, R, chan, m, c):
     return s / k if k > 0 else float("nan")
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def trend(st, off, n, n_channels, c, th):
     """Innovation-magnitude trend: (mean squared-residual sum of the newer half of the
     window - that of the older half) / ``th``; > 0 when innovations grow."""
@@ -106,7 +106,7 @@ def trend(st, off, n, n_channels, c, th):
     return (new - old) / half / th
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy")
 def statistic_of(kind, st, off, n, n_channels, HPH, R, chan, m, c, r):
     """Any statistic ``kind`` (0 dom, 1 ror, 2 nis, 3 trend) of channel ``c``, given this
     epoch's residuals ``r``; NaN if the channel is absent."""
@@ -119,7 +119,7 @@ def statistic_of(kind, st, off, n, n_channels, HPH, R, chan, m, c, r):
     return statistic(kind, st, off, n, n_channels, HPH, R, chan, m, c)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy")
 def statistic(kind, st, off, n, n_channels, HPH, R, chan, m, c):
     """Statistic ``kind`` (0 = dom, 1 = ror) of channel ``c``; NaN if the channel is absent."""
     th = trace_theory(HPH, R, chan, m, c)

@@ -38,7 +38,7 @@ from fuzzynav.nav.layout import NAV_VEL
 DVL_BLOCKS = ("dvl_scale", "dvl_misalignment", "lever_arm")
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _state(aux, start, i, default):
     """Component ``i`` of a sensor block's estimate (``default`` when the block is absent)."""
     if start < 0:
@@ -46,7 +46,7 @@ def _state(aux, start, i, default):
     return aux[AUX_XS + start - N_CORE + i]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _cross_matrix(a, out):
     """``out = [a x]`` (3 x 3)."""
     out[0, 0], out[0, 1], out[0, 2] = 0.0, -a[2], a[1]
@@ -54,7 +54,7 @@ def _cross_matrix(a, out):
     out[2, 0], out[2, 1], out[2, 2] = -a[1], a[0], 0.0
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _rows_core(G, C_bn, vn, i, H, m):
     """Velocity and attitude columns of row ``m`` (axis ``i``): ``G C_nb``, ``-G C_nb [v x]``."""
     gc = np.zeros(3)
@@ -68,7 +68,7 @@ def _rows_core(G, C_bn, vn, i, H, m):
     H[m, X_ATT + 2] = vn[0] * gc[1] - vn[1] * gc[0]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _rows_states(G, mu, u, w, k, i, s_k, s_mu, s_l, H, m, X):
     """Columns of the DVL's own states in row ``m`` (axis ``i``)."""
     if s_k >= 0:  # -(I - [mu x]) u
@@ -84,7 +84,7 @@ def _rows_states(G, mu, u, w, k, i, s_k, s_mu, s_l, H, m, X):
             H[m, s_l + j] = -(G[i, 0] * X[0, j] + G[i, 1] * X[1, j] + G[i, 2] * X[2, j])
 
 
-@nb.njit(MEAS_SIG, cache=True)
+@nb.njit(MEAS_SIG, cache=True, error_model="numpy")
 def dvl_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
     s_k, s_mu, s_l = int(par[3]), int(par[4]), int(par[5])
     k = _state(aux, s_k, 0, 0.0)

@@ -26,7 +26,7 @@ from fuzzynav.nav.earth import radii_nb
 from fuzzynav.nav.layout import NAV_H, NAV_LAT, NAV_LON, NAV_VEL
 
 
-@nb.njit(MEAS_SIG, cache=True)
+@nb.njit(MEAS_SIG, cache=True, error_model="numpy")
 def gnss_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
     lx, ly, lz = par[0], par[1], par[2]
     # antenna offset in ENU and its velocity from the body rotation

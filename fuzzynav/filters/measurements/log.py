@@ -41,13 +41,13 @@ LOG_STATES = (("log_scale", math.inf, 0.02, 0.0), ("log_bias", math.inf, 1.0, 0.
               ("water_current", 1800.0, 0.5, 0.5))
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _state(aux, par, j):
     """Estimate of the log state whose start is ``par[j]`` (0 when the block is absent)."""
     return aux[AUX_XS + int(par[j]) - N_CORE] if par[j] >= 0.0 else 0.0
 
 
-@nb.njit(MEAS_SIG, cache=True)
+@nb.njit(MEAS_SIG, cache=True, error_model="numpy")
 def log_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
     sig = row[1]
     if not (sig > 0.0 and math.isfinite(row[0])):

@@ -38,7 +38,7 @@ MODES = {"heading": 0, "vector": 1}
 CH_HEADING, CH_FIELD = 0, 1
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _heading_row(C, row, z, H, R, chan):
     if not (math.isfinite(row[0]) and row[4] > 0.0):
         return 0
@@ -53,7 +53,7 @@ def _heading_row(C, row, z, H, R, chan):
     return 1
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _vector_rows(C, row, par, z, H, R, chan):
     b = par[1:4]
     m = 0
@@ -72,7 +72,7 @@ def _vector_rows(C, row, par, z, H, R, chan):
     return m
 
 
-@nb.njit(MEAS_SIG, cache=True)
+@nb.njit(MEAS_SIG, cache=True, error_model="numpy")
 def magnetometer_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
     if int(par[0]) == 1:
         return _vector_rows(C_bn, row, par, z, H, R, chan)

@@ -27,12 +27,12 @@ from fuzzynav.nav.neutral_points import pair_beta
 _STEP = 1e-6
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _wrap(a):
     return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _tilted(C_bn, axis, eps, out):
     """``(I - [phi x]) C_bn`` for ``phi = eps e_axis`` into ``out``."""
     phi = np.zeros(3)
@@ -44,7 +44,7 @@ def _tilted(C_bn, axis, eps, out):
         out[2, j] = c2 + phi[1] * c0 - phi[0] * c1
 
 
-@nb.njit(MEAS_SIG, cache=True)
+@nb.njit(MEAS_SIG, cache=True, error_model="numpy")
 def neutral_point_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
     sig = row[5]
     if not (sig > 0.0 and math.isfinite(row[0])):

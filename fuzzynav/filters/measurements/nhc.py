@@ -21,7 +21,7 @@ from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.nav.layout import NAV_VEL
 
 
-@nb.njit(MEAS_SIG, cache=True)
+@nb.njit(MEAS_SIG, cache=True, error_model="numpy")
 def nhc_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
     ve, vn, vu = nav[NAV_VEL], nav[NAV_VEL + 1], nav[NAV_VEL + 2]
     m = 0

@@ -50,7 +50,7 @@ _MAX_VAR = 0.01
 _HDR = 5
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def euler_jacobian(C, J):
     """Rows d(pitch, roll, heading)/d(phi) of ``C_bn`` for ``C_calc = (I - [phi x]) C``."""
     jp, jr, jh = euler_rows(C)
@@ -58,7 +58,7 @@ def euler_jacobian(C, J):
         J[0, j], J[1, j], J[2, j] = jp[j], jr[j], jh[j]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def euler_rows(C):
     """:func:`euler_jacobian` as three 3-tuples (pitch, roll, heading rows): no array."""
     cp2 = C[0, 1] ** 2 + C[1, 1] ** 2  # cos^2 pitch
@@ -70,7 +70,7 @@ def euler_rows(C):
     return jp, jr, jh
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _euler(C):
     pitch = math.asin(max(-1.0, min(1.0, C[2, 1])))
     roll = math.atan2(-C[2, 0], C[2, 2])
@@ -78,7 +78,7 @@ def _euler(C):
     return pitch, roll, heading
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _point(C, aop, sun, sigma, J, z, H, R, chan):
     pitch, roll, heading = _euler(C)
     h, dh_da = ps.heading_from_zenith_aop(aop, sun, pitch, roll, heading)
@@ -96,7 +96,7 @@ def _point(C, aop, sun, sigma, J, z, H, R, chan):
     return 1
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _imaging(C, aops, extra, frames, sun, sigma, prior_std, z, H, R, chan):
     k = aops.size  # extra: the row's columns from polarization_rows
     pitch, roll, heading = _euler(C)
@@ -139,7 +139,7 @@ def _imaging(C, aops, extra, frames, sun, sigma, prior_std, z, H, R, chan):
     return 2
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _raw(C, aops, frames, sun, sigmas, z, H, R, chan):
     m = 0
     for i in range(aops.size):
@@ -157,7 +157,7 @@ def _raw(C, aops, frames, sun, sigmas, z, H, R, chan):
     return m
 
 
-@nb.njit(MEAS_SIG, cache=True)
+@nb.njit(MEAS_SIG, cache=True, error_model="numpy")
 def polarization_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
     kind, k, mode = int(par[0]), int(par[1]), int(par[2])
     frames = par[_HDR:_HDR + FRAME * k]  # a view of the parameters: nothing copied

@@ -35,7 +35,7 @@ def extra_start(k: int) -> int:
     return 2 * (k + 3)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def fill_extra(aops, sun, frames, out):
     """Write an epoch's extra columns into ``out`` (``2k + 5``): ``[cos aop_1..k,
     sin aop_1..k, sun azimuth, s_x, s_y, s_z, n_used]`` (the kernel forms them itself for a
@@ -48,7 +48,7 @@ def fill_extra(aops, sun, frames, out):
     out[2 * k + 1], out[2 * k + 2], out[2 * k + 3], out[2 * k + 4] = sx, sy, sz, used
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def _imaging_columns(z, frames, k):
     """:func:`fill_extra` of every row of ``z = [aop_1..k, sun_e, sun_n, sun_u]``."""
     out = np.empty((z.shape[0], 2 * k + 5))
