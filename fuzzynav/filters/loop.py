@@ -25,10 +25,11 @@ from fuzzynav.filters.bank_beta import ShareControl, push_innovation, update_sha
 from fuzzynav.filters.bank_fusion import FUSED_NOW, SHARED, STALE, after_propagation, fuse, \
     fusion_work, local_residual, master_covariance, propagate_locals, share
 from fuzzynav.filters.error_st import EM_ST, st_fused, st_measurement, st_regauge, st_reset, \
-    st_to_phi, st_velocity_variance
+    st_to_phi
 from fuzzynav.filters.feedback import bias_totals, feedback
-from fuzzynav.filters.layout import AUX_FORCE, AUX_RATE, AUX_XS, X_VEL
-from fuzzynav.nav.layout import NAV_SIZE, PREV_SIZE
+from fuzzynav.filters.layout import AUX_FORCE, AUX_RATE, AUX_XS
+from fuzzynav.filters.record import record_output
+from fuzzynav.nav.layout import PREV_SIZE
 from fuzzynav.nav.strapdown import init_prev, mech_step, quat_to_dcm_into
 
 
@@ -117,7 +118,7 @@ class Outputs(NamedTuple):
     """Recorded solution (every ``out_stride`` samples): time, nav, sensor states, the
     fused sigma, per local filter its error state ``xl`` and sigma ``sigl`` (K, L, n), and
     the information shares ``beta`` (K, L).  A bank of one writes none of the last three
-    (:func:`_record`): they may be placeholders of any length."""
+    (:func:`~fuzzynav.filters.record.record_output`): they may be placeholders of any length."""
 
     t: np.ndarray
     nav: np.ndarray
@@ -144,37 +145,6 @@ NO_ADAPTER = -1
 EV_PENDING, EV_ACCEPTED, EV_GATED, EV_EMPTY, EV_BAD_S, EV_BEFORE_START = 0, 1, 2, 3, 4, 5
 # loop status
 ST_OK, ST_COVARIANCE = 0, 1
-
-
-@nb.njit(cache=True, error_model="numpy")
-def _sigma_into(row, P, nav, em):
-    for i in range(P.shape[0]):
-        row[i] = math.sqrt(max(P[i, i], 0.0))
-    if em == EM_ST:  # report the sigma of the velocity error itself, as the phi model does
-        for i in range(3):
-            row[X_VEL + i] = math.sqrt(max(st_velocity_variance(P, nav, i), 0.0))
-
-
-@nb.njit(cache=True, error_model="numpy")
-def _record(j, t, nav, xs, st, P_master, beta, out, em):
-    """Record output ``j``; ``P_master`` is the master's covariance (see
-    :func:`~fuzzynav.filters.bank_fusion.master_covariance`).  A bank of one records only
-    the master, its local's outputs are formed from it (the runner's ``_locals``)."""
-    out_t, out_nav, out_xs, out_sig, out_xl, out_sigl, out_beta = out
-    out_t[j] = t
-    for i in range(NAV_SIZE):
-        out_nav[j, i] = nav[i]
-    for i in range(xs.size):
-        out_xs[j, i] = xs[i]
-    P3, X = st.P, st.x
-    _sigma_into(out_sig[j], P_master, nav, em)
-    if X.shape[0] == 1:
-        return
-    for k in range(X.shape[0]):
-        out_beta[j, k] = beta[k]
-        _sigma_into(out_sigl[j, k], P3[k], nav, em)
-        for i in range(X.shape[1]):
-            out_xl[j, k, i] = X[k, i]
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -208,9 +178,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
     # does not reset to the fused solution after every update
     carry = NL > 1 and (reset == 0 or period > 0.0)
     # only a policy may scale the predicted covariance by the noise since the last update
-    keep_q = False
-    for a_id in s_adapt:
-        keep_q = keep_q or a_id != NO_ADAPTER
+    keep_q = np.any(s_adapt != NO_ADAPTER)
     nav = nav0.copy()
     prev = np.zeros(PREV_SIZE)
     init_prev(nav, prev)
@@ -258,7 +226,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
     while e < E and ev_t[e] < time_s[0] - 1e-9:
         ev_flag[e] = EV_BEFORE_START
         e += 1
-    _record(0, time_s[0], nav, xs, state,
+    record_output(0, time_s[0], nav, xs, state,
             P3[0] if NL == 1 else master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork),
             beta, out, em)
     for k in range(N):
@@ -378,7 +346,7 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
         since_out += 1
         if since_out == out_stride:
             since_out = 0
-            _record((k + 1) // out_stride, t, nav, xs, state, P3[0] if NL == 1 else
+            record_output((k + 1) // out_stride, t, nav, xs, state, P3[0] if NL == 1 else
                     master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork), beta, out, em)
     return ST_OK, N
 

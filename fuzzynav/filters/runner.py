@@ -151,7 +151,7 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
     E, M = tb["ev_t"].size, tb["M"]
     # the loop writes whole output rows, in order; the time column (NaN until written) tells
     # how many it wrote, so the other arrays need no filling
-    KL = K if NL > 1 else 1  # a bank of one records no local outputs (loop._record)
+    KL = K if NL > 1 else 1  # a bank of one records no local outputs (record.record_output)
     out = dict(t=np.full(K, np.nan), nav=np.empty((K, NAV_SIZE)), xs=np.empty((K, n - N_CORE)),
                sig=np.empty((K, n)), xl=np.empty((KL, NL, n)), sigl=np.empty((KL, NL, n)),
                beta=np.empty((KL, NL)))
