@@ -227,8 +227,8 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
         ev_flag[e] = EV_BEFORE_START
         e += 1
     record_output(0, time_s[0], nav, xs, state,
-            P3[0] if NL == 1 else master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork),
-            beta, out, em)
+                  P3[0] if NL == 1 else master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork),
+                  beta, out, em)
     for k in range(N):
         dt = time_s[k + 1] - time_s[k]
         for i in range(3):
@@ -347,7 +347,8 @@ def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fn
         if since_out == out_stride:
             since_out = 0
             record_output((k + 1) // out_stride, t, nav, xs, state, P3[0] if NL == 1 else
-                    master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork), beta, out, em)
+                          master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork), beta, out,
+                          em)
     return ST_OK, N
 
 

@@ -4,7 +4,9 @@ import gc
 import math
 
 import numpy as np
+import pytest
 
+from fuzzynav.errors import FuzzynavError
 from fuzzynav.filters.measurements import polarization_rows as pr
 from fuzzynav.nav import polarization_imaging as pim
 from fuzzynav.sim import skylight as sk
@@ -68,3 +70,13 @@ def test_point_sensor_rows_carry_no_extra_columns():
     point = SensorData("polarization", data.time_s, data.z[:, [0, K, K + 1, K + 2]],
                        data.sigma[:, [0, K, K + 1, K + 2]], {"sensor_type": 0})
     np.testing.assert_array_equal(pr.rows(point), np.hstack([point.z, point.sigma]))
+
+
+def test_views_that_do_not_match_the_aop_columns_are_refused_with_the_shapes():
+    """A stream whose views_b names more views than z has AoP columns would make the kernel
+    read past its rows: one clear error names both shapes instead."""
+    data = _imaging_data(3)
+    wrong = SensorData("polarization", data.time_s, data.z[:, 2:], data.sigma[:, 2:],
+                       data.meta)
+    with pytest.raises(FuzzynavError, match=r"z has shape \(40, 8\).*names 7 views"):
+        pr.rows(wrong)

@@ -22,6 +22,7 @@ import weakref
 import numba as nb
 import numpy as np
 
+from fuzzynav.errors import FuzzynavError
 from fuzzynav.nav.polarization_imaging import aop_trig, sun_from_aops, view_frames
 
 
@@ -85,5 +86,9 @@ def rows(data) -> np.ndarray:
     base = [data.z, data.sigma]
     if int(data.meta.get("sensor_type", 0)) != 0:
         views = np.asarray(data.meta.get("views_b", [[0.0, 0.0, 1.0]]), float).reshape(-1, 3)
+        if data.z.ndim != 2 or data.z.shape[1] != views.shape[0] + 3:
+            raise FuzzynavError(
+                f"polarization data: z has shape {data.z.shape}, but meta views_b names "
+                f"{views.shape[0]} views (z needs one AoP column per view and the sun's 3)")
         base.append(imaging_columns(data.z, views))
     return np.hstack(base).astype(float, copy=False)
