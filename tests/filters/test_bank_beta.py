@@ -143,3 +143,35 @@ def test_bad_controllers_give_one_clear_error():
     # a share controller is no per-sensor policy
     with pytest.raises(FuzzynavError, match="controls a filter bank"):
         bind_systems([(from_dict(beta_doc()), "beta.json")], {})
+
+
+def test_a_share_change_rescales_the_local_noise_by_old_over_new():
+    """``Q_i = Q / beta_i``: when the controller moves a share from ``beta_old`` to
+    ``beta_new``, the local's noise density is multiplied by ``beta_old / beta_new`` -- a
+    local whose share falls gets *more* process noise (less information), one whose share
+    rises gets less.  The constant controller gives weight 1 to both locals: shares 1/2."""
+    from fuzzynav.filters.bank_beta import update_shares
+
+    ctl = ShareController(from_dict(constant_doc()), "constant").share_control(2)
+    beta = np.array([0.7, 0.3])
+    qd = np.array([[1.0, 2.0, 4.0], [1.0, 2.0, 4.0]])
+    assert update_shares(ctl, beta, qd)
+    np.testing.assert_allclose(beta, [0.5, 0.5], rtol=1e-12)
+    # local 0 lost share (0.7 -> 0.5): Q / 0.5 > Q / 0.7, noise up by 0.7/0.5
+    np.testing.assert_allclose(qd[0], np.array([1.0, 2.0, 4.0]) * 0.7 / 0.5, rtol=1e-12)
+    np.testing.assert_allclose(qd[1], np.array([1.0, 2.0, 4.0]) * 0.3 / 0.5, rtol=1e-12)
+    # the densities always equal Q / beta_i for the one shared Q = qd_i * beta_i
+    np.testing.assert_allclose(qd[0] * beta[0], qd[1] * beta[1] * 0.7 / 0.3, rtol=1e-12)
+
+
+def test_a_falling_share_widens_that_local_covariance(data):
+    """The effect of the rule on a run: shares moved from 0.3 to 0.5 give local 1 less
+    process noise than keeping 0.3 does (Q / 0.5 < Q / 0.3), so its predicted covariance
+    is smaller; the local whose share fell from 0.7 to 0.5 gets a larger one."""
+    moved = _run(data, _bank(ShareController(from_dict(constant_doc()), "constant"), (0.7, 0.3)))
+    fixed = _run(data, _bank(beta=(0.7, 0.3)))
+    assert moved.ok and fixed.ok
+    # final local covariances: local 0 (share down) wider, local 1 (share up) narrower
+    P_m, P_f = moved.locals.P_end, fixed.locals.P_end
+    assert np.trace(P_m[0]) > np.trace(P_f[0])
+    assert np.trace(P_m[1]) < np.trace(P_f[1])
