@@ -173,6 +173,15 @@ CASES = [
     ("pos-empty", lambda d: (d / POS).write_bytes(b""), POS, "lines"),
     ("pos-is-a-directory", lambda d: ((d / POS).unlink(), (d / POS).mkdir()), POS,
      "not a regular file"),
+    ("pos-day-38", lambda d: _edit_fields(d, POS, 50, 0, _lines(d, POS)[49].split()[0][:8]
+                                          + "38"), POS, "line 50"),
+    ("pos-month-13", lambda d: _edit_fields(d, POS, 50, 0, _lines(d, POS)[49].split()[0][:5]
+                                            + "13" + _lines(d, POS)[49].split()[0][7:]),
+     POS, "line 50"),
+    ("pos-hour-25", lambda d: _edit_fields(d, POS, 50, 1, "25"
+                                           + _lines(d, POS)[49].split()[1][2:]), POS, "line 50"),
+    ("pos-second-60", lambda d: _edit_fields(d, POS, 50, 1, _lines(d, POS)[49].split()[1][:6]
+                                             + "60.000"), POS, "line 50"),
     ("pos-no-header", lambda d: _write(d, POS, [x for x in _lines(d, POS)
                                                if not x.startswith("%")]), POS, "header"),
 ]

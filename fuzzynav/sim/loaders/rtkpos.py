@@ -11,6 +11,7 @@ Quality ``Q``: 1 fixed, 2 float, 3 SBAS, 4 DGPS, 5 single, 6 PPP.
 from __future__ import annotations
 
 import calendar
+import datetime
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -69,6 +70,11 @@ def _parse_time(path, lineno, date: str, clock: str):
         hh, mm, ss = clock.split(":")
         sec = float(ss)
         whole = int(np.floor(sec))
+        # a real calendar date and clock: timegm alone would roll day 38 into the next
+        # month (GPS time has no leap second, so 60 s is refused too)
+        datetime.datetime(y, mo, d, int(hh), int(mm), whole)
+        if not 0.0 <= sec < 60.0:
+            raise ValueError(sec)
         t = calendar.timegm((y, mo, d, int(hh), int(mm), whole, 0, 0, 0))
         return t, sec - whole
     except (ValueError, TypeError):
