@@ -82,8 +82,15 @@ def make_storage(url: str, heartbeat: bool = True):
     if path is not None:
         from fuzzynav.tuning.journal import open_journal
 
-        os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-        return open_journal(path)  # repairs a record cut off by a full disk
+        if os.path.isdir(path):
+            raise FuzzynavError(f"storage {url}: {path} is a directory; name a journal "
+                                f"file, e.g. journal:{path}/study.log")
+        try:
+            os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+            return open_journal(path)  # repairs a record cut off by a full disk
+        except OSError as exc:  # /proc, read-only, no permission: one line, not a traceback
+            raise FuzzynavError(f"storage {url}: cannot open the journal file "
+                                f"({exc.strerror or type(exc).__name__})") from None
     kw = {}
     if heartbeat:
         kw = dict(heartbeat_interval=10, grace_period=60,

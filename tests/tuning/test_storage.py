@@ -357,6 +357,19 @@ def test_an_unreachable_database_is_one_clear_error(tmp_path):
     assert "secret" not in str(err.value)
 
 
+@pytest.mark.parametrize("where, message", [
+    ("dir", "is a directory; name a journal file"),
+    ("/proc/fuzzynav-no/journal.log", "cannot open the journal file"),
+    ("/proc/fuzzynav-journal.log", "cannot open the journal file"),
+])
+def test_a_journal_that_cannot_be_a_file_is_one_clear_error(tmp_path, where, message):
+    cfg = load_study_config(write_study(tmp_path))
+    path = str(tmp_path) if where == "dir" else where
+    with pytest.raises(FuzzynavError, match=message) as err:
+        open_study(cfg, storage_url=f"journal:{path}", create=True)
+    assert f"storage journal:{path}" in str(err.value)
+
+
 def test_the_slot_lock_is_the_journal_itself(tmp_path):
     """flock on the journal: exclusive between processes, released by a kill, no file."""
     path = tmp_path / "s.journal"
