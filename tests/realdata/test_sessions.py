@@ -74,3 +74,22 @@ def test_the_spec_is_split_at_the_last_colon_unless_the_directory_exists(tmp_pat
         parse_data_spec(f"rtklib:{plain}:")
     with pytest.raises(DataMissingError, match="recording directory not found"):
         parse_data_spec(f"rtklib:{tmp_path / 'none'}:1")
+
+
+@pytest.mark.parametrize("names, session, expect", [
+    (["gnss_1_sf.pos", "gnss_12_sf.pos"], "1", "gnss_1_sf.pos"),
+    (["gnss_1.pos", "gnss_12.pos"], "1", "gnss_1.pos"),
+    (["gnss_1_sf.pos", "gnss_12_sf.pos"], "12", "gnss_12_sf.pos"),
+    (["gnss_1-rtk.pos", "gnss_1a.pos"], "1", "gnss_1-rtk.pos"),
+])
+def test_a_session_takes_only_its_own_gnss_solution(tmp_path, names, session, expect):
+    """``gnss_<id>*.pos`` must not reach into another session whose id starts with this
+    one's (session 1 and session 12 in one directory)."""
+    from fuzzynav.sim.loaders.recording_files import find_files
+
+    for sid in {session, "12"}:
+        (tmp_path / f"imu_{sid}.csv").write_text("x\n")
+        (tmp_path / f"imu_{sid}.csv.tag").write_bytes(b"x")
+    for n in names:
+        (tmp_path / n).write_text("x\n")
+    assert find_files(tmp_path, session)["pos"].name == expect

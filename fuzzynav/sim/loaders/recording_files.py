@@ -11,8 +11,8 @@ from pathlib import Path
 from fuzzynav.errors import DataMissingError, InputFileError
 
 
-def _one(directory: Path, pattern: str, what: str, several: str) -> Path:
-    found = sorted(directory.glob(pattern))
+def _one(directory: Path, pattern: str, what: str, several: str, keep=None) -> Path:
+    found = sorted(p for p in directory.glob(pattern) if keep is None or keep(p.name))
     if not found:
         raise DataMissingError(f"{directory}: no {what} ({pattern}) in the recording directory")
     if len(found) > 1:
@@ -45,6 +45,13 @@ def _imu_file(directory: Path, session) -> Path:
     return imu
 
 
+def _of_session(name: str, session_id: str) -> bool:
+    """``gnss_<id>.pos`` or ``gnss_<id><sep>...pos`` with a separator that is not a letter
+    or digit: session 1 must not take session 12's ``gnss_12_sf.pos``."""
+    rest = name[len("gnss_" + session_id):-len(".pos")]
+    return rest == "" or not rest[0].isalnum()
+
+
 def find_files(directory, session=None) -> dict:
     """The IMU CSV, its tag and the GNSS solution in ``directory`` (clear errors if not)."""
     directory = Path(directory)
@@ -56,7 +63,8 @@ def find_files(directory, session=None) -> dict:
         raise DataMissingError(f"{tag}: time-tag file of {imu.name} not found")
     session_id = imu.stem[len("imu_"):]
     pos = _one(directory, f"{glob.escape('gnss_' + session_id)}*.pos", "GNSS solution",
-               "keep one solution per session in the directory")
+               "keep one solution per session in the directory",
+               keep=lambda name: _of_session(name, session_id))
     for what, path in (("IMU file", imu), ("time-tag file", tag), ("GNSS solution", pos)):
         if not path.is_file():
             raise InputFileError(path, "", f"not a regular file (a directory?); the {what} "
