@@ -92,12 +92,10 @@ def optimiser_names() -> tuple:
 
 
 def _tpe(cfg, seed):
-    from fuzzynav.tuning import tpe
-
-    # the lazy sampler proposes what Optuna's proposes, sampling only the groups a trial uses
-    cls = tpe.LazyGroupTPESampler if tpe.ENABLED else optuna.samplers.TPESampler
-    return cls(seed=seed, multivariate=True, group=True, constant_liar=True,
-               n_startup_trials=10)
+    # group=True: each partition structure of the conditional space is its own group;
+    # constant_liar: parallel workers do not all propose around the same running trial
+    return optuna.samplers.TPESampler(seed=seed, multivariate=True, group=True,
+                                      constant_liar=True, n_startup_trials=10)
 
 
 register_optimiser(Optimiser(
