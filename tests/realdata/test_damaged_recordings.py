@@ -182,6 +182,8 @@ CASES = [
                                            + _lines(d, POS)[49].split()[1][2:]), POS, "line 50"),
     ("pos-second-60", lambda d: _edit_fields(d, POS, 50, 1, _lines(d, POS)[49].split()[1][:6]
                                              + "60.000"), POS, "line 50"),
+    ("pos-second-inf", lambda d: _edit_fields(d, POS, 50, 1, _lines(d, POS)[49].split()[1][:6]
+                                              + "inf"), POS, "line 50"),
     ("pos-no-header", lambda d: _write(d, POS, [x for x in _lines(d, POS)
                                                if not x.startswith("%")]), POS, "header"),
 ]

@@ -70,14 +70,11 @@ def _parse_time(path, lineno, date: str, clock: str):
         hh, mm, ss = clock.split(":")
         sec = float(ss)
         whole = int(np.floor(sec))
-        # a real calendar date and clock: timegm alone would roll day 38 into the next
-        # month (GPS time has no leap second, so 60 s is refused too)
-        datetime.datetime(y, mo, d, int(hh), int(mm), whole)
-        if not 0.0 <= sec < 60.0:
-            raise ValueError(sec)
-        t = calendar.timegm((y, mo, d, int(hh), int(mm), whole, 0, 0, 0))
-        return t, sec - whole
-    except (ValueError, TypeError):
+        # datetime refuses what timegm alone would roll over (day 38 into the next month;
+        # seconds past 59: GPS time has no leap second); an infinite second overflows int
+        stamp = datetime.datetime(y, mo, d, int(hh), int(mm), whole)
+        return calendar.timegm(stamp.timetuple()), sec - whole
+    except (ValueError, TypeError, OverflowError):
         raise InputFileError(path, f"line {lineno}",
                              f"bad GPST date-time {date} {clock!r}") from None
 
