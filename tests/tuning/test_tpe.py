@@ -6,6 +6,7 @@ these tests check what the registry now builds, on whatever Optuna is installed.
 from __future__ import annotations
 
 import math
+from unittest import mock
 
 import optuna
 
@@ -38,10 +39,14 @@ def proposals(seed: int, n: int = 25):
 
 
 def test_tpe_is_optunas_multivariate_group_sampler():
-    sampler = get_optimiser("tpe").make(None, 0)
-    assert type(sampler) is optuna.samplers.TPESampler
+    # the arguments it is built with (public), not Optuna's private attributes
+    with mock.patch.object(optuna.samplers, "TPESampler",
+                           wraps=optuna.samplers.TPESampler) as cls:
+        sampler = get_optimiser("tpe").make(None, 5)
+    assert isinstance(sampler, optuna.samplers.TPESampler)
+    kw = cls.call_args.kwargs
     # what the space needs: one group per partition structure, liars for parallel workers
-    assert sampler._multivariate and sampler._group and sampler._constant_liar
+    assert kw["multivariate"] and kw["group"] and kw["constant_liar"] and kw["seed"] == 5
 
 
 def test_a_seeded_study_proposes_the_same_trials_again():
