@@ -100,10 +100,15 @@ def one_line(message: str) -> str:
 def main(argv=None) -> int:
     """Entry point: parse ``argv`` and run the chosen command; return the exit code."""
     parser = build_parser()
-    args = parser.parse_args(argv)
     stdout = sys.stdout
     sys.stdout = _GuardedStdout(stdout)
     try:
+        try:
+            args = parser.parse_args(argv)
+        except SystemExit:
+            # --help and --version print, then exit: their output is guarded like any other
+            sys.stdout.flush()
+            raise
         code = int(args.func(args) or 0)
         sys.stdout.flush()  # a full disk shows here, not as a warning at exit
         return code

@@ -47,6 +47,21 @@ def test_a_full_disk_behind_stdout_is_one_line(capsys, monkeypatch, argv):
     assert code == 2 and _one_line(err) and "stdout" in err and "No space left" in err
 
 
+@pytest.mark.parametrize("argv", [["--help"], ["--version"], ["run", "--help"]])
+def test_help_to_a_full_disk_is_one_line(capsys, monkeypatch, argv):
+    """argparse prints help and exits by itself; the guard still sees the failed write."""
+    monkeypatch.setattr(sys, "stdout", _FailingStdout(errno.ENOSPC))
+    code = main(argv)
+    err = capsys.readouterr().err
+    assert code == 2 and _one_line(err) and "No space left" in err
+
+
+def test_help_to_a_working_stdout_still_exits_0(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--help"])
+    assert exc.value.code == 0 and "usage: fuzzynav" in capsys.readouterr().out
+
+
 def test_a_closed_pipe_behind_stdout_ends_quietly(capsys, monkeypatch):
     monkeypatch.setattr(sys, "stdout", _FailingStdout(errno.EPIPE))
     code = main(["fis", "surface", str(GPS), "--csv", "--grid", "200"])
@@ -77,6 +92,15 @@ def test_dev_full_as_a_real_process():
     """The output is small enough to sit in the buffer until exit: still one line."""
     with open("/dev/full", "w") as full:
         proc = _cli(["scenarios"], full)
+    assert proc.returncode == 2 and _one_line(proc.stderr), proc.stderr
+    assert "No space left on device" in proc.stderr
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+def test_help_to_dev_full_as_a_real_process():
+    """``fuzzynav --help >/dev/full``: the help sits in the buffer until argparse exits."""
+    with open("/dev/full", "w") as full:
+        proc = _cli(["--help"], full)
     assert proc.returncode == 2 and _one_line(proc.stderr), proc.stderr
     assert "No space left on device" in proc.stderr
 
