@@ -16,13 +16,11 @@ import importlib
 import os
 import sys
 
-from fuzzynav.errors import FuzzynavError, OutputError
+from fuzzynav.errors import MAX_MESSAGE, FuzzynavError, OutputError, bounded
 
 #: modules under ``fuzzynav.cli`` that contribute sub-commands, in help order
 COMMAND_MODULES = ("fis", "nav", "study")
 
-#: longest error message printed (characters); a longer one is cut and says by how much
-MAX_MESSAGE = 1000
 
 #: exit code when the reader of stdout went away (128 + SIGPIPE, as the shell reports it)
 EXIT_BROKEN_PIPE = 141
@@ -91,10 +89,7 @@ def _silence_stdout() -> None:
 
 def one_line(message: str) -> str:
     """``message`` on one line and at most :data:`MAX_MESSAGE` characters."""
-    text = " ".join(str(message).splitlines())
-    if len(text) > MAX_MESSAGE:
-        text = f"{text[:MAX_MESSAGE]}… ({len(text) - MAX_MESSAGE} characters cut)"
-    return text
+    return bounded(" ".join(str(message).splitlines()))
 
 
 def main(argv=None) -> int:

@@ -29,8 +29,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from fuzzynav.errors import FuzzynavError, InputFileError
-from fuzzynav.fuzzy.io import brief
+from fuzzynav.errors import FuzzynavError, InputFileError, brief
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
 from fuzzynav.tuning.controller_config import parse_controller, user_file
 from fuzzynav.tuning.recording_config import (check_no_attitude, check_recordings_held_out,

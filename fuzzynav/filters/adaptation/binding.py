@@ -24,10 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fuzzynav.errors import InputFileError
+from fuzzynav.errors import MAX_QUOTE, InputFileError, brief
 from fuzzynav.filters import adaptation, measurements
 from fuzzynav.filters.adaptation import context, window
-from fuzzynav.fuzzy.io import MAX_QUOTE, brief
 
 #: the DoM/ROR window in epochs, inclusive bounds
 WINDOW_RANGE = (1, 10000)
