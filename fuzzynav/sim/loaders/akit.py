@@ -33,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fuzzynav.errors import DataMissingError, InputFileError
+from fuzzynav.errors import DataMissingError, InputFileError, brief
 from fuzzynav.nav import attitude
 from fuzzynav.sim.loaders.akit_timing import MAX_OFFSET_S, ClockMap, dvl_offset, \
     estimate_clock
@@ -81,16 +81,25 @@ class AkitRecording:
     kind = "akit"
 
 
+#: highest trajectory number accepted (A-KIT has 1-8; a range to 10^12 would fill memory
+#: before the first missing file is noticed)
+MAX_TRAJECTORY = 9999
+
+
 def parse_trajectories(text) -> list[int]:
     """``"3"``, ``"1,4,6"`` or ``"1-8"`` (and mixtures) -> sorted trajectory numbers."""
     out = set()
     for part in str(text if text is not None else "1-8").split(","):
-        m = re.fullmatch(r"\s*(\d+)\s*(?:-\s*(\d+)\s*)?", part)
+        m = re.fullmatch(r"\s*(\d{1,12})\s*(?:-\s*(\d{1,12})\s*)?", part)
         if not m or (m.group(2) and int(m.group(2)) < int(m.group(1))):
             raise InputFileError(None, "--data trajectory",
-                                 f"expected N, N-M or a comma list, got {text!r}")
-        lo = int(m.group(1))
-        out.update(range(lo, int(m.group(2) or lo) + 1))
+                                 f"expected N, N-M or a comma list, got {brief(text)}")
+        lo, hi = int(m.group(1)), int(m.group(2) or m.group(1))
+        if not 1 <= lo <= hi <= MAX_TRAJECTORY:
+            raise InputFileError(None, "--data trajectory",
+                                 f"trajectory numbers run from 1 to {MAX_TRAJECTORY}, got "
+                                 f"{brief(part.strip())}")
+        out.update(range(lo, hi + 1))
     return sorted(out)
 
 
