@@ -14,6 +14,7 @@ import hashlib
 import os
 import re
 import shutil
+import socket
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
@@ -149,6 +150,46 @@ def _renamed(exc: OutputError, tmp: Path, directory: Path) -> OutputError:
     return OutputError(path, exc.reason, exc.what, written=exc.written)
 
 
+#: staging directories are named ``.staged-<pid>@<host>-<random>``: the owner is known
+_STAGED_RE = re.compile(r"\.staged-(\d+)@([^/]*)-[^-/]+")
+
+
+def _staged_prefix() -> str:
+    return f".staged-{os.getpid()}@{socket.gethostname()}-"
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's live process
+        return True
+    return True
+
+
+def sweep_staged(directory) -> list[Path]:
+    """Remove the staging directories in ``directory`` left by a killed writer.
+
+    A process killed (SIGKILL, power loss) inside :func:`staged` cannot clean up; its
+    directory is removed by the next writer into the same place, once its owner (a process
+    of this host, named in the directory's name) is gone.  Directories of live processes and
+    of other hosts (a shared file system) are left alone.
+
+    Returns
+    -------
+    list of Path
+        The directories removed.
+    """
+    host, removed = socket.gethostname(), []
+    for path in Path(directory).glob(".staged-*"):
+        m = _STAGED_RE.fullmatch(path.name)
+        if m and m.group(2) == host and not _alive(int(m.group(1))) and path.is_dir():
+            shutil.rmtree(path, ignore_errors=True)
+            removed.append(path)
+    return removed
+
+
 @contextmanager
 def staged(directory, what: str = "", last=()):
     """Write a group of files into ``directory`` all at once, or not at all.
@@ -157,7 +198,8 @@ def staged(directory, what: str = "", last=()):
     file system); the caller writes its files there, complete.  When the block ends, every
     file in it is moved onto the same name in ``directory`` (the names in ``last`` after the
     others: an index such as ``report.md`` appears once what it refers to is there); the
-    temporary directory is removed in any case.
+    temporary directory is removed in any case, and one a killed writer left behind is
+    removed by the next (:func:`sweep_staged`).
 
     Parameters
     ----------
@@ -176,8 +218,9 @@ def staged(directory, what: str = "", last=()):
         lists the files moved before it).  Otherwise ``directory`` is as it was.
     """
     directory = make_dir(directory, what)
+    sweep_staged(directory)
     try:
-        tmp = Path(tempfile.mkdtemp(prefix=".staged-", dir=directory))
+        tmp = Path(tempfile.mkdtemp(prefix=_staged_prefix(), dir=directory))
     except OSError as exc:  # a read-only directory
         raise OutputError(directory, exc, what) from None
     try:
