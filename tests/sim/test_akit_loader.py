@@ -143,7 +143,7 @@ def _damaged(tmp_path, synthetic, rel, edit):
     ("IMU_trajectory1.csv", lambda s: s[: s.index("\n", len(s) // 2) + 9], "line"),  # cut
     ("corrected/DVL_trajectory1.csv", lambda s: s.replace(",", ";", 30), "line 2"),
     ("corrected/GT_trajectory1.csv", lambda s: "\n".join(s.splitlines()[:30]), "Time"),
-    ("IMU_trajectory1.csv", lambda s: s.replace("-9.", "-1.9"), "ACC Z"),              # no g
+    ("IMU_trajectory1.csv", lambda s: s.replace("-9.", "-1.9"), "ACC X,Y,Z"),          # no g
     ("corrected/DVL_trajectory1.csv", lambda s: s.replace("\n1.0,", "\nnan,", 1), "line"),
 ])
 def test_damaged_files_give_one_clear_error(tmp_path, synthetic, rel, edit, where):
