@@ -1,0 +1,89 @@
+"""The documentation site (mkdocs.yml): every public module has an API page, and the site
+builds strictly (a broken link, anchor or cross-reference fails) without writing into the
+checkout.  The builds skip when the ``docs`` extra is not installed (it is in ``dev``)."""
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PKG = ROOT / "fuzzynav"
+
+
+def _public_top_level() -> set[str]:
+    """Subpackages and modules directly under fuzzynav/ without a leading underscore."""
+    names = {p.stem for p in PKG.glob("*.py")}
+    names |= {p.name for p in PKG.iterdir() if (p / "__init__.py").is_file()}
+    return {n for n in names if not n.startswith("_")}
+
+
+def _need_docs_extra() -> None:
+    # only mkdocs itself: with mkdocs there, a missing theme or plugin fails the build loudly
+    pytest.importorskip("mkdocs", reason="mkdocs missing: pip install -e '.[docs]'")
+
+
+def _mkdocs_build(config: Path, site_dir: Path) -> subprocess.CompletedProcess:
+    env = dict(os.environ, NO_MKDOCS_2_WARNING="1")  # Material's end-of-life banner
+    # no -q: mkdocs 1.6 then drops the warnings before --strict counts them (exit 0)
+    return subprocess.run(
+        [sys.executable, "-m", "mkdocs", "build", "--strict",
+         "-f", str(config), "-d", str(site_dir)],
+        cwd=config.parent, env=env, capture_output=True, text=True, timeout=300)
+
+
+def test_every_public_module_has_an_api_page_in_the_nav():
+    config = (ROOT / "mkdocs.yml").read_text()
+    pages = {p.stem for p in (ROOT / "docs" / "api").glob("*.md")} - {"index"}
+    assert pages == _public_top_level()
+    for name in pages:
+        text = (ROOT / "docs" / "api" / f"{name}.md").read_text()
+        assert f"::: fuzzynav.{name}\n" in text, name
+        assert f"api/{name}.md" in config, f"docs/api/{name}.md is not in the nav"
+
+
+def test_site_builds_strictly_outside_the_checkout(tmp_path):
+    _need_docs_extra()
+    before = {p.name for p in ROOT.iterdir()}
+    res = _mkdocs_build(ROOT / "mkdocs.yml", tmp_path / "site")
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert {p.name for p in ROOT.iterdir()} == before  # nothing written into the checkout
+    site = tmp_path / "site"
+    home = (site / "index.html").read_text()
+    # the README is the home page, its docs/... links rewritten to the site's pages
+    assert "Fuzzy adaptive Kalman filtering" in home
+    assert 'href="paper000/"' in home and 'href="docs/' not in home
+    # the API is rendered from the docstrings: a function, a `#:`-documented constant
+    # and a numpydoc parameter table
+    fuzzy = (site / "api" / "fuzzy" / "index.html").read_text()
+    assert 'id="fuzzynav.fuzzy.io.load_fis"' in fuzzy and "Parameters" in fuzzy
+    assert 'id="fuzzynav.units.DPH"' in (site / "api" / "units" / "index.html").read_text()
+    assert not list(site.rglob("*.py"))  # no package source copied onto the site
+
+
+BROKEN = {  # each kind of broken reference, and what the warning must name
+    "[a rule file](../rules/paper000_gps_sins.json)": "rules/paper000_gps_sins.json",
+    "[no such page](missing.md)": "missing.md",
+    "[no such section](#no-such-heading)": "#no-such-heading",
+    "[load][fuzzynav.fuzzy.io.no_such_function]": "fuzzynav.fuzzy.io.no_such_function",
+}
+
+
+def test_the_strict_build_refuses_every_kind_of_broken_reference(tmp_path):
+    """The site's own settings, on a one-page site, warn on each one and so fail."""
+    _need_docs_extra()
+    import yaml
+
+    config = yaml.safe_load((ROOT / "mkdocs.yml").read_text())
+    config["nav"] = [{"Home": "index.md"}]
+    config["docs_dir"] = "docs"
+    config["plugins"][-1]["mkdocstrings"]["handlers"]["python"]["paths"] = [str(ROOT)]
+    (tmp_path / "docs").mkdir()
+    (tmp_path / "docs" / "index.md").write_text("# Home\n\n" + "\n\n".join(BROKEN) + "\n")
+    (tmp_path / "mkdocs.yml").write_text(yaml.safe_dump(config))
+    res = _mkdocs_build(tmp_path / "mkdocs.yml", tmp_path / "site")
+    assert res.returncode != 0
+    warnings = [line for line in (res.stdout + res.stderr).splitlines() if "WARNING" in line]
+    for body, complaint in BROKEN.items():
+        assert any(complaint in line for line in warnings), (body, warnings)
