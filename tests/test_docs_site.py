@@ -71,18 +71,31 @@ BROKEN = {  # each kind of broken reference, and what the warning must name
     "[no such page](missing.md)": "missing.md",
     "[no such section](#no-such-heading)": "#no-such-heading",
     "[load][fuzzynav.fuzzy.io.no_such_function]": "fuzzynav.fuzzy.io.no_such_function",
+    "::: stale": "Parameter 'gain' does not appear in the function signature",
 }
+STALE_DOCSTRING = '''def scale(x):
+    """Scale x.
+
+    Parameters
+    ----------
+    gain : float
+        A parameter that was renamed in the signature but not here.
+    """
+'''
 
 
 def test_the_strict_build_refuses_every_kind_of_broken_reference(tmp_path):
-    """The site's own settings, on a one-page site, warn on each one and so fail."""
+    """The site's own settings, on a one-page site, warn on each one and so fail (a numpydoc
+    docstring out of step with its signature included)."""
     _need_docs_extra()
     import yaml
 
     config = yaml.safe_load((ROOT / "mkdocs.yml").read_text())
     config["nav"] = [{"Home": "index.md"}]
     config["docs_dir"] = "docs"
-    config["plugins"][-1]["mkdocstrings"]["handlers"]["python"]["paths"] = [str(ROOT)]
+    (plugin,) = [p["mkdocstrings"] for p in config["plugins"] if "mkdocstrings" in p]
+    plugin["handlers"]["python"]["paths"] = [str(ROOT), str(tmp_path)]
+    (tmp_path / "stale.py").write_text(STALE_DOCSTRING)
     (tmp_path / "docs").mkdir()
     (tmp_path / "docs" / "index.md").write_text("# Home\n\n" + "\n\n".join(BROKEN) + "\n")
     (tmp_path / "mkdocs.yml").write_text(yaml.safe_dump(config))
