@@ -93,6 +93,7 @@ def test_the_strict_build_refuses_every_kind_of_broken_reference(tmp_path):
     config = yaml.safe_load((ROOT / "mkdocs.yml").read_text())
     config["nav"] = [{"Home": "index.md"}]
     config["docs_dir"] = "docs"
+    config["hooks"] = [str(ROOT / hook) for hook in config.get("hooks", [])]
     (plugin,) = [p["mkdocstrings"] for p in config["plugins"] if "mkdocstrings" in p]
     plugin["handlers"]["python"]["paths"] = [str(ROOT), str(tmp_path)]
     (tmp_path / "stale.py").write_text(STALE_DOCSTRING)
@@ -104,3 +105,51 @@ def test_the_strict_build_refuses_every_kind_of_broken_reference(tmp_path):
     warnings = [line for line in (res.stdout + res.stderr).splitlines() if "WARNING" in line]
     for body, complaint in BROKEN.items():
         assert any(complaint in line for line in warnings), (body, warnings)
+
+
+def _hooks():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("mkdocs_hooks", ROOT / "mkdocs_hooks.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.mark.parametrize("source, expected", [
+    # CommonMark: a bullet list, or an ordered one from 1, may interrupt a paragraph
+    ("Text\n- a\n- b\n", "Text\n\n- a\n- b\n"),
+    ("Text\n1. a\n2. b\n", "Text\n\n1. a\n2. b\n"),
+    ("Text ends in\n5. which is no list\n", None),
+    # a tight list with continuation lines and a nested list stays as it is
+    ("- a\n  more of a\n- b\n  - b1\n  - b2\n- c\n", None),
+    # the next item after a loose item's second paragraph (or a table) is set apart
+    ("- a\n\n  second paragraph of a\n- b\n", "- a\n\n  second paragraph of a\n\n- b\n"),
+    # a list after a heading, or after a blank line, needs nothing; code is left alone
+    ("## Heading\n- a\n", None),
+    ("Text\n\n- a\n", None),
+    ("```\ncode\n- not an item\n```\n", None),
+    ("Para\n```\nx\n```\nafter\n- a\n", "Para\n```\nx\n```\nafter\n\n- a\n"),
+])
+def test_lists_after_a_paragraph_line_get_their_blank_line(source, expected):
+    assert _hooks().blank_line_before_lists(source) == (source if expected is None else expected)
+
+
+def test_the_site_reads_github_lists_as_github_does():
+    """With the site's extensions and hook, Python-Markdown finds the items GitHub finds."""
+    markdown = pytest.importorskip("markdown", reason="pip install -e '.[docs]'")
+    import yaml
+
+    config = yaml.safe_load((ROOT / "mkdocs.yml").read_text())
+    names, configs = [], {}
+    for ext in config["markdown_extensions"]:
+        name, options = next(iter(ext.items())) if isinstance(ext, dict) else (ext, {})
+        names.append(name)
+        configs[name] = options or {}
+    source = ("Refused:\n- **Sizes.** Estimated first.\n  - outages\n  - segments\n"
+              "- **Structure.**\n\n  | key | why |\n  |---|---|\n  | a | b |\n\n"
+              "  After the table.\n- **Last.**\n")
+    html = markdown.markdown(_hooks().blank_line_before_lists(source), extensions=names,
+                             extension_configs=configs)
+    assert html.count("<li>") == 5 and html.count("<ul>") == 2, html
+    assert "<table>" in html and "- " not in html, html
