@@ -72,9 +72,10 @@ BROKEN = {  # each kind of broken reference, and what the warning must name
     "[no such section](#no-such-heading)": "#no-such-heading",
     "[load][fuzzynav.fuzzy.io.no_such_function]": "fuzzynav.fuzzy.io.no_such_function",
     "::: stale": "Parameter 'gain' does not appear in the function signature",
+    "(stale role)": ":func:`stale.gone` names no object of the package",
 }
 STALE_DOCSTRING = '''def scale(x):
-    """Scale x.
+    """Scale x, as :func:`stale.gone` did.
 
     Parameters
     ----------
@@ -95,7 +96,10 @@ def test_the_strict_build_refuses_every_kind_of_broken_reference(tmp_path):
     config["docs_dir"] = "docs"
     config["hooks"] = [str(ROOT / hook) for hook in config.get("hooks", [])]
     (plugin,) = [p["mkdocstrings"] for p in config["plugins"] if "mkdocstrings" in p]
-    plugin["handlers"]["python"]["paths"] = [str(ROOT), str(tmp_path)]
+    python = plugin["handlers"]["python"]
+    python["paths"] = [str(ROOT), str(tmp_path)]
+    python["options"]["extensions"] = [  # the local ones by their path in the checkout
+        str(ROOT / ext) if ".py" in ext else ext for ext in python["options"]["extensions"]]
     (tmp_path / "stale.py").write_text(STALE_DOCSTRING)
     (tmp_path / "docs").mkdir()
     (tmp_path / "docs" / "index.md").write_text("# Home\n\n" + "\n\n".join(BROKEN) + "\n")
@@ -110,7 +114,7 @@ def test_the_strict_build_refuses_every_kind_of_broken_reference(tmp_path):
 def _hooks():
     import importlib.util
 
-    spec = importlib.util.spec_from_file_location("mkdocs_hooks", ROOT / "mkdocs_hooks.py")
+    spec = importlib.util.spec_from_file_location("mkdocs_hooks", ROOT / "docsite" / "mkdocs_hooks.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -153,3 +157,46 @@ def test_the_site_reads_github_lists_as_github_does():
                              extension_configs=configs)
     assert html.count("<li>") == 5 and html.count("<ul>") == 2, html
     assert "<table>" in html and "- " not in html, html
+
+
+def _roles():
+    griffe = pytest.importorskip("griffe", reason="pip install -e '.[docs]'")
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("sphinx_roles",
+                                                  ROOT / "docsite" / "sphinx_roles.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return griffe, module
+
+
+def test_sphinx_roles_become_links_to_what_the_site_documents(tmp_path, caplog):
+    griffe, roles = _roles()
+    pkg_dir = tmp_path / "toypkg"
+    pkg_dir.mkdir()
+    (pkg_dir / "__init__.py").write_text('"""Toy."""\n')
+    (pkg_dir / "other.py").write_text(
+        '"""Other."""\n\n\nclass Thing:\n    """A thing."""\n\n'
+        '    def grow(self):\n        """Grow."""\n\n\nclass Bare:\n    pass\n')
+    (pkg_dir / "mod.py").write_text(
+        '"""Mod."""\nfrom .other import Thing\n\n\ndef helper():\n    """Help."""\n\n\n'
+        'def _hidden():\n    """Private."""\n')
+    pkg = griffe.load("toypkg", search_paths=[str(tmp_path)])
+    mod = pkg["mod"]
+    cases = {
+        ":func:`helper`": "[`helper`][toypkg.mod.helper]",          # same module
+        ":class:`Thing`": "[`Thing`][toypkg.other.Thing]",          # imported: canonical path
+        ":meth:`Thing.grow`": "[`Thing.grow`][toypkg.other.Thing.grow]",
+        ":class:`~toypkg.other.Thing`": "[`Thing`][toypkg.other.Thing]",
+        ":class:`the thing <toypkg.other.Thing>`": "[`the thing`][toypkg.other.Thing]",
+        ":func:`toypkg.mod.\n    helper`": "[`toypkg.mod.helper`][toypkg.mod.helper]",
+        ":func:`_hidden`": "`_hidden`",                             # private: not on the site
+        ":class:`toypkg.other.Bare`": "`toypkg.other.Bare`",        # undocumented: not either
+        ":class:`numpy.ndarray`": "`numpy.ndarray`",                # outside the package
+    }
+    for role, expected in cases.items():
+        assert roles.rewrite(f"See {role}.", mod, pkg) == f"See {expected}.", role
+    assert not caplog.records
+    with caplog.at_level("WARNING", logger="griffe"):
+        assert roles.rewrite(":func:`toypkg.gone`", mod, pkg) == "`toypkg.gone`"
+    assert "names no object of the package" in caplog.text
