@@ -1,6 +1,7 @@
-"""The documentation site (mkdocs.yml): every public module has an API page, and the site
-builds strictly (a broken link, anchor or cross-reference fails) without writing into the
-checkout.  The builds skip when the ``docs`` extra is not installed (it is in ``dev``)."""
+"""The documentation site (mkdocs.yml): every public module has an API page, the site builds
+strictly (a broken link, anchor or cross-reference fails) without writing into the checkout,
+and the two local helpers in docsite/ (lists as GitHub reads them, Sphinx roles as links) do
+what they say.  The tests that need the ``docs`` extra skip without it (it is in ``dev``)."""
 import os
 import subprocess
 import sys
@@ -45,6 +46,7 @@ def test_every_public_module_has_an_api_page_in_the_nav():
 
 def test_site_builds_strictly_outside_the_checkout(tmp_path):
     _need_docs_extra()
+
     def listing():  # the checkout's top level and docs/ (other tests may add to the rest)
         return ({p.name for p in ROOT.iterdir()} & {"site", ".cache"},
                 sorted((ROOT / "docs").rglob("*")))
@@ -141,7 +143,8 @@ def test_lists_after_a_paragraph_line_get_their_blank_line(source, expected):
 
 def test_the_site_reads_github_lists_as_github_does():
     """With the site's extensions and hook, Python-Markdown finds the items GitHub finds."""
-    markdown = pytest.importorskip("markdown", reason="pip install -e '.[docs]'")
+    _need_docs_extra()
+    import markdown
     import yaml
 
     config = yaml.safe_load((ROOT / "mkdocs.yml").read_text())
@@ -160,8 +163,10 @@ def test_the_site_reads_github_lists_as_github_does():
 
 
 def _roles():
-    griffe = pytest.importorskip("griffe", reason="pip install -e '.[docs]'")
+    _need_docs_extra()
     import importlib.util
+
+    import griffe
 
     spec = importlib.util.spec_from_file_location("sphinx_roles",
                                                   ROOT / "docsite" / "sphinx_roles.py")
