@@ -37,7 +37,10 @@ def _mkdocs_build(config: Path, site_dir: Path) -> subprocess.CompletedProcess:
 def test_every_public_module_has_an_api_page_in_the_nav():
     config = (ROOT / "mkdocs.yml").read_text()
     pages = {p.stem for p in (ROOT / "docs" / "api").glob("*.md")} - {"index"}
-    assert pages == _public_top_level()
+    missing, stale = _public_top_level() - pages, pages - _public_top_level()
+    assert not missing, (f"add docs/api/NAME.md holding '::: fuzzynav.NAME' and a nav entry "
+                         f"'fuzzynav.NAME: api/NAME.md' in mkdocs.yml for {sorted(missing)}")
+    assert not stale, f"docs/api pages of modules that are gone: {sorted(stale)}"
     for name in pages:
         text = (ROOT / "docs" / "api" / f"{name}.md").read_text()
         assert f"::: fuzzynav.{name}\n" in text, name
