@@ -4,7 +4,9 @@ The pages are written for GitHub, where a bullet list may follow a paragraph lin
 (CommonMark lets a bullet item, or an ordered one numbered 1, interrupt a paragraph).
 Python-Markdown needs a blank line first and otherwise runs the items into the paragraph.
 The hook adds that blank line on the site; the pages themselves stay as they are.  (Lists
-nested by two spaces are the ``mdx_truly_sane_lists`` extension's part.)
+nested by two spaces are the ``mdx_truly_sane_lists`` extension's part.)  It also makes a
+code span naming a ``fuzzynav.`` path a link to that object's section of the API reference,
+when it has one (an optional cross-reference: plain code otherwise).
 """
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ import re
 _ITEM = re.compile(r" {0,3}(?:[-*+]|\d{1,9}[.)])(?: |$)")
 _INTERRUPTS = re.compile(r" {0,3}(?:[-*+]|1[.)]) +\S")  # items that may interrupt a paragraph
 _FENCE = re.compile(r" *(`{3,}|~{3,})")
+_CODE_PATH = re.compile(r"(?<![\[`])`(fuzzynav(?:\.[A-Za-z_]\w*)+)`(?![`\]])")
 
 
 def blank_line_before_lists(markdown: str) -> str:
@@ -60,6 +63,35 @@ def blank_line_before_lists(markdown: str) -> str:
     return "\n".join(out)
 
 
+def link_code_paths(markdown: str) -> str:
+    """Make every code span naming a ``fuzzynav.`` path an optional cross-reference.
+
+    Parameters
+    ----------
+    markdown : str
+        Page source.
+
+    Returns
+    -------
+    str
+        The source with `` `fuzzynav.x.y` `` outside code fences and headings replaced by an
+        ``<autoref optional>`` element, which mkdocs-autorefs turns into a link to the API
+        reference's section for ``fuzzynav.x.y`` when there is one and into the code span
+        alone when not.
+    """
+    out, fence = [], ""
+    for line in markdown.split("\n"):
+        if fence:
+            fence = "" if line.strip().startswith(fence) else fence
+        elif (m := _FENCE.match(line)):
+            fence = m.group(1)
+        elif not line.lstrip().startswith("#"):
+            line = _CODE_PATH.sub(r'<autoref identifier="\1" optional><code>\1</code></autoref>',
+                                  line)
+        out.append(line)
+    return "\n".join(out)
+
+
 def on_page_markdown(markdown: str, **kwargs) -> str:
     """mkdocs event: the page's Markdown, before it is converted."""
-    return blank_line_before_lists(markdown)
+    return link_code_paths(blank_line_before_lists(markdown))

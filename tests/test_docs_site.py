@@ -69,6 +69,11 @@ def test_site_builds_strictly_outside_the_checkout(tmp_path):
     assert 'id="fuzzynav.fuzzy.io.load_fis"' in fuzzy and "Parameters" in fuzzy
     assert 'id="fuzzynav.units.DPH"' in (site / "api" / "units" / "index.html").read_text()
     assert not list(site.rglob("*.py"))  # no package source copied onto the site
+    # the guide pages' `fuzzynav.x.y` code spans link into the API reference (63 when written)
+    guide = [p for p in site.glob("*/index.html") if p.parent.name != "api"]
+    links = sum(p.read_text().count('href="../api/') for p in guide)
+    assert links >= 30, links
+    assert not any("<autoref" in p.read_text() for p in guide)  # every one resolved or not
 
 
 BROKEN = {  # each kind of broken reference, and what the warning must name
@@ -142,6 +147,20 @@ def _hooks():
 ])
 def test_lists_after_a_paragraph_line_get_their_blank_line(source, expected):
     assert _hooks().blank_line_before_lists(source) == (source if expected is None else expected)
+
+
+@pytest.mark.parametrize("source, expected", [
+    ("see `fuzzynav.sim.imu` and `fuzzynav.units.DEG`.",
+     'see <autoref identifier="fuzzynav.sim.imu" optional><code>fuzzynav.sim.imu</code>'
+     '</autoref> and <autoref identifier="fuzzynav.units.DEG" optional><code>fuzzynav.units.DEG'
+     '</code></autoref>.'),
+    ("# The engine (`fuzzynav.fuzzy`)", None),               # a heading (the nav, the toc)
+    ("```\n`fuzzynav.fuzzy`\n```", None),                    # code
+    ("[`fuzzynav.fuzzy`](fuzzy.md)", None),                  # already a link
+    ("`fuzzynav` and ``fuzzynav.fuzzy`` and `fuzzynav.fuzzy.load_fis()`", None),
+])
+def test_code_spans_naming_the_package_become_optional_cross_references(source, expected):
+    assert _hooks().link_code_paths(source) == (source if expected is None else expected)
 
 
 def test_the_site_reads_github_lists_as_github_does():
