@@ -24,7 +24,8 @@ from nbclient import NotebookClient
 
 REPO = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((REPO / "notebooks").glob("*.ipynb"))
-EXPECTED = ["01_fuzzy_system.ipynb", "02_paper000.ipynb", "03_study.ipynb"]
+EXPECTED = ["01_fuzzy_system.ipynb", "02_paper000.ipynb", "03_study.ipynb",
+            "04_paper001.ipynb", "05_paper002.ipynb", "06_paper003.ipynb", "07_paper004.ipynb"]
 #: per cell; generous because a cold numba cache compiles the filter loop (a minute or more
 #: on a loaded 2-core machine) in the first cell that runs a filter
 CELL_TIMEOUT_S = 600
@@ -47,7 +48,7 @@ def _fingerprint() -> dict:
             for p in files}
 
 
-def test_the_three_notebooks_are_there():
+def test_the_expected_notebooks_are_there():
     assert [p.name for p in NOTEBOOKS] == EXPECTED
 
 
@@ -67,7 +68,7 @@ def test_committed_with_outputs_cleared(path):
 
 @pytest.fixture(scope="module")
 def shared_sim_cache(tmp_path_factory):
-    """One simulation cache for the three notebooks (02 and 03 share paper000 logs)."""
+    """One simulation cache for the notebooks (02 and 03 share paper000 logs)."""
     return tmp_path_factory.mktemp("nb-sim-cache")
 
 
