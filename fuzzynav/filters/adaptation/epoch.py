@@ -103,7 +103,8 @@ class EpochPolicy:
                                 f"{', '.join(ADAPTERS)})")
         self.adapter = adapter
         self.channels = _channel_names(channels)
-        self.model = _model(model, self.channels, getattr(adapter, "binding", None))
+        self.model = _model(model, self.channels, getattr(adapter, "binding", None),
+                            getattr(adapter, "source", None))
         self.m = len(self.channels)
         if self.m > self.model.max_rows:
             raise FuzzynavError(f"channels: {self.m} rows, the {self.model.kind} model has "
@@ -258,7 +259,7 @@ def _channel_names(channels) -> tuple:
     return names
 
 
-def _model(model, channels, binding):
+def _model(model, channels, binding, source=None):
     """The measurement model the rows belong to (see :class:`EpochPolicy`)."""
     models = measurements.MODELS.load()
     if isinstance(model, str):
@@ -274,7 +275,7 @@ def _model(model, channels, binding):
                                 f"{sorted(wanted)}; known: " + "; ".join(
                                     f"{k} ({', '.join(m.channels)})" for k, m in models.items()))
     if binding is not None:
-        binding.check_channels(model, getattr(binding, "source", None))
+        binding.check_channels(model, source)
     return model
 
 
