@@ -122,10 +122,14 @@ def log(tmp_path_factory):
     return simulate(scn, 1, tmp_path_factory.mktemp("sim"))
 
 
+#: each case compiles a recorder around its kernel (1-5 s): three in the default run
 CASES = [("fuzzy", {"rules": "paper000_select_gnss.json"}),      # r-scaling
-         ("fuzzy", {"rules": "paper000_rq_select_gnss.json"}),   # rq-scaling, motion inputs
-         ("fuzzy", {"rules": "paper000_gps_sins.json"}),         # exponential weighting
-         ("sage-husa", None), ("vb", None), ("huber", None)]
+         ("sage-husa", None), ("huber", None),
+         pytest.param("fuzzy", {"rules": "paper000_rq_select_gnss.json"},  # motion inputs
+                      marks=pytest.mark.slow),
+         pytest.param("fuzzy", {"rules": "paper000_gps_sins.json"},  # exponential weighting
+                      marks=pytest.mark.slow),
+         pytest.param("vb", None, marks=pytest.mark.slow)]
 
 
 @pytest.mark.parametrize("filter_name, options", CASES,
