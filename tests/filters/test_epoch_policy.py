@@ -214,6 +214,7 @@ def test_a_constant_rule_gives_a_geometric_scale(tmp_path):
 
 
 def test_every_per_sensor_policy_the_loop_knows_can_be_stepped():
+    """A new fuzzy policy fails here ("run by a rule file") until a rule file is named."""
     names = set(adaptation.ADAPTERS.load())
     fuzzy = {"exponential-weighting": "paper000_gps_sins.json",
              "r-scaling": "paper002_ror_gnss.json", "rq-scaling": "paper000_rq_gnss.json"}
@@ -223,9 +224,7 @@ def test_every_per_sensor_policy_the_loop_knows_can_be_stepped():
         assert policy.name == name
         step = policy.step(np.full(6, 0.5), np.eye(6), np.ones(6))
         assert step.r_scale.shape == (6,) and np.all(step.r_scale > 0)
-    assert names - {"none"} <= set(fuzzy) | {"constant-scale", "sage-husa", "huber",
-                                             "fading-memory", "variational-bayes",
-                                             "strong-tracking"}
+        assert step.p_weight > 0 and step.q_scale > 0
 
 
 def test_the_policy_is_the_loops_kernel_not_a_bound_method():
@@ -241,6 +240,7 @@ def test_the_policy_is_the_loops_kernel_not_a_bound_method():
     ((np.ones(2), np.eye(2), np.ones((2, 2))), "diagonal"),
     ((np.ones(2), np.eye(2), [1.0, -1.0]), "positive"),
     ((np.array([1.0, np.nan]), np.eye(2), np.ones(2)), "innovation"),
+    ((np.ones(2), "eye", np.ones(2)), "hph: must be numbers"),
 ])
 def test_bad_sizes_are_one_clear_error(args, match):
     policy = EpochPolicy.from_policy("sage-husa", ("pos", "vel"))

@@ -61,7 +61,9 @@ class EpochStep:
     p_weight : float
         Factor on the propagated part of ``P-`` (1 = none).
     q_scale : float
-        Factor on the process noise from this epoch on (1 = unchanged).
+        Factor on the process noise from this epoch on (1 = unchanged); it compounds: the
+        loop multiplies its process noise by it at every epoch (``rq-scaling`` returns the
+        ratio of its new process-noise level to the previous one).
     diag : dict
         The policy's logged diagnostics by name (as in the loop's event log).
     status : int
@@ -171,13 +173,13 @@ class EpochPolicy:
     def step(self, innovation, hph, R, context=None) -> EpochStep:
         """Adapt one epoch (see the module docstring for the arguments)."""
         r = self._vector(innovation, "innovation")
-        HPH = np.array(hph, dtype=float, copy=True)
+        HPH = _floats(hph, "hph")
         if self.m == 1 and HPH.size == 1:
             HPH = HPH.reshape(1, 1)
         if HPH.shape != (self.m, self.m) or not np.isfinite(HPH).all():
             raise FuzzynavError(f"hph: must be a finite ({self.m}, {self.m}) array "
                                 f"(H P- H^T of the {self.m} rows), got shape {HPH.shape}")
-        R_in = np.asarray(R, dtype=float)
+        R_in = _floats(R, "R")
         Rv = self._variances(R_in)
         ctx = self._context(context, Rv)
         out = np.ones(2 + self.m)
@@ -200,10 +202,7 @@ class EpochPolicy:
 
     def _vector(self, value, what: str) -> np.ndarray:
         """``value`` as m finite floats: (m,), a column (m, 1) or, for one row, a scalar."""
-        try:
-            v = np.array(value, dtype=float)
-        except (TypeError, ValueError):
-            v = np.array([np.nan])
+        v = _floats(value, what)
         if v.shape in ((self.m, 1), () if self.m == 1 else (self.m,)):
             v = v.reshape(self.m)
         if v.shape != (self.m,) or not np.isfinite(v).all():
@@ -249,6 +248,14 @@ class EpochPolicy:
                 slot = context.CTX_R + self.m + self._cols[stat]
             ctx[slot] = value
         return ctx
+
+
+def _floats(value, what: str) -> np.ndarray:
+    """``value`` as a new float array (one clear error when it holds no numbers)."""
+    try:
+        return np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise FuzzynavError(f"{what}: must be numbers, got {value!r}"[:200]) from None
 
 
 def _channel_names(channels) -> tuple:
