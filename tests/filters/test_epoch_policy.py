@@ -9,6 +9,8 @@ numbers), and those must match the loop's own event log (its S diagonal and diag
 which the recorder does not touch.
 """
 import dataclasses
+import json
+from pathlib import Path
 
 import numba as nb
 import numpy as np
@@ -20,10 +22,17 @@ from fuzzynav.filters.adaptation import ADAPT_SIG
 from fuzzynav.filters.adaptation.epoch import EpochPolicy
 
 MAXR = 6  # rows of a GNSS epoch
-#: per recorded epoch: m, r, HPH, R, speed/rate/force, status, out[0], out[1], R factors
-BLOCK = 1 + MAXR + MAXR * MAXR + MAXR + 3 + 1 + 2 + MAXR
+#: a recorded epoch: m, then from these offsets r, HPH, R, speed/rate/force, the kernel's
+#: status and its out (weight, Q factor, R factors)
+O_R, O_HPH = 1, 1 + MAXR
+O_RN = O_HPH + MAXR * MAXR
+O_CTX = O_RN + MAXR
+O_STATUS = O_CTX + 3
+O_OUT = O_STATUS + 1
+BLOCK = O_OUT + 2 + MAXR
 CAPACITY = 400  # epochs
 GNSS_ROWS = ("pos",) * 3 + ("vel",) * 3
+RULES = Path(__file__).resolve().parents[2] / "rules"
 
 
 def _recorder(inner):
@@ -39,18 +48,17 @@ def _recorder(inner):
         if not full:
             st[b] = m
             for i in range(m):
-                st[b + 1 + i] = r[i]
-                st[b + 1 + MAXR + MAXR * MAXR + i] = R[i]
+                st[b + O_R + i] = r[i]
+                st[b + O_RN + i] = R[i]
                 for j in range(m):
-                    st[b + 1 + MAXR + i * MAXR + j] = HPH[i, j]
+                    st[b + O_HPH + i * MAXR + j] = HPH[i, j]
             for i in range(3):
-                st[b + 1 + 2 * MAXR + MAXR * MAXR + i] = ctx[i]
+                st[b + O_CTX + i] = ctx[i]
         status = inner(fp, ip, st[:k], r, HPH, R, chan, m, out, diag, ctx)
         if not full:
-            o = b + 4 + 2 * MAXR + MAXR * MAXR
-            st[o] = status
+            st[b + O_STATUS] = status
             for i in range(2 + m):
-                st[o + 1 + i] = out[i]
+                st[b + O_OUT + i] = out[i]
             st[k] = n + 1
         return status
 
@@ -103,11 +111,10 @@ def _epochs(st):
     for e in range(n):
         b = st[k + 1 + e * BLOCK:k + 1 + (e + 1) * BLOCK]
         m = int(b[0])
-        o = 4 + 2 * MAXR + MAXR * MAXR
-        out.append(dict(r=b[1:1 + m], HPH=b[1 + MAXR:1 + MAXR + MAXR * MAXR]
-                        .reshape(MAXR, MAXR)[:m, :m], R=b[1 + MAXR + MAXR * MAXR:][:m],
-                        ctx=b[1 + 2 * MAXR + MAXR * MAXR:][:3], status=int(b[o]),
-                        out=b[o + 1:o + 3 + m]))
+        out.append({"r": b[O_R:O_R + m],
+                    "HPH": b[O_HPH:O_RN].reshape(MAXR, MAXR)[:m, :m],
+                    "R": b[O_RN:O_RN + m], "ctx": b[O_CTX:O_STATUS],
+                    "status": int(b[O_STATUS]), "out": b[O_OUT:O_OUT + 2 + m]})
     return out
 
 
@@ -187,9 +194,7 @@ def test_sage_husa_matches_its_recursion_by_hand():
 
 def _constant_rules(tmp_path, value):
     """An r-scaling rule file with one rule, always fully fired, giving ``t = value``."""
-    import json
-
-    doc = json.loads(open("rules/paper002_ror.json").read())
+    doc = json.loads((RULES / "paper002_ror.json").read_text())
     doc["inputs"][0]["terms"] = [{"name": "any", "mf": "trap", "params": [-1.0, -0.5, 3.5, 4.0]}]
     doc["outputs"][0]["terms"] = [{"name": "c", "mf": "tri",
                                    "params": [value - 0.1, value, value + 0.1]}]

@@ -122,7 +122,7 @@ class EpochPolicy:
         self.reset()
 
     @classmethod
-    def from_rules(cls, rules, channels, model=None) -> "EpochPolicy":
+    def from_rules(cls, rules, channels, model=None) -> EpochPolicy:
         """The policy a rule file binds (a path, or a file name in ``rules/``)."""
         from fuzzynav.filters.catalog import find_rule_file
         from fuzzynav.fuzzy import load_fis
@@ -138,7 +138,7 @@ class EpochPolicy:
         return cls(adaptation.get(binding.adapter)(fis, str(path), binding), channels, model)
 
     @classmethod
-    def from_policy(cls, name: str, channels, model=None, **params) -> "EpochPolicy":
+    def from_policy(cls, name: str, channels, model=None, **params) -> EpochPolicy:
         """A registered classical policy by name, with its parameters (e.g. ``b=0.97``)."""
         kind = adaptation.get(name)
         if issubclass(kind, FuzzyPolicy):
