@@ -32,7 +32,8 @@ from tests.conftest import datasets_dir
 REPO = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((REPO / "notebooks").glob("*.ipynb"))
 EXPECTED = ["01_fuzzy_system.ipynb", "02_paper000.ipynb", "03_study.ipynb",
-            "04_paper001.ipynb", "05_paper002.ipynb", "06_paper003.ipynb", "07_paper004.ipynb"]
+            "04_paper001.ipynb", "05_paper002.ipynb", "06_paper003.ipynb", "07_paper004.ipynb",
+            "08_own_filter.ipynb"]
 #: per cell; generous because a cold numba cache compiles the filter loop (a minute or more
 #: on a loaded 2-core machine) in the first cell that runs a filter
 CELL_TIMEOUT_S = 600
