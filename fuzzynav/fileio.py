@@ -19,7 +19,7 @@ import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
-from fuzzynav.errors import OutputError
+from fuzzynav.errors import InputFileError, OutputError, brief
 
 
 def _umask() -> int:
@@ -69,9 +69,48 @@ def output_errors(path, what: str):
         raise OutputError(path, exc, what) from None
 
 
+#: directories of the operating system: fuzzynav writes nothing there, whoever asks (the
+#: tests, and many containers, run as root, whom no permission stops)
+SYSTEM_DIRS = ("/bin", "/boot", "/dev", "/etc", "/lib", "/lib32", "/lib64", "/proc", "/sbin",
+               "/sys", "/usr")
+
+
+def is_inside(path, base) -> bool:
+    """Whether ``path`` is ``base`` or below it, after resolving ``..`` and symbolic links."""
+    path, base = Path(os.path.realpath(path)), Path(os.path.realpath(base))
+    return path == base or base in path.parents
+
+
+def check_place(path, what: str = "") -> Path:
+    """``path`` unless it lies in a system directory (:data:`SYSTEM_DIRS`): then an
+    :class:`OutputError` naming it, before anything is created."""
+    for d in SYSTEM_DIRS:
+        if os.path.isdir(d) and is_inside(path, d):
+            raise OutputError(path, f"{d} is a system directory; fuzzynav writes nothing "
+                                    "there", what)
+    return Path(path)
+
+
+def study_output(text, study_file, key: str) -> Path:
+    """Where a study file's ``key`` says to write: relative to the study's directory and
+    inside it (``..`` and symbolic links resolved), else :class:`InputFileError` naming the
+    file and key.  Paths given on the command line (``--out``) are the user's own choice
+    and do not pass through here."""
+    study_file = Path(study_file)
+    path = Path(text).expanduser()
+    path = path if path.is_absolute() else study_file.parent / path
+    if not is_inside(path, study_file.parent):
+        raise InputFileError(study_file, key, f"{brief(str(text))} lies outside the study's "
+                                              f"directory {study_file.parent}; a study writes "
+                                              "only there (give another directory on the "
+                                              "command line)")
+    return path
+
+
 def make_dir(path, what: str = "") -> Path:
-    """``mkdir -p path``; a failure is an :class:`OutputError` naming it (and ``what``)."""
-    path = Path(path)
+    """``mkdir -p path``; a failure is an :class:`OutputError` naming it (and ``what``).
+    Every writer here passes through it, so none writes into a system directory."""
+    path = check_place(Path(path), what)
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

@@ -27,7 +27,7 @@ from optuna.trial import TrialState
 
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.experiment import filter_context, run_on_log
-from fuzzynav.fileio import write_atomic
+from fuzzynav.fileio import study_output, write_atomic
 from fuzzynav.filters import measurements
 from fuzzynav.filters.baselines import Q_FIELDS, TUNED
 from fuzzynav.filters.params_file import PARAMS_FORMAT, check_params
@@ -85,7 +85,7 @@ def load_baseline_config(path) -> BaselineConfig:
         out = Path(bt.string("out", f"{path.stem}.json"))
         bt.finish()
         study = study_config_from_dict(doc, path, need_controllers=False)
-    out = out if out.is_absolute() else path.parent / out
+    out = study_output(out, path, "baselines.out")
     return BaselineConfig(study, tuple(dict.fromkeys(tune)), out)
 
 
