@@ -86,6 +86,11 @@ def _load(kind: str, directory: str, session, options: str | None = None):
     return loaded[0] if isinstance(loaded, list) else loaded
 
 
+#: shortest stretch of a recording a study may score [s]: a window past the end, or of a few
+#: seconds, would score nothing (a division by a zero distance) or noise
+MIN_SCORED_S = 10.0
+
+
 def recording_run(name: str, seed: int = 0) -> RecordingRun:
     """The :class:`RecordingRun` of a single-session recording spec and a seed.
 
@@ -99,6 +104,10 @@ def recording_run(name: str, seed: int = 0) -> RecordingRun:
     rec = _load(spec.kind, str(resolve(spec)), spec.session, spec.options)
     t_first, t_last = float(rec.imu.time_s[0]), float(rec.imu.time_s[-1])
     lo, hi = spec.window.bounds(t_first, t_last) if spec.window else (t_first, t_last)
+    if not hi - lo >= MIN_SCORED_S:
+        raise FuzzynavError(f"{name}: window {spec.window} leaves {max(hi - lo, 0.0):.3g} s to "
+                            f"score (at least {MIN_SCORED_S:g}: MIN_SCORED_S); the recording "
+                            f"runs 0-{t_last - t_first:.0f} s")
     if hasattr(rec, "dvl"):
         return _dvl_run(name, seed, rec, lo, hi)
     if hasattr(rec, "gnss"):
@@ -125,6 +134,10 @@ def _gnss_run(name, seed, rec, lo, hi,
     feeds, windows, start, lever = prepare_feeds(cut, settings, seed)
     sigma0 = fed_sigma(cut, settings)
     t0 = max(settings.t_start_s, start.init.time_s, lo)
+    if not hi - t0 >= MIN_SCORED_S:
+        raise FuzzynavError(f"{name}: {max(hi - t0, 0.0):.3g} s left to score after the start "
+                            f"at {t0 - float(rec.imu.time_s[0]):.0f} s (at least "
+                            f"{MIN_SCORED_S:g}: MIN_SCORED_S); widen the window")
 
     def run(setup):
         res = run_setup(start, {"gnss": feeds[STUDY_FEED]}, setup, settings.use_velocity)

@@ -136,7 +136,12 @@ class Evaluator:
         :class:`~fuzzynav.realdata.studyruns.RecordingRun` of a recording."""
         key = (scenario, seed)
         if key not in self._logs and is_recording_name(scenario):
-            self._logs[key] = recording_run(scenario, seed)  # loaded once per process
+            try:
+                self._logs[key] = recording_run(scenario, seed)  # loaded once per process
+            except FuzzynavError as exc:  # found only now: say which study entry it is
+                group = "train" if key in self.config.train else "test"
+                raise FuzzynavError(f"{self.config.path}: {group}.recordings ({scenario}): "
+                                    f"{exc}") from None
         if key not in self._logs:
             if scenario not in self._scenarios:
                 self._scenarios[scenario] = load_scenario(scenario)

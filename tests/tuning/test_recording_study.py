@@ -155,3 +155,18 @@ def test_export_of_a_recording_study_records_expected_on_the_simulated_run(
     assert (saved["expected"]["scenario"], saved["expected"]["seed"]) == ("paper004", 100)
     assert saved["provenance"]["train"] == [["akit:auv:1", 0]]
     assert "att" not in saved["provenance"]["objective"]["ratios_to_ekf"]   # NaN left out
+
+
+@pytest.mark.parametrize("window", ["@500-900", "@110-115", "@99.5-100%"])
+def test_a_window_with_nothing_to_score_is_refused_naming_the_study_entry(tmp_path, with_data,
+                                                                          window):
+    """A window past the end crashed with ZeroDivisionError in the A-KIT score (or ran every
+    trial on penalty scores and ended in "diverged"); now one line before any trial, naming
+    the study file, the group and the recording."""
+    from fuzzynav.errors import FuzzynavError
+
+    path = write_study(tmp_path, _doc([f"akit:auv:1{window}"], ["akit:auv:2"]))
+    ev = Evaluator(load_study_config(path))
+    with pytest.raises(FuzzynavError, match=rf"{path}: train\.recordings \(akit:auv:1"
+                                            rf"{window}\): .*MIN_SCORED_S"):
+        ev.baseline(f"akit:auv:1{window}", 0)
