@@ -19,7 +19,7 @@ import sys
 from fuzzynav.errors import FuzzynavError, OutputError
 
 #: modules under ``fuzzynav.cli`` that contribute sub-commands, in help order
-COMMAND_MODULES = ("fis", "nav", "study")
+COMMAND_MODULES = ("fis", "nav", "study", "data")
 
 #: longest error message printed (characters); a longer one is cut and says by how much
 MAX_MESSAGE = 1000

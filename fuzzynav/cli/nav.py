@@ -44,9 +44,10 @@ def register(sub) -> None:
 def add_source_arguments(p) -> None:
     p.add_argument("scenario", nargs="?", help="built-in scenario name or scenario TOML file")
     p.add_argument("--data", metavar="KIND:DIR[:SESSION]",
-                   help="a recording instead of a scenario, e.g. rtklib:../shared/datasets/"
-                        "rtklib-drive; SESSION picks one of several recordings in DIR (the "
-                        "<id> of imu_<id>.csv)")
+                   help="a recording instead of a scenario, e.g. rtklib:path/to/drive, or a "
+                        "dataset of fuzzynav data list: rtklib-drive, akit:3 (after fuzzynav "
+                        "data fetch NAME); SESSION picks one of several recordings in DIR "
+                        "(the <id> of imu_<id>.csv)")
 
 
 def add_recording_arguments(p) -> None:
