@@ -80,7 +80,8 @@ def _cmd_scenarios(args) -> int:
     for name in list_scenarios():
         scn = load_scenario(name)
         print(f"  {name:<24} {scn.duration_s:7.0f} s  {scn.description}")
-    print("\ndata sources (--data KIND:DIR[:SESSION]):")
+    print("\ndata sources (--data KIND:DIR[:SESSION], or a dataset NAME[:SESSION] of "
+          "fuzzynav data list):")
     for kind, desc in data_sources().items():
         print(f"  {kind:<24} {desc}")
     print("\nfilters (--filter NAME):")
