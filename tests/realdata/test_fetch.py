@@ -155,6 +155,14 @@ def test_interrupted_fetch_resumes_with_the_missing_and_cut_files(server, home):
         assert _sha256(home / TINY.name / f.path) == f.sha256
 
 
+def test_a_file_missing_on_the_server_is_one_line_with_the_status(server, home):
+    (server.root / TINY.files[0].url).unlink()
+    with pytest.raises(FetchError, match=r"\(HTTP 404\)") as err:
+        fetch(TINY.name)
+    assert TINY.files[0].url in str(err.value) and "\n" not in str(err.value)
+    assert not any((home / TINY.name).iterdir())          # nothing written
+
+
 def _dead_url() -> str:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
