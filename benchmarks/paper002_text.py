@@ -55,6 +55,9 @@ python -m fuzzynav.align.tune studies/align/paper002_tune.toml   # tune ROR -> t
 python benchmarks/paper002_results.py                             # this page
 ```
 
+The notebook `notebooks/05_paper002.ipynb` draws the azimuth error over the alignment
+against the filter's 3σ, with a three-seed Monte-Carlo beside the paper's claim.
+
 ## What we built, as the paper describes it
 
 | paper | fuzzynav |

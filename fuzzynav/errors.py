@@ -7,8 +7,42 @@ a TOML key) and what was wrong.  The CLI prints that one line and exits with cod
 from __future__ import annotations
 
 
+#: longest message a fuzzynav error carries (characters); a longer one is cut and says by
+#: how much, so a library caller (a notebook, a study worker's log) gets a readable line too
+MAX_MESSAGE = 1000
+
+#: longest quotation of an offending value in a message (characters)
+MAX_QUOTE = 200
+
+
+def brief(value) -> str:
+    """``repr(value)``, cut to :data:`MAX_QUOTE` characters and then saying what it was
+    (a 200 000-character name in a message would bury what was wrong with it)."""
+    text = repr(value)
+    if len(text) <= MAX_QUOTE:
+        return text
+    what = type(value).__name__
+    for kind, unit in ((list, "items"), (dict, "keys"), (str, "characters")):
+        if isinstance(value, kind):
+            what = f"{kind.__name__} of {len(value)} {unit}"
+    return f"{text[:MAX_QUOTE]}... ({what})"
+
+
+def bounded(text: str) -> str:
+    """``text`` cut to :data:`MAX_MESSAGE` characters, saying how many were cut."""
+    if len(text) <= MAX_MESSAGE:
+        return text
+    return f"{text[:MAX_MESSAGE]}… ({len(text) - MAX_MESSAGE} characters cut)"
+
+
 class FuzzynavError(Exception):
-    """Base class of errors caused by user input (exit code 2 in the CLI)."""
+    """Base class of errors caused by user input (exit code 2 in the CLI).
+
+    A message longer than :data:`MAX_MESSAGE` is cut here, once, whoever raises it.
+    """
+
+    def __init__(self, *args):
+        super().__init__(*(bounded(a) if isinstance(a, str) else a for a in args))
 
 
 class InputFileError(FuzzynavError, ValueError):
@@ -39,7 +73,7 @@ class UnknownNameError(FuzzynavError, KeyError):
     def __init__(self, kind: str, name: str, known):
         self.kind, self.name = kind, name
         self.known = sorted(known)
-        super().__init__(f"unknown {kind} {name!r}; known: {', '.join(self.known)}")
+        super().__init__(f"unknown {kind} {brief(name)}; known: {', '.join(self.known)}")
 
     def __str__(self) -> str:  # KeyError would quote the message
         return self.args[0]

@@ -14,11 +14,12 @@ import hashlib
 import os
 import re
 import shutil
+import socket
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
-from fuzzynav.errors import OutputError
+from fuzzynav.errors import InputFileError, OutputError, brief
 
 
 def _umask() -> int:
@@ -68,9 +69,48 @@ def output_errors(path, what: str):
         raise OutputError(path, exc, what) from None
 
 
+#: directories of the operating system: fuzzynav writes nothing there, whoever asks (the
+#: tests, and many containers, run as root, whom no permission stops)
+SYSTEM_DIRS = ("/bin", "/boot", "/dev", "/etc", "/lib", "/lib32", "/lib64", "/proc", "/sbin",
+               "/sys", "/usr")
+
+
+def is_inside(path, base) -> bool:
+    """Whether ``path`` is ``base`` or below it, after resolving ``..`` and symbolic links."""
+    path, base = Path(os.path.realpath(path)), Path(os.path.realpath(base))
+    return path == base or base in path.parents
+
+
+def check_place(path, what: str = "") -> Path:
+    """``path`` unless it lies in a system directory (:data:`SYSTEM_DIRS`): then an
+    :class:`OutputError` naming it, before anything is created."""
+    for d in SYSTEM_DIRS:
+        if os.path.isdir(d) and is_inside(path, d):
+            raise OutputError(path, f"{d} is a system directory; fuzzynav writes nothing "
+                                    "there", what)
+    return Path(path)
+
+
+def study_output(text, study_file, key: str) -> Path:
+    """Where a study file's ``key`` says to write: relative to the study's directory and
+    inside it (``..`` and symbolic links resolved), else :class:`InputFileError` naming the
+    file and key.  Paths given on the command line (``--out``) are the user's own choice
+    and do not pass through here."""
+    study_file = Path(study_file)
+    path = Path(text).expanduser()
+    path = path if path.is_absolute() else study_file.parent / path
+    if not is_inside(path, study_file.parent):
+        raise InputFileError(study_file, key, f"{brief(str(text))} lies outside the study's "
+                                              f"directory {study_file.parent}; a study writes "
+                                              "only there (give another directory on the "
+                                              "command line)")
+    return path
+
+
 def make_dir(path, what: str = "") -> Path:
-    """``mkdir -p path``; a failure is an :class:`OutputError` naming it (and ``what``)."""
-    path = Path(path)
+    """``mkdir -p path``; a failure is an :class:`OutputError` naming it (and ``what``).
+    Every writer here passes through it, so none writes into a system directory."""
+    path = check_place(Path(path), what)
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -149,6 +189,46 @@ def _renamed(exc: OutputError, tmp: Path, directory: Path) -> OutputError:
     return OutputError(path, exc.reason, exc.what, written=exc.written)
 
 
+#: staging directories are named ``.staged-<pid>@<host>-<random>``: the owner is known
+_STAGED_RE = re.compile(r"\.staged-(\d+)@([^/]*)-[^-/]+")
+
+
+def _staged_prefix() -> str:
+    return f".staged-{os.getpid()}@{socket.gethostname()}-"
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's live process
+        return True
+    return True
+
+
+def sweep_staged(directory) -> list[Path]:
+    """Remove the staging directories in ``directory`` left by a killed writer.
+
+    A process killed (SIGKILL, power loss) inside :func:`staged` cannot clean up; its
+    directory is removed by the next writer into the same place, once its owner (a process
+    of this host, named in the directory's name) is gone.  Directories of live processes and
+    of other hosts (a shared file system) are left alone.
+
+    Returns
+    -------
+    list of Path
+        The directories removed.
+    """
+    host, removed = socket.gethostname(), []
+    for path in Path(directory).glob(".staged-*"):
+        m = _STAGED_RE.fullmatch(path.name)
+        if m and m.group(2) == host and not _alive(int(m.group(1))) and path.is_dir():
+            shutil.rmtree(path, ignore_errors=True)
+            removed.append(path)
+    return removed
+
+
 @contextmanager
 def staged(directory, what: str = "", last=()):
     """Write a group of files into ``directory`` all at once, or not at all.
@@ -157,7 +237,8 @@ def staged(directory, what: str = "", last=()):
     file system); the caller writes its files there, complete.  When the block ends, every
     file in it is moved onto the same name in ``directory`` (the names in ``last`` after the
     others: an index such as ``report.md`` appears once what it refers to is there); the
-    temporary directory is removed in any case.
+    temporary directory is removed in any case, and one a killed writer left behind is
+    removed by the next (:func:`sweep_staged`).
 
     Parameters
     ----------
@@ -176,8 +257,9 @@ def staged(directory, what: str = "", last=()):
         lists the files moved before it).  Otherwise ``directory`` is as it was.
     """
     directory = make_dir(directory, what)
+    sweep_staged(directory)
     try:
-        tmp = Path(tempfile.mkdtemp(prefix=".staged-", dir=directory))
+        tmp = Path(tempfile.mkdtemp(prefix=_staged_prefix(), dir=directory))
     except OSError as exc:  # a read-only directory
         raise OutputError(directory, exc, what) from None
     try:

@@ -11,6 +11,11 @@ keep their files in a ``TemporaryDirectory``); the working directory must hold o
 notebook; and the parts of the checkout that the notebooks read from (``rules/``,
 ``studies/``, ``notebooks/``, the top level) must have the same files with the same
 contents. The whole tree is not watched because other work may add files to it meanwhile.
+
+Real recordings (paper 004's A-KIT part) reach the kernel as ``$FUZZYNAV_DATA`` (the
+directory the other tests use, :func:`tests.conftest.datasets_dir`); a notebook skips such
+a part with a message when they are absent, and when they are present the test checks that
+the part really ran.
 """
 from __future__ import annotations
 
@@ -22,15 +27,23 @@ import nbformat
 import pytest
 from nbclient import NotebookClient
 
+from tests.conftest import datasets_dir
+
 REPO = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((REPO / "notebooks").glob("*.ipynb"))
-EXPECTED = ["01_fuzzy_system.ipynb", "02_paper000.ipynb", "03_study.ipynb"]
+EXPECTED = ["01_fuzzy_system.ipynb", "02_paper000.ipynb", "03_study.ipynb",
+            "04_paper001.ipynb", "05_paper002.ipynb", "06_paper003.ipynb", "07_paper004.ipynb",
+            "08_own_filter.ipynb"]
 #: per cell; generous because a cold numba cache compiles the filter loop (a minute or more
 #: on a loaded 2-core machine) in the first cell that runs a filter
 CELL_TIMEOUT_S = 600
 #: committed notebooks are small: outputs cleared, no embedded figures
 MAX_BYTES = 40_000
 WATCHED = ("rules", "studies", "notebooks")
+#: notebooks with a part on real recordings: name -> (recording file under the datasets
+#: directory, what the notebook prints when it ran that part); the directory reaches the
+#: kernel as ``$FUZZYNAV_DATA`` and, when the recording is there, the part must have run
+REAL_DATA = {"07_paper004.ipynb": ("akit/IMU_trajectory1.csv", "A-KIT: ran on trajectories")}
 
 
 def _ids(path: Path) -> str:
@@ -47,7 +60,7 @@ def _fingerprint() -> dict:
             for p in files}
 
 
-def test_the_three_notebooks_are_there():
+def test_the_expected_notebooks_are_there():
     assert [p.name for p in NOTEBOOKS] == EXPECTED
 
 
@@ -67,7 +80,7 @@ def test_committed_with_outputs_cleared(path):
 
 @pytest.fixture(scope="module")
 def shared_sim_cache(tmp_path_factory):
-    """One simulation cache for the three notebooks (02 and 03 share paper000 logs)."""
+    """One simulation cache for the notebooks (02 and 03 share paper000 logs)."""
     return tmp_path_factory.mktemp("nb-sim-cache")
 
 
@@ -81,6 +94,10 @@ def test_notebook_runs(path, tmp_path, shared_sim_cache, monkeypatch):
     monkeypatch.setenv("FUZZYNAV_CACHE", str(shared_sim_cache))
     monkeypatch.setenv("TMPDIR", str(kernel_tmp))
     monkeypatch.delenv("FUZZYNAV_RULES", raising=False)
+    data = datasets_dir().resolve()
+    needs = REAL_DATA.get(path.name)
+    have_data = needs is not None and (data / needs[0]).is_file()
+    monkeypatch.setenv("FUZZYNAV_DATA", str(data))
     before = _fingerprint()
 
     nb = nbformat.read(work / path.name, as_version=4)
@@ -97,3 +114,6 @@ def test_notebook_runs(path, tmp_path, shared_sim_cache, monkeypatch):
         sorted(k for k in after.keys() | before.keys() if after.get(k) != before.get(k)))
     figures = sum("image/png" in o.get("data", {}) for c in code for o in c.outputs)
     assert figures >= 2, "the figures did not reach the notebook (matplotlib backend?)"
+    if have_data:
+        printed = "".join(o.get("text", "") for c in code for o in c.outputs)
+        assert needs[1] in printed, f"{path.name} skipped its real-data part, but {data} has it"

@@ -5,7 +5,9 @@ import json
 
 from fuzzynav.align.experiment import ALIGN_ROWS, monte_carlo_alignment
 from fuzzynav.align.scenario import load_alignment_scenario
-from fuzzynav.errors import FuzzynavError
+from fuzzynav.align.fuzzy_r import FuzzyRScaling
+from fuzzynav.align.run import get_align_filter
+from fuzzynav.errors import FuzzynavError, brief
 from fuzzynav.metrics import mean_ci
 from fuzzynav.report import comparison_rows, render
 
@@ -18,15 +20,26 @@ def _refuse(args, *options) -> None:
                             "(compare on an alignment scenario, run --align)")
 
 
+#: largest azimuth threshold (arcmin): half a turn; more means nothing
+MAX_THRESHOLD_ARCMIN = 180.0 * 60.0
+
+
 def compare_alignment(args, filters, claims=None, claim_labels=(), rows=()) -> int:
     """Run ``filters`` on ``args.mc`` seeds of an alignment scenario and print the table."""
     _refuse(args, ("plot", "--plot"), ("t_start", "--t-start"))
     scn = load_alignment_scenario(args.scenario)
+    fuzzy = [f for f in filters if get_align_filter(f).fuzzy]
     if args.rules and len(args.rules) > 1:
         raise FuzzynavError("--rules: the alignment filters take one rule file (ROR -> t)")
+    if args.rules and not fuzzy:
+        raise FuzzynavError(f"--rules: no filter of {', '.join(filters)} takes a rule file "
+                            "(the fuzzy ones do: align-fuzzy, align-fuzzy-fast)")
+    if args.rules:
+        FuzzyRScaling(args.rules[0])  # a file that is not a ROR -> t controller: refused now
     thr = getattr(args, "align_threshold", None)
-    if thr is not None and not thr > 0:
-        raise FuzzynavError(f"--align-threshold must be > 0 arcmin, got {thr}")
+    if thr is not None and not 0 < thr <= MAX_THRESHOLD_ARCMIN:
+        raise FuzzynavError(f"--align-threshold must be in (0, {MAX_THRESHOLD_ARCMIN:g}] "
+                            f"arcmin, got {thr}")
     seeds = list(range(args.seed, args.seed + args.mc))
     df = monte_carlo_alignment(scn, filters, seeds, rules=(args.rules or [None])[0],
                                threshold_arcmin=thr, progress=not args.json and args.mc > 1)
@@ -58,6 +71,25 @@ ALIGNED_NAV_ROWS = (("aligned heading error (deg)", "align_heading_err_deg"),
                     ("aligned level error (deg)", "align_level_err_deg"))
 
 
+def parse_align_spec(text: str):
+    """``"align-fuzzy@FILE"`` -> ``("align-fuzzy", "FILE")``; ``"align-kf"`` -> ``(.., None)``.
+
+    The aligner's rule file is given with the aligner: ``--rules`` belongs to the
+    navigation filter (``run --filter fakf --align align-fuzzy --rules F`` used to send F
+    to the aligner and leave fakf on its default rules).
+    """
+    name, at, rules = str(text).partition("@")
+    spec = get_align_filter(name)
+    if at and not rules:
+        raise FuzzynavError(f"--align {brief(text)}: no rule file after '@'")
+    if rules and not spec.fuzzy:
+        raise FuzzynavError(f"--align {brief(text)}: {name} takes no rule file (the fuzzy "
+                            "aligners do: align-fuzzy, align-fuzzy-fast)")
+    if rules:
+        FuzzyRScaling(rules)  # refused now if it is not a ROR -> t controller
+    return name, rules or None
+
+
 def run_with_alignment(args) -> int:
     """``fuzzynav run SCENARIO --filter F --align A``: align on the rest, then navigate."""
     import pandas as pd
@@ -70,11 +102,11 @@ def run_with_alignment(args) -> int:
     _refuse(args, ("plot", "--plot"), ("json", "--json"), ("t_start", "--t-start"))
     scn = load_scenario(args.scenario)
     seeds = list(range(args.seed, args.seed + args.mc))
-    rules = (args.rules or [None])[0] if args.align.startswith("align-fuzzy") else None
-    opts = {"rules": list(args.rules)} if args.rules and rules is None else {}
+    align, rules = parse_align_spec(args.align)
+    opts = {"rules": list(args.rules)} if args.rules else {}
     rows = []
     for seed in seeds:
-        out = run_aligned(simulate(scn, seed, args.cache), args.filter, opts, args.align, rules)
+        out = run_aligned(simulate(scn, seed, args.cache), args.filter, opts, align, rules)
         rows.append({"filter": args.filter, "seed": seed, **out.metrics})
     df = pd.DataFrame(rows)
     label = f"{args.align} -> {args.filter}"

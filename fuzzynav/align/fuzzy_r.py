@@ -14,12 +14,36 @@ from collections import deque
 
 import numpy as np
 
+from fuzzynav.errors import InputFileError, brief
 from fuzzynav.filters.catalog import find_rule_file
 from fuzzynav.fuzzy import load_fis
 from fuzzynav.fuzzy.kernels import eval_compiled
 
 #: the rule file shipped with the paper's three hand rules
 DEFAULT_RULES = "paper002_ror.json"
+
+
+def _check_controller(fis, path) -> None:
+    """Refuse a rule file that is not a ROR -> t controller (one input, one positive output;
+    a binding, if any, of the ``r-scaling`` adapter reading ``ror``), naming the field."""
+    def fail(where, what):
+        raise InputFileError(path, where, f"{what}; the alignment filters take a ROR -> t "
+                                          f"controller (e.g. {DEFAULT_RULES})")
+    if len(fis.inputs) != 1 or len(fis.outputs) != 1:
+        fail("$.inputs", f"has {len(fis.inputs)} input(s) and {len(fis.outputs)} output(s), "
+                         "not 1 and 1")
+    binding = fis.binding or {}
+    if binding:
+        if binding.get("adapter") != "r-scaling":
+            fail("$.binding.adapter", f"is {brief(binding.get('adapter'))}, not 'r-scaling'")
+        stat = (binding.get("inputs") or {}).get(fis.inputs[0].name, {}).get("statistic")
+        if stat != "ror":
+            fail(f"$.binding.inputs.{fis.inputs[0].name}.statistic",
+                 f"is {brief(stat)}, not 'ror'")
+    lo = fis.outputs[0].range[0]
+    if not lo > 0:
+        fail("$.outputs[0].range", f"starts at {lo:g}: the factor t multiplies R and must be "
+                                   "> 0 over the whole range")
 
 
 class FuzzyRScaling:
@@ -37,7 +61,12 @@ class FuzzyRScaling:
     """
 
     def __init__(self, fis, window=None, scale_min=1e-2, scale_max=1e3):
-        self.fis = fis if hasattr(fis, "evaluate") else load_fis(find_rule_file(fis))
+        path = None
+        if not hasattr(fis, "evaluate"):
+            path = find_rule_file(fis)
+            fis = load_fis(path)
+        self.fis = fis
+        _check_controller(fis, path)
         binding = self.fis.binding or {}
         self.window = int(window or binding.get("window", 10))
         self.scale_min, self.scale_max = scale_min, scale_max

@@ -53,7 +53,7 @@ ALIGN_FILTERS = {f.name: f for f in (
 def get_align_filter(name: str) -> AlignFilter:
     """A named alignment filter."""
     if name not in ALIGN_FILTERS:
-        raise UnknownNameError("alignment filter", name[:100], ALIGN_FILTERS)
+        raise UnknownNameError("alignment filter", name, ALIGN_FILTERS)
     return ALIGN_FILTERS[name]
 
 

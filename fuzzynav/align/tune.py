@@ -26,7 +26,7 @@ from fuzzynav.align import run as R
 from fuzzynav.align.experiment import metrics
 from fuzzynav.align.fuzzy_r import FuzzyRScaling
 from fuzzynav.align.scenario import load_alignment_scenario
-from fuzzynav.fileio import publish
+from fuzzynav.fileio import publish, study_output
 from fuzzynav.fuzzy import load_fis
 from fuzzynav.errors import InputFileError
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
@@ -87,7 +87,7 @@ def _config(path: Path) -> dict:
     t = Table(doc)
     here = path.parent
     cfg = {"template": (here / t.string("template")).resolve(),
-           "output": (here / t.string("output")).resolve(),
+           "output": study_output(t.string("output"), path, "output").resolve(),
            "filter": t.string("filter", "align-fuzzy"),
            "n_trials": t.integer("n_trials", 30, lo=1, hi=100000),
            "sampler_seed": t.integer("sampler_seed", 0, lo=0),

@@ -16,13 +16,11 @@ import importlib
 import os
 import sys
 
-from fuzzynav.errors import FuzzynavError, OutputError
+from fuzzynav.errors import MAX_MESSAGE, FuzzynavError, OutputError, bounded
 
 #: modules under ``fuzzynav.cli`` that contribute sub-commands, in help order
 COMMAND_MODULES = ("fis", "nav", "study", "data")
 
-#: longest error message printed (characters); a longer one is cut and says by how much
-MAX_MESSAGE = 1000
 
 #: exit code when the reader of stdout went away (128 + SIGPIPE, as the shell reports it)
 EXIT_BROKEN_PIPE = 141
@@ -91,19 +89,21 @@ def _silence_stdout() -> None:
 
 def one_line(message: str) -> str:
     """``message`` on one line and at most :data:`MAX_MESSAGE` characters."""
-    text = " ".join(str(message).splitlines())
-    if len(text) > MAX_MESSAGE:
-        text = f"{text[:MAX_MESSAGE]}… ({len(text) - MAX_MESSAGE} characters cut)"
-    return text
+    return bounded(" ".join(str(message).splitlines()))
 
 
 def main(argv=None) -> int:
     """Entry point: parse ``argv`` and run the chosen command; return the exit code."""
     parser = build_parser()
-    args = parser.parse_args(argv)
     stdout = sys.stdout
     sys.stdout = _GuardedStdout(stdout)
     try:
+        try:
+            args = parser.parse_args(argv)
+        except SystemExit:
+            # --help and --version print, then exit: their output is guarded like any other
+            sys.stdout.flush()
+            raise
         code = int(args.func(args) or 0)
         sys.stdout.flush()  # a full disk shows here, not as a warning at exit
         return code

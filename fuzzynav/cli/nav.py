@@ -24,7 +24,8 @@ def register(sub) -> None:
     p.add_argument("--filter", default="ekf", help="named filter (see `fuzzynav scenarios`)")
     p.add_argument("--align", metavar="ALIGN_FILTER",
                    help="align on the scenario's opening rest with this alignment filter "
-                        "(align-kf, align-fuzzy, ...) and start the navigation from it")
+                        "(align-kf, align-fuzzy, ...; align-fuzzy@FILE with its own rule "
+                        "file) and start the navigation from it")
     add_common_arguments(p)
     add_recording_arguments(p)
     p.set_defaults(func=_cmd_run)
@@ -183,6 +184,9 @@ def _cmd_compare(args) -> int:
     filters = [f.strip() for f in args.filters.split(",") if f.strip()]
     if len(filters) < 2:
         raise FuzzynavError("--filters needs at least two comma-separated filter names")
+    twice = sorted({f for f in filters if filters.count(f) > 1})
+    if twice:  # the columns (and the claims beside them) would no longer line up
+        raise FuzzynavError(f"--filters names {', '.join(twice)} twice")
     check_common(args)
     labels, claims = claims_for(str(args.scenario))
     from fuzzynav.align.scenario import is_alignment_scenario

@@ -24,7 +24,6 @@ file :data:`DEFAULT_PARAMS` is looked up in ``./studies`` and then the checkout'
 """
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
@@ -36,10 +35,10 @@ from fuzzynav.filters import measurements
 from fuzzynav.filters.adaptation.classical import (ConstantScale, Huber, SageHusa,
                                                    VariationalBayes)
 from fuzzynav.filters.adaptation.strong_tracking import StrongTracking
+from fuzzynav.filters.params_file import read_params_file
 from fuzzynav.filters.named import FilterSetup, config_from_imu, config_overrides, \
     register_filter
 
-PARAMS_FORMAT = "fuzzynav-baselines"
 #: the tuned-parameter file used when a filter is named without ``@FILE``
 DEFAULT_PARAMS = "paper000_baselines.json"
 #: process-noise multipliers of ``ekf-tuned`` / ``als``: key -> FilterConfig field
@@ -54,6 +53,8 @@ def _base(ctx):
 def find_params_file(name) -> Path:
     """A tuned-parameter file by path, or by file name in ``./studies`` or the checkout's
     ``studies/`` (where the baseline studies write them)."""
+    if not str(name).strip():
+        raise InputFileError(None, "params", "names no file (NAME@ with nothing after the @)")
     p = Path(name)
     if p.is_file():
         return p
@@ -67,27 +68,10 @@ def find_params_file(name) -> Path:
 
 
 def read_params(path) -> dict:
-    """The ``filters`` table of a tuned-parameter file (checked: positive finite numbers)."""
+    """The ``filters`` table of a tuned-parameter file, every key and range checked
+    (:func:`fuzzynav.filters.params_file.read_params_file`)."""
     path = find_params_file(path)
-    try:
-        doc = json.loads(Path(path).read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise InputFileError(path, "", f"not a readable JSON file ({exc})") from None
-    if not isinstance(doc, dict) or doc.get("format") != PARAMS_FORMAT:
-        raise InputFileError(path, "$.format", f"must be {PARAMS_FORMAT!r} (a file written "
-                                               "by a baseline study)")
-    filters = doc.get("filters")
-    if not isinstance(filters, dict):
-        raise InputFileError(path, "$.filters", "must be an object: filter -> parameters")
-    for name, params in filters.items():
-        if not isinstance(params, dict):
-            raise InputFileError(path, f"$.filters.{name}", "must be an object")
-        for key, v in params.items():
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or \
-                    not (math.isfinite(v) and v > 0):
-                raise InputFileError(path, f"$.filters.{name}.{key}",
-                                     f"must be a positive finite number, got {v!r}")
-    return {"path": Path(path), "filters": filters}
+    return {"path": Path(path), "filters": read_params_file(path)}
 
 
 def params_of(ctx, name: str) -> dict:

@@ -13,6 +13,7 @@ from typing import Callable
 import numpy as np
 
 from fuzzynav import units
+from fuzzynav.errors import FuzzynavError, brief
 from fuzzynav.registry import Registry
 from fuzzynav.filters.config import FilterConfig
 
@@ -133,7 +134,10 @@ def parse_filter_spec(spec: str):
     hold, say, ``fakf`` (the paper's rules) and ``fakf@rules/paper000_rscale_tuned.json``.
     For a filter with tuned parameters (``ekf-tuned@FILE``) the file is its ``params``.
     """
-    name, _, rules = spec.partition("@")
+    name, at, rules = spec.partition("@")
+    if at and not rules.strip("+ "):
+        raise FuzzynavError(f"{brief(spec)}: no file after '@' (NAME@FILE, or NAME alone for "
+                            "the filter's default)")
     target = FILTERS.load().get(name) if rules else None
     if target is not None and target.takes_params:
         return name, {"params": rules}

@@ -25,11 +25,12 @@ from pathlib import Path
 
 from fuzzynav.errors import InputFileError
 from fuzzynav.filters.adaptation.classical import ConstantScale
+from fuzzynav.filters.params_file import APSO_Q_KEYS, check_params, read_params_file
 from fuzzynav.filters.named import FilterSetup, config_from_imu, config_overrides, \
     register_filter
 
 #: multiplier keys besides the per-channel ``r_scale_<channel>``
-Q_KEYS = ("q_scale_att", "q_scale_vel", "q_scale_gyro", "q_scale_accel")
+Q_KEYS = APSO_Q_KEYS
 
 
 def read_multipliers(path) -> dict:
@@ -43,28 +44,21 @@ def read_multipliers(path) -> dict:
         raise InputFileError(path, "", f"is not JSON ({exc.msg} at line {exc.lineno})")
     if isinstance(doc, dict) and "multipliers" not in doc and "filters" in doc:
         # a baseline study's parameter file (studies/paper004_apso.toml): its "apso" entry
-        mult = doc["filters"].get("apso") if isinstance(doc["filters"], dict) else None
-        if not isinstance(mult, dict):
-            raise InputFileError(path, "$.filters.apso", "missing or not an object")
-        return check_multipliers(mult, path, "$.filters.apso.")
+        filters = read_params_file(path)
+        if "apso" not in filters:
+            raise InputFileError(path, "$.filters.apso", "missing (this file tunes: "
+                                 f"{', '.join(filters) or 'none'})")
+        return filters["apso"]
     mult = doc.get("multipliers") if isinstance(doc, dict) else None
     if not isinstance(mult, dict):
         raise InputFileError(path, "$.multipliers", "missing or not an object")
-    return check_multipliers(mult, path, "$.multipliers.")
+    return check_params("apso", mult, path, "$.multipliers.")
 
 
 def check_multipliers(mult: dict, path=None, prefix="") -> dict:
-    """Refuse unknown keys and non-positive or non-finite factors."""
-    out = {}
-    for k, v in mult.items():
-        if k not in Q_KEYS and k != "r_scale" and not str(k).startswith("r_scale_"):
-            raise InputFileError(path, f"{prefix}{k}", "unknown multiplier (known: "
-                                 f"{', '.join(Q_KEYS)}, r_scale, r_scale_<channel>)")
-        if isinstance(v, bool) or not isinstance(v, (int, float)) \
-                or not (math.isfinite(v) and v > 0.0):
-            raise InputFileError(path, f"{prefix}{k}", f"must be a positive number, got {v!r}")
-        out[str(k)] = float(v)
-    return out
+    """Refuse unknown keys and factors outside the multiplier range (an empty set is the
+    plain EKF: allowed for filter options, refused in files by the file readers)."""
+    return check_params("apso", mult, path, prefix) if mult else {}
 
 
 def scaled_config(base, mult: dict):

@@ -15,6 +15,7 @@ from collections.abc import Mapping
 from functools import lru_cache
 from importlib import resources
 
+from fuzzynav.errors import MAX_QUOTE, brief
 from fuzzynav.fuzzy._where import FisError, located
 from fuzzynav.fuzzy.document import FORMAT, OPTIONAL_OBJECTS, VERSION, to_dict
 from fuzzynav.fuzzy.fis_matlab import read_matlab_fis, write_matlab_fis
@@ -107,23 +108,6 @@ def _check_header(doc, path):
     if isinstance(version, bool) or version != VERSION:
         raise FisError(path, "$.version", f"unsupported version {version!r}; this fuzzynav "
                                           f"reads {FORMAT} version {VERSION}")
-
-
-#: longest quotation of the offending value in a schema error message (characters)
-MAX_QUOTE = 200
-
-
-def brief(value) -> str:
-    """``repr(value)``, cut to :data:`MAX_QUOTE` characters and then saying what it was
-    (a 200 000-character name in a message would bury what was wrong with it)."""
-    text = repr(value)
-    if len(text) <= MAX_QUOTE:
-        return text
-    what = type(value).__name__
-    for kind, unit in ((list, "items"), (dict, "keys"), (str, "characters")):
-        if isinstance(value, kind):
-            what = f"{kind.__name__} of {len(value)} {unit}"
-    return f"{text[:MAX_QUOTE]}... ({what})"
 
 
 def schema_message(error) -> str:

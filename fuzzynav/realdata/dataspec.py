@@ -171,10 +171,26 @@ def expand(spec: RecordingSpec) -> list[RecordingSpec]:
     return [replace(spec, session=str(s)) for s in split(spec.session)]
 
 
+def identity(spec: RecordingSpec) -> tuple:
+    """``(kind, directory, sessions)`` of what a spec reads, however it is spelled: the
+    directory's real path (``akit``, ``./akit/`` and ``/data/akit`` are one recording; as
+    written, normalised, when it cannot be found) and the set of sessions it covers."""
+    try:
+        where = os.path.realpath(resolve(spec))
+    except FuzzynavError:
+        where = os.path.normpath(os.path.expanduser(spec.directory))
+    split = SOURCES[spec.kind].split
+    sessions = frozenset(str(s) for s in split(spec.session)) if split is not None \
+        else frozenset([spec.session])
+    return spec.kind, where, sessions
+
+
 def overlaps(a: RecordingSpec, b: RecordingSpec) -> bool:
-    """Whether two single-session specs share data that is scored (same recording and
-    session, overlapping windows; windows of different units are taken to overlap)."""
-    if (a.kind, a.directory, a.session) != (b.kind, b.directory, b.session):
+    """Whether two specs share data that is scored (the same recording by
+    :func:`identity`, a session in common, overlapping windows; windows of different units
+    are taken to overlap)."""
+    (kind_a, dir_a, ses_a), (kind_b, dir_b, ses_b) = identity(a), identity(b)
+    if (kind_a, dir_a) != (kind_b, dir_b) or not ses_a & ses_b:
         return False
     if a.window is None or b.window is None or a.window.percent != b.window.percent:
         return True

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from fuzzynav.errors import InputFileError
-from fuzzynav.fileio import output_errors, publish, safe_stem
+from fuzzynav.fileio import make_dir, output_errors, publish, safe_stem
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.sim.scenario import Scenario
 from fuzzynav.sim.sensors import SensorData
@@ -161,8 +161,9 @@ def _read_cache(path: Path, key: str, scenario: Scenario, seed: int):
 
 def _write_cache(path: Path, arrays: dict):
     """Write atomically; a full disk or a read-only place is one :class:`OutputError`."""
-    with output_errors(path, "simulation cache file (see --cache / $FUZZYNAV_CACHE)"):
-        path.parent.mkdir(parents=True, exist_ok=True)
+    what = "simulation cache file (see --cache / $FUZZYNAV_CACHE)"
+    make_dir(path.parent, what)
+    with output_errors(path, what):
         fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
         try:
             with os.fdopen(fd, "wb") as f:

@@ -243,7 +243,7 @@ def _read(name_or_path):
         return read_toml(path, "scenario file"), path.stem, str(path), path.parent
     name = str(name_or_path)
     if name not in list_scenarios():
-        raise UnknownNameError("scenario", name[:100], list_scenarios())
+        raise UnknownNameError("scenario", name, list_scenarios())
     label = f"<built-in {name}.toml>"
     with with_path(label):
         doc = parse_toml((_builtin_dir() / f"{name}.toml").read_bytes())

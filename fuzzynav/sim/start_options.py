@@ -36,6 +36,7 @@ import math
 from dataclasses import dataclass
 
 from fuzzynav.errors import InputFileError
+from fuzzynav.sim.sensors.gnss import MAX_LEVER_ARM_M
 
 HEADING_METHODS = ("auto", "course", "track", "specific-force")
 
@@ -101,6 +102,9 @@ def _triple(text):
     parts = [float(p) for p in text.split(",")]
     if len(parts) != 3 or not all(math.isfinite(p) for p in parts):
         raise ValueError("must be three numbers x,y,z [m] (body right, forward, up)")
+    if max(abs(p) for p in parts) > MAX_LEVER_ARM_M:
+        raise ValueError(f"each component must be within +-{MAX_LEVER_ARM_M:g} m (larger "
+                         "than any vehicle)")
     return tuple(parts)
 
 

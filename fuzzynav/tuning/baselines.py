@@ -27,9 +27,10 @@ from optuna.trial import TrialState
 
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.experiment import filter_context, run_on_log
-from fuzzynav.fileio import write_atomic
+from fuzzynav.fileio import study_output, write_atomic
 from fuzzynav.filters import measurements
-from fuzzynav.filters.baselines import PARAMS_FORMAT, Q_FIELDS, TUNED
+from fuzzynav.filters.baselines import Q_FIELDS, TUNED
+from fuzzynav.filters.params_file import PARAMS_FORMAT, check_params
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
 from fuzzynav.tuning.config import study_config_from_dict
 from fuzzynav.tuning.objective import Evaluator
@@ -84,7 +85,7 @@ def load_baseline_config(path) -> BaselineConfig:
         out = Path(bt.string("out", f"{path.stem}.json"))
         bt.finish()
         study = study_config_from_dict(doc, path, need_controllers=False)
-    out = out if out.is_absolute() else path.parent / out
+    out = study_output(out, path, "baselines.out")
     return BaselineConfig(study, tuple(dict.fromkeys(tune)), out)
 
 
@@ -190,6 +191,8 @@ def write_params(bcfg: BaselineConfig, found: dict, scores: dict, trials: dict,
                  history=None) -> Path:
     """Write the tuned-parameter file the named filters read (atomically); ``history``:
     filter -> the PSO swarm's convergence (:func:`fuzzynav.tuning.pso.history`)."""
+    for name, p in found.items():  # what the reader would refuse is never written
+        check_params(name, p, bcfg.out, f"$.filters.{name}.")
     doc = {"format": PARAMS_FORMAT, "version": 1, "study": bcfg.study.name,
            "baseline": bcfg.study.baseline,
            "train": [list(r) for r in bcfg.study.train],
@@ -213,6 +216,10 @@ def run_baselines(bcfg: BaselineConfig, trials=None, storage=None, cache_dir=Non
             from fuzzynav.tuning.als_fit import als_params
 
             found[name] = als_params(ev, bcfg.study.train)
+            if not found[name]:  # an empty entry would run as the plain EKF and score 1.0
+                raise FuzzynavError("[baselines] tune = 'als': the training runs have no "
+                                    "GNSS receiver, the only sensor ALS estimates R for; "
+                                    "drop 'als' from tune")
             scores[name] = _train_score(ev, name, found[name])
             counts[name] = 0
             continue

@@ -29,8 +29,8 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from fuzzynav.errors import FuzzynavError, InputFileError
-from fuzzynav.fuzzy.io import brief
+from fuzzynav.errors import FuzzynavError, InputFileError, brief
+from fuzzynav.fileio import study_output
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
 from fuzzynav.tuning.controller_config import parse_controller, user_file
 from fuzzynav.tuning.recording_config import (check_no_attitude, check_recordings_held_out,
@@ -269,6 +269,10 @@ def study_config_from_dict(doc: dict, path: Path | None = None,
                  storage=st.string("storage", ""),
                  stale_after_s=st.number("stale_after_s", 300.0, lo=0.0, lo_open=True))
     st.finish()
+    if study["storage"].startswith("journal:") and path is not None:
+        # a journal named in the study file lives in the study's directory, like the default
+        study["storage"] = "journal:" + str(study_output(study["storage"][len("journal:"):],
+                                                         path, "study.storage"))
     kind = study.pop("objective")
     study.update(multi_objective=kind != "single", robust=kind == "robust")
     ob = top.table("objective", required=False) or Table({}, "objective")

@@ -10,9 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from fuzzynav.errors import InputFileError
+from fuzzynav.errors import InputFileError, brief
 from fuzzynav.filters.adaptation.binding import WINDOW_RANGE
-from fuzzynav.fuzzy.io import brief
 from fuzzynav.sim.tomltable import Table
 
 TUNE_MODES = ("both", "rules", "breakpoints")

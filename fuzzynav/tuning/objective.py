@@ -204,6 +204,7 @@ class Objective:
         self.worker = worker
         self.current = None       # number of the trial being run (or last run) here
         self.last_error = None    # the exception that failed the last trial here
+        self._claimed = None      # number of the last trial this worker named itself owner of
         self._last_beat = -math.inf
         # a heartbeat is one journal record: often enough for a reaper on another host
         # (stale_after_s), not after every run
@@ -223,11 +224,19 @@ class Objective:
             self.last_error = exc
             raise
 
-    def _run(self, trial):
+    def claim(self, trial) -> None:
+        """Name this worker as ``trial``'s owner (host, pid, worker, first heartbeat); once
+        per trial, as early as possible (see :func:`fuzzynav.tuning.study.reap_stale`)."""
+        if self._claimed == trial.number:
+            return
         trial.set_user_attr("host", socket.gethostname())
         trial.set_user_attr("pid", os.getpid())
         trial.set_user_attr("worker", self.worker)
         self._beat(trial, force=True)
+        self._claimed = trial.number
+
+    def _run(self, trial):
+        self.claim(trial)
         systems = build_all(self.spaces, trial)
         runs = list(enumerate(self.cfg.train))
         np.random.default_rng(trial.number).shuffle(runs)

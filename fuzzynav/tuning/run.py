@@ -26,7 +26,7 @@ from tqdm.auto import tqdm
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.tuning.prefetch import warm_shared
 from fuzzynav.tuning.samplers import get_optimiser
-from fuzzynav.tuning.study import n_finished, open_study, reap_stale, run_worker
+from fuzzynav.tuning.study import n_finished, open_study, reap_orphans, run_worker
 from fuzzynav.tuning.warmup import warm_up
 
 #: a worker is started with this program instead of ``python -m``, which would put the
@@ -144,6 +144,7 @@ def supervise(cfg, study, total, workers, storage=None, cache_dir=None, on_poll=
         A worker stopped on a user error, or workers kept dying, and the study is short of
         ``total``.
     """
+    url = storage or cfg.storage_url
     procs = {i: _spawn(cfg, total, storage, i, cache_dir, evaluator) for i in range(workers)}
     restarts = dict.fromkeys(procs, 0)
     errors = []
@@ -159,7 +160,7 @@ def supervise(cfg, study, total, workers, storage=None, cache_dir=None, on_poll=
                     if procs:  # a CPU is free until the others end: read the journal now,
                         n_finished(study)  # so the final count reads only their last trials
                     continue
-                reap_stale(study, cfg.stale_after_s)  # its RUNNING trial: FAIL + retry
+                reap_orphans(study, cfg, url)  # its RUNNING trial: FAIL + retry
                 if code != USER_ERROR and restarts[i] < MAX_RESTARTS \
                         and n_finished(study) < total:
                     restarts[i] += 1
@@ -174,7 +175,7 @@ def supervise(cfg, study, total, workers, storage=None, cache_dir=None, on_poll=
         for p in procs.values():
             p.kill()
             p.wait()
-    reap_stale(study, cfg.stale_after_s)
+    reap_orphans(study, cfg, url)
     done = n_finished(study)
     if errors and (done < total or any(code == USER_ERROR for _, code in errors)):
         what = "; ".join(f"worker {i} {_exit_text(code)}" for i, code in errors)

@@ -44,6 +44,12 @@ class TrialSlots:
 
         self._conn.execute(sqlalchemy.text(query), {"k": self._key})
 
+    @property
+    def exclusive(self) -> bool:
+        """Whether this worker holds a real lock (a journal file or PostgreSQL storage; other
+        storages have none and every worker counts on its own)."""
+        return self._held and (self._fh is not None or self._conn is not None)
+
     def acquire(self) -> None:
         """Block until this worker holds the lock (no-op if it already does)."""
         if self._held:

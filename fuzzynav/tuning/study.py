@@ -197,13 +197,18 @@ def _owner(t, now: float):
     return ua.get("host"), ua.get("pid"), beat
 
 
-def reap_stale(study, stale_after_s: float) -> int:
+def reap_stale(study, stale_after_s: float, exclusive: bool = False) -> int:
     """Fail and re-enqueue ``RUNNING`` trials whose worker is gone; returns how many.
 
     A worker on this host is gone when its process no longer exists (a live process keeps
     its trial, however long it runs); a worker elsewhere when its heartbeat is older than
     ``stale_after_s``.  When two workers reap the same trial, only the one whose ``FAIL``
     lands first re-enqueues it.
+
+    ``exclusive``: the caller holds the study's slot lock (:class:`TrialSlots`), which a
+    worker keeps from before it creates a trial until the trial names its owner.  A trial
+    that names no owner then has none (its worker was killed in between) and is reaped at
+    once, not after ``stale_after_s``.
     """
     now, host, n = time.time(), socket.gethostname(), 0
     for t in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
@@ -211,6 +216,8 @@ def reap_stale(study, stale_after_s: float) -> int:
         if w_host == host and pid is not None:
             if _alive(int(pid)):
                 continue
+        elif w_host is None and exclusive:
+            pass  # ownerless under the lock: an orphan
         elif now - beat <= stale_after_s:
             continue
         try:
@@ -232,9 +239,21 @@ def _room(study, cfg, n_total: int) -> bool:
     return n_finished(study) + busy < n_total
 
 
+def reap_orphans(study, cfg, url: str) -> int:
+    """:func:`reap_stale` under the study's slot lock (a supervisor, between trials)."""
+    slots = TrialSlots(with_driver(url), cfg.name)
+    try:
+        slots.acquire()
+        return reap_stale(study, cfg.stale_after_s, exclusive=slots.exclusive)
+    finally:
+        slots.close()
+
+
 def _run_one(study, objective, slots) -> TrialState:
-    """Run one trial (the slot lock is released once it has started); its final state."""
+    """Run one trial (the slot lock is released once the trial names its owner, so that a
+    trial without one, seen under the lock, is an orphan); its final state."""
     def run(trial):
+        objective.claim(trial)
         slots.release()
         return objective(trial)
 
@@ -284,7 +303,7 @@ def _trials_until(study, cfg, n_total, objective, slots, progress) -> int:
     while True:
         slots.acquire()
         try:
-            reap_stale(study, cfg.stale_after_s)
+            reap_stale(study, cfg.stale_after_s, exclusive=slots.exclusive)
             if not _room(study, cfg, n_total):
                 return done
             if not ready(study, cfg):  # let the other workers finish what it waits for

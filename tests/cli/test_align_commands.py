@@ -83,3 +83,80 @@ def test_scenarios_lists_the_alignment_family_and_filters(capsys):
     assert code == 0
     for name in ("paper002-sway", "paper002-mems", "align-fuzzy-fast", "align-kf12"):
         assert name in out
+
+
+ROOT = __import__("pathlib").Path(__file__).resolve().parents[2]
+ROR = ROOT / "rules" / "paper002_ror.json"
+GPS = ROOT / "rules" / "paper000_gps_sins.json"
+
+
+def _one_in_one_out_of_another_adapter(tmp_path):
+    """paper002's ROR -> t controller relabelled as an exponential-weighting one."""
+    doc = json.loads(ROR.read_text())
+    doc["binding"]["adapter"] = "exponential-weighting"
+    path = tmp_path / "ew.json"
+    path.write_text(json.dumps(doc))
+    return path
+
+
+def _negative_factor(tmp_path):
+    doc = json.loads(ROR.read_text())
+    out = doc["outputs"][0]
+    lo, hi = out["range"]
+    out["range"] = [-hi, hi]
+    path = tmp_path / "neg.json"
+    path.write_text(json.dumps(doc))
+    return path
+
+
+def test_alignment_rule_files_and_options_are_checked(capsys, tmp_path):
+    ew, neg = _one_in_one_out_of_another_adapter(tmp_path), _negative_factor(tmp_path)
+    for argv, fragment in [
+        (["compare", "paper002", "--filters", "align-kf,align-kf"], "names align-kf twice"),
+        (["compare", "paper000", "--filters", "ekf,fakf,ekf"], "names ekf twice"),
+        (["compare", "paper002", "--filters", "align-kf,align-kf12", "--rules", ROR],
+         "--rules: no filter of align-kf, align-kf12 takes a rule file"),
+        (["compare", "paper002", "--filters", "align-kf,align-fuzzy", "--rules", GPS],
+         "has 2 input(s) and 1 output(s)"),
+        (["compare", "paper002", "--filters", "align-kf,align-fuzzy", "--rules", ew],
+         "$.binding.adapter: is 'exponential-weighting', not 'r-scaling'"),
+        (["compare", "paper002", "--filters", "align-kf,align-fuzzy", "--rules", neg],
+         "$.outputs[0].range: starts at -"),
+        (["compare", "paper002", "--filters", "align-kf,align-fuzzy", "--align-threshold",
+          "inf"], "--align-threshold must be in (0, 10800]"),
+        (["compare", "paper002", "--filters", "align-kf,align-fuzzy", "--align-threshold",
+          "nan"], "--align-threshold must be in (0, 10800]"),
+        (["run", "paper000-nominal", "--align", f"align-kf@{ROR}"], "align-kf takes no rule"),
+        (["run", "paper000-nominal", "--align", "align-fuzzy@"], "no rule file after '@'"),
+        (["run", "paper000-nominal", "--align", f"align-fuzzy@{ew}"], "not 'r-scaling'"),
+        (["run", "paper000-nominal", "--filter", "ekf", "--align", "align-fuzzy", "--rules",
+          ROR], "--rules: filter 'ekf' takes no rule files"),
+    ]:
+        code, out, err = _run(capsys, *map(str, argv))
+        assert code == 2 and fragment in err and err.count("\n") == 1, (argv, err)
+        assert out == ""
+
+
+class _Called(Exception):
+    pass
+
+
+def test_rules_go_to_the_navigation_filter_and_align_at_to_the_aligner(capsys, monkeypatch):
+    """``--rules`` used to go to a fuzzy aligner, leaving fakf on its default rules."""
+    import fuzzynav.align.chain as chain
+
+    seen = {}
+
+    def fake(log, nav_filter, options=None, align_filter="align-kf", rules=None):
+        seen.update(nav=nav_filter, options=options, aligner=align_filter, rules=rules)
+        raise _Called
+
+    monkeypatch.setattr(chain, "run_aligned", fake)
+    monkeypatch.setattr("fuzzynav.sim.log.simulate", lambda *a, **k: None)
+    try:
+        main(["run", "paper000-nominal", "--filter", "fakf", "--align", f"align-fuzzy@{ROR}",
+              "--rules", str(GPS)])
+    except _Called:
+        pass
+    assert seen == {"nav": "fakf", "options": {"rules": [str(GPS)]},
+                    "aligner": "align-fuzzy", "rules": str(ROR)}

@@ -47,6 +47,21 @@ def test_a_full_disk_behind_stdout_is_one_line(capsys, monkeypatch, argv):
     assert code == 2 and _one_line(err) and "stdout" in err and "No space left" in err
 
 
+@pytest.mark.parametrize("argv", [["--help"], ["--version"], ["run", "--help"]])
+def test_help_to_a_full_disk_is_one_line(capsys, monkeypatch, argv):
+    """argparse prints help and exits by itself; the guard still sees the failed write."""
+    monkeypatch.setattr(sys, "stdout", _FailingStdout(errno.ENOSPC))
+    code = main(argv)
+    err = capsys.readouterr().err
+    assert code == 2 and _one_line(err) and "No space left" in err
+
+
+def test_help_to_a_working_stdout_still_exits_0(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--help"])
+    assert exc.value.code == 0 and "usage: fuzzynav" in capsys.readouterr().out
+
+
 def test_a_closed_pipe_behind_stdout_ends_quietly(capsys, monkeypatch):
     monkeypatch.setattr(sys, "stdout", _FailingStdout(errno.EPIPE))
     code = main(["fis", "surface", str(GPS), "--csv", "--grid", "200"])
@@ -81,6 +96,15 @@ def test_dev_full_as_a_real_process():
     assert "No space left on device" in proc.stderr
 
 
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+def test_help_to_dev_full_as_a_real_process():
+    """``fuzzynav --help >/dev/full``: the help sits in the buffer until argparse exits."""
+    with open("/dev/full", "w") as full:
+        proc = _cli(["--help"], full)
+    assert proc.returncode == 2 and _one_line(proc.stderr), proc.stderr
+    assert "No space left on device" in proc.stderr
+
+
 # -- long values are quoted briefly ---------------------------------------------------------
 def test_a_long_unknown_binding_key(capsys, tmp_path):
     doc = json.loads(GPS.read_text(encoding="utf-8"))
@@ -104,12 +128,15 @@ def test_a_long_study_name(capsys, tmp_path):
 
 
 @pytest.mark.parametrize("option", ["--filter", "--data"])
-def test_a_long_command_line_value_is_cut_by_the_cli(capsys, tmp_path, option):
+def test_a_long_command_line_value_is_bounded(capsys, tmp_path, option):
+    """An unknown name is quoted briefly by its error; a long path is cut by the error's
+    base class (the same cap a library caller gets)."""
     value = "x" * LONG if option == "--filter" else "rtklib:" + "d" * LONG
     argv = ["run", TINY, option, value] if option == "--filter" else ["run", option, value]
     code, _, err = _run(capsys, *argv, "--cache", tmp_path)
     assert code == 2 and _one_line(err)
-    assert len(err) < MAX_MESSAGE + 100 and "characters cut)" in err
+    mark = "str of 200000 characters" if option == "--filter" else "characters cut)"
+    assert len(err) < MAX_MESSAGE + 100 and mark in err
 
 
 def test_a_message_with_newlines_stays_on_one_line(capsys, monkeypatch):

@@ -8,7 +8,8 @@ import pytest
 from fuzzynav.errors import FuzzynavError, InputFileError
 from fuzzynav.filters import adaptation, measurements
 from fuzzynav.filters.adaptation.strong_tracking import StrongTracking
-from fuzzynav.filters.baselines import PARAMS_FORMAT, hqh_per_channel
+from fuzzynav.filters.baselines import hqh_per_channel
+from fuzzynav.filters.params_file import PARAMS_FORMAT
 from fuzzynav.filters.named import FilterContext, get_filter, parse_filter_spec
 
 GNSS = measurements.get("gnss")

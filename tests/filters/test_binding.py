@@ -167,3 +167,51 @@ def test_fis_check_refuses_a_bad_binding_in_one_line(tmp_path, capsys):
     assert err.strip().splitlines() == [f"fuzzynav: error: {path}: $.binding.inputs.dom_pos."
                                         f"chanel: unknown key 'chanel'; known: statistic, "
                                         f"channel"]
+
+
+def _remapped(doc, out_index, lo, hi):
+    """``doc`` with output ``out_index`` mapped affinely onto ``[lo, hi]`` (its terms and
+    default too, so that only the range is wrong)."""
+    doc = copy.deepcopy(doc)
+    out = doc["outputs"][out_index]
+    a, b = out["range"]
+
+    def f(v):
+        return lo + (v - a) * (hi - lo) / (b - a)
+    out["range"] = [lo, hi]
+    for term in out["terms"]:
+        term["params"] = [f(v) for v in term["params"]]
+    if out.get("default") is not None:
+        out["default"] = f(out["default"])
+    return doc
+
+
+@pytest.mark.parametrize("name, out_index, lo, hi, target", [
+    ("paper000_select_gnss.json", 0, -2.0, -0.5, "r_scale"),   # a factor below zero
+    ("paper000_select_gnss.json", 0, 1e5, 1e9, "r_scale"),     # beyond the running bounds
+    ("paper000_rq_gnss.json", 1, 0.5, 500.0, "q_scale"),      # beyond the level's 1e2
+    ("paper000_gps_sins.json", 0, 0.0, 1.1, "alpha"),         # raised to 0.1 silently
+    ("paper001_beta.json", 0, -1.0, 1.2, "beta"),             # a negative weight
+])
+def test_an_output_range_outside_its_targets_domain_is_refused(tmp_path, capsys, name,
+                                                               out_index, lo, hi, target):
+    """These were clamped in the kernel while ``fis check`` said OK."""
+    from fuzzynav.cli import main
+    from fuzzynav.fuzzy.io import from_dict
+
+    doc = _remapped(_doc(RULES / name), out_index, lo, hi)
+    with pytest.raises(InputFileError, match=rf"\$\.outputs\[{out_index}\]\.range.*{target}"):
+        Binding.of(from_dict(doc), "x.json")
+    path = tmp_path / name
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    code = main(["fis", "check", str(path)])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == "" and f"outside what '{target}' can take" in err
+
+
+def test_an_output_range_at_its_domains_edges_is_accepted():
+    from fuzzynav.filters.adaptation.r_scaling import S_MAX, S_MIN
+    from fuzzynav.fuzzy.io import from_dict
+
+    doc = _remapped(_doc(RULES / "paper000_select_gnss.json"), 0, S_MIN, S_MAX)
+    assert Binding.of(from_dict(doc), "x.json").adapter == "r-scaling"

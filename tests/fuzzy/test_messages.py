@@ -5,7 +5,8 @@ from pathlib import Path
 import pytest
 
 from fuzzynav.fuzzy import FisError, load_fis
-from fuzzynav.fuzzy.io import MAX_FILE_BYTES, MAX_QUOTE
+from fuzzynav.errors import MAX_QUOTE
+from fuzzynav.fuzzy.io import MAX_FILE_BYTES
 from tests.fuzzy.systems import ROR
 
 

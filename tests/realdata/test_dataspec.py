@@ -53,6 +53,32 @@ def test_overlap_is_per_session_and_window():
     assert not overlaps(p("akit:a:1"), p("akit:a:2"))
 
 
+def test_overlap_compares_what_is_read_not_the_spelling(monkeypatch, tmp_path):
+    """``akit:akit/:9``, ``akit:./akit:9`` and an absolute path were held out from
+    ``akit:akit:9`` (the "held-out" score equalled the training one)."""
+    p = parse_recording_spec
+    monkeypatch.setenv(DATA_DIR_ENV, str(tmp_path))
+    (tmp_path / "akit").mkdir()
+    (tmp_path / "link").symlink_to(tmp_path / "akit")
+    train = p("akit:akit:9")
+    for test in ("akit:akit/:9", "akit:./akit:9", f"akit:{tmp_path / 'akit'}:9",
+                 "akit:link:9", "akit:akit:8-10", "akit:akit:09", "akit:akit:9@0-50%"):
+        assert overlaps(p(test), train), test
+    for test in ("akit:akit:8", "akit:other:9", "rtklib:akit"):
+        assert not overlaps(p(test), train), test
+
+
+def test_a_study_refuses_a_respelled_training_recording_as_held_out(monkeypatch, tmp_path):
+    from fuzzynav.sim.tomltable import Table
+    from fuzzynav.tuning.recording_config import check_recordings_held_out
+
+    monkeypatch.setenv(DATA_DIR_ENV, str(tmp_path))
+    (tmp_path / "akit").mkdir()
+    with pytest.raises(FuzzynavError, match=r"recording akit:\./akit/:9 is also"):
+        check_recordings_held_out(Table({}, "test"), (("akit:akit:9", 0),),
+                                  (("akit:./akit/:9", 0),))
+
+
 def test_data_dir_from_environment_and_missing_directory(monkeypatch, tmp_path):
     monkeypatch.setenv(DATA_DIR_ENV, str(tmp_path))
     assert data_dir() == tmp_path

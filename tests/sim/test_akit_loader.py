@@ -6,8 +6,8 @@ import pytest
 
 from fuzzynav.errors import DataMissingError, InputFileError
 from fuzzynav.nav import attitude
-from fuzzynav.sim.loaders.akit import (body_velocity, load_trajectory, parse_trajectories,
-                                       read_table, reference_on_imu_clock)
+from fuzzynav.sim.loaders.akit import (MAX_TRAJECTORY, body_velocity, load_trajectory,
+                                       parse_trajectories, read_table, reference_on_imu_clock)
 from tests.conftest import datasets_dir
 from tests.sim.akit_files import auv_trajectory, varied_auv_trajectory, write_akit
 
@@ -113,10 +113,18 @@ def test_trajectory_lists(text, expected):
     assert parse_trajectories(text) == expected
 
 
-@pytest.mark.parametrize("text", ["x", "3-1", "1-", ""])
+@pytest.mark.parametrize("text", ["x", "3-1", "1-", "", "0", "0-8", "1-999999999999",
+                                  "2,10000", "9" * 5000])
 def test_bad_trajectory_lists(text):
-    with pytest.raises(InputFileError, match="trajectory"):
+    """A range to 10^12 was a MemoryError traceback; a 5000-digit number is quoted briefly."""
+    with pytest.raises(InputFileError, match="trajectory") as exc:
         parse_trajectories(text)
+    assert len(str(exc.value)) < 400
+
+
+def test_the_highest_trajectory_number_is_accepted():
+    assert parse_trajectories(f"{MAX_TRAJECTORY - 1}-{MAX_TRAJECTORY}") == [MAX_TRAJECTORY - 1,
+                                                                          MAX_TRAJECTORY]
 
 
 def _damaged(tmp_path, synthetic, rel, edit):
@@ -135,7 +143,7 @@ def _damaged(tmp_path, synthetic, rel, edit):
     ("IMU_trajectory1.csv", lambda s: s[: s.index("\n", len(s) // 2) + 9], "line"),  # cut
     ("corrected/DVL_trajectory1.csv", lambda s: s.replace(",", ";", 30), "line 2"),
     ("corrected/GT_trajectory1.csv", lambda s: "\n".join(s.splitlines()[:30]), "Time"),
-    ("IMU_trajectory1.csv", lambda s: s.replace("-9.", "-1.9"), "ACC Z"),              # no g
+    ("IMU_trajectory1.csv", lambda s: s.replace("-9.", "-1.9"), "ACC X,Y,Z"),          # no g
     ("corrected/DVL_trajectory1.csv", lambda s: s.replace("\n1.0,", "\nnan,", 1), "line"),
 ])
 def test_damaged_files_give_one_clear_error(tmp_path, synthetic, rel, edit, where):

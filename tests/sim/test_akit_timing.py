@@ -12,7 +12,7 @@ import pytest
 from fuzzynav.nav import attitude
 from fuzzynav.sim.loaders.akit import (body_velocity, load_trajectory, read_table,
                                        reference_on_imu_clock)
-from fuzzynav.sim.loaders.akit_timing import parabola_min
+from fuzzynav.sim.loaders.akit_timing import dvl_offset, parabola_min
 from tests.conftest import datasets_dir
 
 AKIT = datasets_dir() / "akit"
@@ -27,6 +27,31 @@ def test_parabola_min_finds_a_vertex_between_samples():
     x = np.arange(7.0)
     assert abs(parabola_min((x - 3.3) ** 2) - 3.3) < 1e-12
     assert parabola_min(x) == 0.0  # at the edge: no refinement
+
+
+def _speeds(t, kind, rng):
+    """A forward speed [m/s] at times ``t``: constant, or varying like an AUV's."""
+    base = np.full_like(t, 1.2) if kind == "constant" else 1.2 + 0.3 * np.sin(t / 10.0)
+    return base + 0.005 * rng.standard_normal(t.size)
+
+
+def test_the_dvl_offset_is_found_where_the_speed_varies():
+    rng = np.random.default_rng(1)
+    t = np.arange(0.0, 600.0)
+    true = 0.7  # the DVL's stamps trail the reference's by 0.7 s
+    ref = _speeds(t, "varying", rng)
+    fwd = 1.2 + 0.3 * np.sin((t - true) / 10.0) + 0.005 * rng.standard_normal(t.size)
+    assert abs(dvl_offset(t, fwd, t, ref, 0.01) - true) < 0.05
+
+
+def test_the_dvl_offset_of_a_constant_speed_run_is_zero_not_noise():
+    """Every shift fits a constant speed alike: the old minimum was the noise's, anywhere in
+    the +-2 s search (at its edge, the loader refused the recording as not lining up)."""
+    rng = np.random.default_rng(2)
+    t = np.arange(0.0, 600.0)
+    offsets = [dvl_offset(t, _speeds(t, "constant", rng), t, _speeds(t, "constant", rng), 0.01)
+               for _ in range(5)]
+    assert offsets == [0.0] * 5
 
 
 def _gyro_dcm_track(rec):

@@ -109,7 +109,9 @@ def test_mounting_toml(tmp_path):
     for text, where in [("imu_to_body = [[1, 0, 0], [0, 1, 0], [0, 0, -1]]", "imu_to_body"),
                         ("imu_rpy_frd_deg = [1, 2]", "imu_rpy_frd_deg"),
                         ("gnss_lever_arm_b_m = [0, 0, 0]", "imu_rpy_frd_deg"),
-                        ("imu_rpy_frd_deg = [0, 0, 0]\nlever = 1", "lever")]:
+                        ("imu_rpy_frd_deg = [0, 0, 0]\nlever = 1", "lever"),
+                        ("imu_rpy_frd_deg = [0, 0, 0]\ngnss_lever_arm_b_m = [0, 1e6, 0]",
+                         "gnss_lever_arm_b_m[1]")]:
         p.write_text(text)
         with pytest.raises(InputFileError) as exc:
             Mounting.from_toml(p)

@@ -32,6 +32,14 @@ def test_an_error_names_the_data_spec_and_the_option():
         parse_start_options("window=0", "rtklib:d")
 
 
+@pytest.mark.parametrize("text", ["0,1e6,0", "-1000.5,0,0", "0,0,1e300"])
+def test_a_lever_arm_longer_than_any_vehicle_is_refused(text):
+    """Scenarios cap the lever arm at 1 km; the start option took 1e6 m."""
+    with pytest.raises(InputFileError, match=r"option lever_arm: .*within \+-1000 m"):
+        parse_start_options(f"lever_arm={text}", "rtklib:d")
+    assert parse_start_options("lever_arm=1000,-1000,0").lever_arm_b_m == (1e3, -1e3, 0.0)
+
+
 def test_the_query_is_split_off_the_spec(tmp_path):
     assert split_options("rtklib:d:2?min_speed=1") == ("rtklib:d:2", "min_speed=1")
     assert split_options("rtklib:d") == ("rtklib:d", None)

@@ -80,7 +80,7 @@ def test_swarm_over_the_apso_space_finds_a_known_minimum_on_the_schedule():
 def test_apso_reads_its_parameter_file_like_the_options(tmp_path, sim_cache):
     mult = {"q_scale_att": 4.0, "q_scale_vel": 0.5, "r_scale": 2.5}
     path = tmp_path / "apso.json"
-    path.write_text(json.dumps({"format": "x", "filters": {"apso": mult}}))
+    path.write_text(json.dumps({"format": "fuzzynav-baselines", "filters": {"apso": mult}}))
     log = simulate(load_scenario(str(TINY)), 0, sim_cache)
     from_file = run_on_log(log, "apso", {"rules": [str(path)]}).metrics
     from_options = run_on_log(log, "apso", mult).metrics
@@ -94,8 +94,13 @@ def test_a_parameter_file_without_apso_names_the_field(tmp_path):
     from fuzzynav.filters.tuned_qr import read_multipliers
 
     path = tmp_path / "other.json"
-    path.write_text(json.dumps({"filters": {"ekf-tuned": {"q_att": 1.0}}}))
-    with pytest.raises(InputFileError, match=r"\$\.filters\.apso"):
+    path.write_text(json.dumps({"format": "fuzzynav-baselines",
+                                "filters": {"ekf-tuned": {"q_att": 1.0}}}))
+    with pytest.raises(InputFileError, match=r"\$\.filters\.apso: missing \(this file tunes: "
+                                             r"ekf-tuned\)"):
+        read_multipliers(path)
+    path.write_text(json.dumps({"filters": {"apso": {"r_scale": 1.0}}}))  # not a study's file
+    with pytest.raises(InputFileError, match=r"\$\.format: must be 'fuzzynav-baselines'"):
         read_multipliers(path)
 
 

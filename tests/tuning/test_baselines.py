@@ -6,8 +6,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fuzzynav.errors import InputFileError
-from fuzzynav.filters.baselines import PARAMS_FORMAT, read_params
+from fuzzynav.errors import FuzzynavError, InputFileError
+from fuzzynav.filters.baselines import read_params
+from fuzzynav.filters.params_file import PARAMS_FORMAT
 from fuzzynav.tuning.baselines import (is_baseline_config, load_baseline_config,
                                        run_baselines, space_of)
 
@@ -125,3 +126,14 @@ def test_a_bad_baseline_study_is_one_line(tmp_path, capsys):
     p.write_text(TINY.format(tune='["nope"]'))
     code, _, err = _cli(capsys, "study", "run", p)
     assert code == 2 and err.count("\n") == 1 and "baselines.tune" in err
+
+
+def test_als_on_runs_without_gnss_is_refused_not_written_empty(tmp_path):
+    """ALS estimates the GNSS R only: on DVL-only runs it used to write ``"als": {}`` (the
+    plain EKF) with a training score of 1.0."""
+    pytest.importorskip("cvxpy")
+    p = tmp_path / "b.toml"
+    p.write_text(TINY.format(tune='["als"]').replace('"paper000-steps"', '"paper004"'))
+    with pytest.raises(FuzzynavError, match=r"tune = 'als'.*no GNSS receiver"):
+        run_baselines(load_baseline_config(p), cache_dir=tmp_path / "cache")
+    assert not (tmp_path / "tuned.json").exists()

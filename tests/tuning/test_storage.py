@@ -9,6 +9,7 @@ import subprocess
 import sys
 import threading
 import time
+import types
 from pathlib import Path
 
 import optuna
@@ -24,8 +25,8 @@ from fuzzynav.tuning.config import load_study_config
 from fuzzynav.tuning.run import run_study
 from fuzzynav.tuning.slots import TrialSlots
 from fuzzynav.tuning.space import build_all
-from fuzzynav.tuning.study import (MAX_FAILS_IN_ROW, Objective, open_study, reap_stale,
-                                   run_worker)
+from fuzzynav.tuning.study import (MAX_FAILS_IN_ROW, Objective, open_study, reap_orphans,
+                                   reap_stale, run_worker)
 from tests.tuning.studies import ROOT, write_study
 
 optuna.logging.set_verbosity(optuna.logging.ERROR)
@@ -282,6 +283,46 @@ def test_who_gets_reaped(bare, monkeypatch):
                        inherited: "FAIL"}
     retried = sorted(t.user_attrs["retry_of"] for t in a.trials if t.state == TrialState.WAITING)
     assert retried == [dead, far, silent, inherited]
+
+
+_KILLED_IN_THE_WINDOW = """
+import os, signal, sys
+import optuna
+from optuna.storages.journal import JournalFileBackend, JournalStorage
+from fuzzynav.tuning.slots import TrialSlots
+path = sys.argv[1]
+study = optuna.load_study(study_name="r", storage=JournalStorage(JournalFileBackend(path)))
+slots = TrialSlots("journal:" + path, "r")
+slots.acquire()
+t = study.ask()               # the trial exists, RUNNING ...
+t.suggest_float("x", 0.0, 1.0)
+os.kill(os.getpid(), signal.SIGKILL)   # ... and its worker dies before naming itself
+"""
+
+
+def test_a_worker_killed_before_naming_itself_is_reaped_at_once(bare):
+    """The slot lock is held from before a trial is created until it names its owner, so
+    an ownerless RUNNING trial seen under the lock is an orphan: reaped now, not after
+    ``stale_after_s`` (300 s here)."""
+    a, _ = bare
+    path = a._storage._backend._file_path
+    proc = subprocess.run([sys.executable, "-c", _KILLED_IN_THE_WINDOW, path], timeout=120)
+    assert proc.returncode == -signal.SIGKILL
+    assert [t.state for t in a.trials] == [TrialState.RUNNING]
+    assert reap_stale(a, 300.0) == 0  # without the lock it may be a worker in the window
+    cfg = types.SimpleNamespace(name="r", stale_after_s=300.0)
+    assert reap_orphans(a, cfg, f"journal:{path}") == 1
+    assert [t.state for t in a.trials] == [TrialState.FAIL, TrialState.WAITING]
+    assert a.trials[1].user_attrs["retry_of"] == 0
+
+
+def test_without_a_real_lock_ownerless_trials_wait_for_stale_after(tmp_path):
+    """An in-memory or SQLite storage has no slot lock: nothing is known, so nothing is
+    reaped before ``stale_after_s``."""
+    study = optuna.create_study(storage=f"sqlite:///{tmp_path / 's.db'}", study_name="r")
+    _running(study, beat_in_s=None)
+    cfg = types.SimpleNamespace(name="r", stale_after_s=300.0)
+    assert reap_orphans(study, cfg, f"sqlite:///{tmp_path / 's.db'}") == 0
 
 
 def test_a_trial_is_retried_at_most_twice(bare):

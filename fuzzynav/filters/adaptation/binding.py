@@ -20,14 +20,14 @@ Besides the per-sensor policies, ``adapter`` may name a filter-bank controller
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from fuzzynav.errors import InputFileError
+from fuzzynav.errors import MAX_QUOTE, InputFileError, brief
 from fuzzynav.filters import adaptation, measurements
 from fuzzynav.filters.adaptation import context, window
-from fuzzynav.fuzzy.io import MAX_QUOTE, brief
 
 #: the DoM/ROR window in epochs, inclusive bounds
 WINDOW_RANGE = (1, 10000)
@@ -43,10 +43,13 @@ class BankController:
     name: str
     role: str
     extra_roles: tuple = ()
+    domains: tuple = ()
 
 
-#: bank controllers by name: ``beta-sharing`` sets the locals' information shares
-BANK_CONTROLLERS = {c.name: c for c in (BankController("beta-sharing", "beta"),)}
+#: bank controllers by name: ``beta-sharing`` sets the locals' information shares (a local's
+#: weight, >= 0; the bank normalises the weights to shares)
+BANK_CONTROLLERS = {c.name: c for c in (
+    BankController("beta-sharing", "beta", domains=(("beta", 0.0, math.inf),)),)}
 
 
 class _Where:
@@ -136,8 +139,7 @@ class Binding:
                                      f"is bound to {brief(doc.get('adapter'))}")
         adapter = _adapter(w, doc.get("adapter"))
         return cls(adapter=adapter.name, inputs=_inputs(w, doc.get("inputs"), fis),
-                   outputs=_outputs(w, doc.get("outputs"), fis, adapter.role,
-                                    getattr(adapter, "extra_roles", ())),
+                   outputs=_outputs(w, doc.get("outputs"), fis, adapter),
                    window=_window(w, doc.get("window", DEFAULT_WINDOW)),
                    sensor=None if doc.get("sensor") is None else
                    w.name(doc["sensor"], "sensor", "a sensor or sensor kind"),
@@ -251,9 +253,11 @@ def _inputs(w: _Where, doc, fis) -> tuple:
     return tuple(_input(w, name, doc[name]) for name in fis.input_names)
 
 
-def _outputs(w: _Where, doc, fis, role: str, extra=()) -> tuple:
-    """One output bound to the adapter's ``role``; at most one to each of its ``extra``
-    roles (e.g. ``q_scale``, the process-noise factor of ``rq-scaling``)."""
+def _outputs(w: _Where, doc, fis, adapter) -> tuple:
+    """One output bound to the adapter's ``role``; at most one to each of its extra roles
+    (e.g. ``q_scale``, the process-noise factor of ``rq-scaling``); each output's range
+    inside what its target can take (the adapter's ``domains``)."""
+    role, extra = adapter.role, getattr(adapter, "extra_roles", ())
     doc = w.mapping(doc if doc is not None else {}, "outputs")
     out = []
     for name, target in doc.items():
@@ -270,7 +274,24 @@ def _outputs(w: _Where, doc, fis, role: str, extra=()) -> tuple:
         raise w.error("outputs", f"bind exactly one output to {role!r} (bound: {n_role})")
     if len({b.target for b in out}) != len(out):
         raise w.error("outputs", "bind at most one output to each target")
+    for b in out:
+        _check_domain(w, fis, b, dict((t, (lo, hi)) for t, lo, hi in adapter.domains))
     return tuple(out)
+
+
+def _check_domain(w: _Where, fis, b: OutputBinding, domains: dict) -> None:
+    """The kernel clamps a value outside its target's domain without a word: a range that
+    leaves it is a rule file that does not do what it says."""
+    if b.target not in domains:
+        return
+    lo, hi = domains[b.target]
+    i = fis.output_names.index(b.name)
+    r_lo, r_hi = fis.outputs[i].range
+    if not lo <= r_lo <= r_hi <= hi:
+        raise InputFileError(w.source, f"$.outputs[{i}].range",
+                             f"output {b.name!r} spans [{r_lo:g}, {r_hi:g}], outside what "
+                             f"{b.target!r} can take, [{lo:g}, {hi:g}] (values beyond are "
+                             "clamped by the policy)")
 
 
 def _window(w: _Where, n) -> int:

@@ -26,6 +26,10 @@ from fuzzynav.filters.adaptation.fuzzy_common import IP_OUT, evaluate, log_input
 from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
 
 
+#: lowest fading factor the kernel applies (an output below is raised to it)
+ALPHA_MIN = 0.1
+
+
 @nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
 def alpha_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     status, x, y = evaluate(fp, ip, st, r, HPH, R, chan, m, ctx)
@@ -48,8 +52,9 @@ class FuzzyExponentialWeighting(FuzzyPolicy):
     name = "exponential-weighting"
     kernel = alpha_kernel
     role = "alpha"
+    domains = (("alpha", ALPHA_MIN, math.inf),)
     diag_prefix = ("alpha",)
 
     def policy_floats(self):
         out = self.fis.outputs[self.binding.output_index(self.fis, self.role)]
-        return (min(1.0, max(out.range[0], 0.1)),)
+        return (min(1.0, max(out.range[0], ALPHA_MIN)),)

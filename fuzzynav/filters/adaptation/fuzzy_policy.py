@@ -20,6 +20,9 @@ class FuzzyPolicy(Adapter):
     """
 
     role = ""
+    #: ``(target, lo, hi)``: the values each bound output can take (the kernel clamps
+    #: beyond); a rule file whose output range leaves them is refused by its binding
+    domains: tuple = ()
     diag_prefix: tuple = ()
     floats: tuple = ()
 

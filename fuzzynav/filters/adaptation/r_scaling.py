@@ -61,4 +61,5 @@ class FuzzyRScaling(FuzzyPolicy):
     name = "r-scaling"
     kernel = rscale_kernel
     role = "r_scale"
+    domains = (("r_scale", S_MIN, S_MAX),)  # the step t; the running factor has these bounds
     diag_prefix = ("r_scale", "t")

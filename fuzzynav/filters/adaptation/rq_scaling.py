@@ -16,7 +16,7 @@ import numba as nb
 from fuzzynav.filters.adaptation import ADAPT_SIG, register
 from fuzzynav.filters.adaptation.fuzzy_common import log_inputs, scalars
 from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
-from fuzzynav.filters.adaptation.r_scaling import r_step
+from fuzzynav.filters.adaptation.r_scaling import S_MAX, S_MIN, r_step
 
 #: bounds of the process-noise level
 Q_MIN, Q_MAX = 1e-2, 1e2
@@ -52,6 +52,7 @@ class FuzzyRQScaling(FuzzyPolicy):
     kernel = rq_kernel
     role = "r_scale"
     extra_roles = ("q_scale",)
+    domains = (("r_scale", S_MIN, S_MAX), ("q_scale", Q_MIN, Q_MAX))
     diag_prefix = ("r_scale", "t", "q_scale")
 
     def __init__(self, fis, source=None, binding=None):

@@ -167,13 +167,27 @@ def estimate_clock(t_imu, dtheta_b, t_ref, q_ref, lat_rad) -> ClockMap:
     return ClockMap(offset_s=float(a * rate), rate=float(rate))
 
 
+#: the DVL offset is determined when the best shift's misfit is this many times below the
+#: spread of the misfit over the search (the A-KIT trajectories give 30-250; a constant
+#: speed, where every shift fits alike, gives the noise's ~0.1)
+MIN_OFFSET_CONTRAST = 1.0
+
+
 def dvl_offset(t_dvl, fwd_dvl, t_ref, fwd_ref, dt: float) -> float:
     """Seconds by which the DVL's stamps trail the reference's (both 1 Hz): the shift that
     best matches its forward velocity to the reference's (rotated into the body),
-    searched in steps ``dt`` over +-:data:`MAX_OFFSET_S`, parabola-refined."""
+    searched in steps ``dt`` over +-:data:`MAX_OFFSET_S`, parabola-refined.
+
+    When the forward speed hardly changes, every shift fits alike and the minimum is noise
+    (it could land anywhere in the search, even at its edge); the offset then does not
+    matter either, and 0 is returned (:data:`MIN_OFFSET_CONTRAST`).
+    """
     n = int(round(MAX_OFFSET_S / dt))
     shifts = np.arange(-n, n + 1) * dt
     ok = (t_dvl - MAX_OFFSET_S >= t_ref[0]) & (t_dvl + MAX_OFFSET_S <= t_ref[-1])
-    cost = [np.mean((fwd_dvl[ok] - np.interp(t_dvl[ok] - s, t_ref, fwd_ref)) ** 2)
-            for s in shifts]
-    return float(shifts[0] + parabola_min(np.array(cost)) * dt)
+    cost = np.array([np.mean((fwd_dvl[ok] - np.interp(t_dvl[ok] - s, t_ref, fwd_ref)) ** 2)
+                     for s in shifts])
+    lo = float(np.min(cost))
+    if not float(np.max(cost)) - lo > MIN_OFFSET_CONTRAST * lo:
+        return 0.0
+    return float(shifts[0] + parabola_min(cost) * dt)

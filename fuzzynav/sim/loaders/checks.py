@@ -190,24 +190,42 @@ def _rest(acc_g, gyro_dps, rate_hz):
     return f, w
 
 
-def _gravity(path, f_g, w_dps, limits):
+@dataclass(frozen=True)
+class ImuColumns:
+    """How an IMU file names and scales its columns, for the messages of :func:`imu_physics`:
+    the column labels, the file's units, the factor from the file's accelerometer unit to g
+    and the unit a wrong file would most likely hold instead."""
+
+    acc: str = "acc x,y,z"
+    gyro: str = "gyro x,y,z"
+    acc_unit: str = "g"
+    gyro_unit: str = "deg/s"
+    to_g: float = 1.0
+    other_acc_unit: str = "m/s^2"
+    layout: str = "acc x,y,z [g], gyro x,y,z [deg/s], tick"
+
+
+def _gravity(path, f_g, w_dps, limits, cols: ImuColumns):
     lo, hi = limits.gravity_band
     if lo <= f_g <= hi:
         return
-    where = "columns acc x,y,z"
+    where = f"columns {cols.acc}"
     said = (f"at rest they read |f| = {f_g * units.G0:.4g} m/s^2 ({f_g:.4g} g), expected "
             f"gravity, {lo:g}-{hi:g} g (gravity_band)")
-    if f_g < 0.5 * lo and lo <= w_dps <= hi:
+    if f_g < 0.5 * lo and lo <= w_dps <= hi and cols.gyro_unit == "deg/s":
         raise InputFileError(path, where, f"{said}, while the gyro columns read {w_dps:.4g} as "
                              "if they held gravity in g: the accelerometer and gyro columns "
-                             "are swapped (expected acc x,y,z [g], gyro x,y,z [deg/s], tick)")
-    if lo <= f_g / units.G0 <= hi:
-        raise InputFileError(path, where, f"{said}: the values look like m/s^2; the file "
-                                          "must hold g")
+                             f"are swapped (expected {cols.layout})")
+    # the file's numbers read in the other unit (m/s^2 for g, g for m/s^2) would be gravity
+    other = units.G0 if cols.to_g == 1.0 else 1.0 / units.G0
+    if lo <= f_g / other <= hi:
+        raise InputFileError(path, where, f"{said}: the values look like {cols.other_acc_unit};"
+                                          f" the file must hold {cols.acc_unit}")
     raise InputFileError(path, where, said)
 
 
-def imu_physics(path, acc_g, gyro_dps, lineno, rate_hz, limits: Limits = DEFAULT_LIMITS):
+def imu_physics(path, acc_g, gyro_dps, lineno, rate_hz, limits: Limits = DEFAULT_LIMITS,
+                cols: ImuColumns = ImuColumns()):
     """Check that the IMU columns hold an IMU in the file's units (g, deg/s).
 
     Gravity at rest on the accelerometers (and not on the gyros: swapped columns), a small
@@ -222,20 +240,23 @@ def imu_physics(path, acc_g, gyro_dps, lineno, rate_hz, limits: Limits = DEFAULT
         1-based line of each sample.
     rate_hz : float
         Nominal sample rate.
+    cols : ImuColumns, optional
+        The file's column labels and units (default: the rtklib logger's, g and deg/s), for
+        the messages; the data come in g and deg/s whatever the file holds.
     """
     f_g, w_dps = _rest(acc_g, gyro_dps, rate_hz)
-    _gravity(path, f_g, w_dps, limits)
+    _gravity(path, f_g, w_dps, limits, cols)
     if w_dps * units.DPS > limits.gyro_rest_max_rps:
-        raise InputFileError(path, "columns gyro x,y,z", f"at rest they read {w_dps:.4g} deg/s,"
-                             f" over {np.rad2deg(limits.gyro_rest_max_rps):.3g} deg/s "
-                             "(gyro_rest_max_rps): not deg/s, or not a gyro")
-    for cols, data, scale, limit, unit, name in (
-            ("gyro x,y,z", gyro_dps, units.DPS, limits.gyro_max_rps, "rad/s", "gyro_max_rps"),
-            ("acc x,y,z", acc_g, units.G0, limits.accel_max_mps2, "m/s^2", "accel_max_mps2")):
+        raise InputFileError(path, f"columns {cols.gyro}", f"at rest they read {w_dps:.4g} "
+                             f"deg/s, over {np.rad2deg(limits.gyro_rest_max_rps):.3g} deg/s "
+                             f"(gyro_rest_max_rps): not {cols.gyro_unit}, or not a gyro")
+    for label, data, scale, limit, unit, name in (
+            (cols.gyro, gyro_dps, units.DPS, limits.gyro_max_rps, "rad/s", "gyro_max_rps"),
+            (cols.acc, acc_g, units.G0, limits.accel_max_mps2, "m/s^2", "accel_max_mps2")):
         mag = np.linalg.norm(data, axis=1) * scale
         k = int(np.argmax(mag))
         if mag[k] > limit:
-            raise InputFileError(path, f"line {lineno[k]}, columns {cols}",
+            raise InputFileError(path, f"line {lineno[k]}, columns {label}",
                                  f"magnitude {mag[k]:.4g} {unit} exceeds {limit:.4g} {unit} "
                                  f"({name})")
 

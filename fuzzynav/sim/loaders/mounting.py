@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from fuzzynav.errors import InputFileError
+from fuzzynav.sim.sensors.gnss import MAX_LEVER_ARM_M
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
 
 #: forward-right-down body axes to right-forward-up: (x, y, z)_rfu = (y, x, -z)_frd
@@ -87,7 +88,8 @@ class Mounting:
         t = Table(d, where)
         rpy = t.vector("imu_rpy_frd_deg", 3, None, broadcast=False)
         mat = t.matrix("imu_to_body", 3, None)
-        lever = t.vector("gnss_lever_arm_b_m", 3, (0.0, 0.0, 0.0), broadcast=False)
+        lever = t.vector("gnss_lever_arm_b_m", 3, (0.0, 0.0, 0.0), broadcast=False,
+                         lo=-MAX_LEVER_ARM_M, hi=MAX_LEVER_ARM_M)
         t.finish()
         if (rpy is None) == (mat is None):
             raise t.error("imu_rpy_frd_deg", "give exactly one of imu_rpy_frd_deg and "

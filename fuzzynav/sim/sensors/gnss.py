@@ -39,7 +39,9 @@ _ZERO3 = (0.0, 0.0, 0.0)
 MAX_POS_M = 1e5          # a 100-km error is no longer a fix
 _MAX_VEL_MPS = 1e3
 _MAX_SCALE = 1e4
-_MAX_LEVER_M = 1e3        # larger than any vehicle
+#: largest antenna lever arm component [m] (larger than any vehicle), in scenarios,
+#: mounting files and start options alike
+MAX_LEVER_ARM_M = 1e3
 _VECTOR_FIELDS = ("pos_sigma_m", "vel_sigma_mps", "gm_pos_sigma_m", "gm_vel_sigma_mps",
                   "claimed_pos_sigma_m", "claimed_vel_sigma_mps", "lever_arm_b_m")
 
@@ -331,8 +333,8 @@ class Spec:
         kw["outlier_vel_mps"] = t.number("outlier_vel_mps", 0.0, lo=0.0, hi=_MAX_VEL_MPS)
         for name in ("outage_period_s", "outage_duration_s"):
             kw[name] = t.number(name, 0.0, lo=0.0)
-        kw["lever_arm_b_m"] = t.vector("lever_arm_b_m", 3, _ZERO3, lo=-_MAX_LEVER_M,
-                                       hi=_MAX_LEVER_M)
+        kw["lever_arm_b_m"] = t.vector("lever_arm_b_m", 3, _ZERO3, lo=-MAX_LEVER_ARM_M,
+                                       hi=MAX_LEVER_ARM_M)
         kw["noise_windows"] = tuple(NoiseWindow.from_table(w)
                                     for w in t.tables("noise_windows", required=False))
         if (kw["outage_period_s"] > 0.0) != (kw["outage_duration_s"] > 0.0):

@@ -1,0 +1,105 @@
+"""Tuned-parameter files: one reader checks every filter, key and range (one line each)."""
+from __future__ import annotations
+
+import copy
+import json
+from pathlib import Path
+
+import pytest
+
+from fuzzynav.cli import main
+from fuzzynav.errors import InputFileError
+from fuzzynav.filters.baselines import read_params
+from fuzzynav.filters.params_file import PARAMETERS, read_params_file
+from fuzzynav.filters.tuned_qr import read_multipliers
+
+ROOT = Path(__file__).resolve().parents[2]
+SHIPPED = ROOT / "studies" / "paper000_baselines.json"
+APSO = ROOT / "studies" / "paper004_apso_rev.json"
+
+
+def _doc():
+    return json.loads(SHIPPED.read_text())
+
+
+def _with(edit):
+    doc = copy.deepcopy(_doc())
+    edit(doc["filters"])
+    return doc
+
+
+def _set(name, key, value):
+    def edit(f):
+        f[name][key] = value
+    return edit
+
+
+BAD = [
+    ("unknown key", _set("ekf-tuned", "r_bogus", 2.0), "$.filters.ekf-tuned.r_bogus",
+     "unknown parameter of ekf-tuned"),
+    ("sage-husa b above 1", _set("sage-husa-tuned", "b", 1.5), "$.filters.sage-husa-tuned.b",
+     "must be a number in (0, 1)"),
+    ("vb fractional iterations", _set("vb-tuned", "iterations", 2.5),
+     "$.filters.vb-tuned.iterations", "must be an integer in [1, 100]"),
+    ("an absurd R factor", _set("ekf-tuned", "r_pos", 1e300), "$.filters.ekf-tuned.r_pos",
+     "must be a number in [1e-06, 1e+06]"),
+    ("a zero factor", _set("ekf-tuned", "q_att", 0.0), "$.filters.ekf-tuned.q_att", "[1e-06"),
+    ("a string", _set("huber-tuned", "gamma", "1.3"), "$.filters.huber-tuned.gamma",
+     "got '1.3'"),
+    ("a boolean", _set("huber-tuned", "gamma", True), "$.filters.huber-tuned.gamma",
+     "got True"),
+    ("empty parameters", lambda f: f.update({"sage-husa-tuned": {}}),
+     "$.filters.sage-husa-tuned", "plain EKF"),
+    ("a missing key", lambda f: f["vb-tuned"].pop("rho"), "$.filters.vb-tuned", "misses rho"),
+    ("cap below floor", _set("sage-husa-tuned", "cap", 0.5), "$.filters.sage-husa-tuned.cap",
+     "must exceed floor"),
+    ("strong tracking beta below 1", _set("strong-tracking-tuned", "beta", 0.5),
+     "$.filters.strong-tracking-tuned.beta", "[1, 1000]"),
+    ("an unknown filter", lambda f: f.update({"kalman-magic": {"x": 1.0}}),
+     "$.filters.kalman-magic", "not a tuned filter"),
+    ("parameters not an object", lambda f: f.update({"huber-tuned": [1.3]}),
+     "$.filters.huber-tuned", "must be an object"),
+]
+
+
+@pytest.mark.parametrize("label, edit, where, phrase", BAD, ids=[b[0] for b in BAD])
+def test_a_bad_parameter_file_is_one_line_naming_the_key(tmp_path, label, edit, where, phrase):
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(_with(edit)))
+    with pytest.raises(InputFileError) as exc:
+        read_params_file(path)
+    msg = str(exc.value)
+    assert msg.startswith(f"{path}: {where}:") and phrase in msg and "\n" not in msg
+
+
+def test_the_shipped_files_read_back_unchanged():
+    assert read_params(SHIPPED)["filters"] == _doc()["filters"]
+    assert read_multipliers(APSO) == json.loads(APSO.read_text())["filters"]["apso"]
+
+
+def test_every_tuned_filter_registered_is_declared():
+    from fuzzynav.filters.named import list_filters
+
+    takers = {f.name for f in list_filters() if f.takes_params}
+    assert takers <= set(PARAMETERS), takers - set(PARAMETERS)
+
+
+def test_an_older_apso_file_with_empty_multipliers_is_refused(tmp_path):
+    path = tmp_path / "apso.json"
+    path.write_text(json.dumps({"multipliers": {}}))
+    with pytest.raises(InputFileError, match=r"\$\.multipliers: is empty"):
+        read_multipliers(path)
+
+
+@pytest.mark.parametrize("spec, phrase", [
+    ("ekf-tuned@", "no file after '@'"),
+    ("fakf@+", "no file after '@'"),
+    ("sage-husa-tuned@{bad}", "$.filters.sage-husa-tuned.b: must be a number in (0, 1)"),
+])
+def test_the_cli_refuses_in_one_line(tmp_path, capsys, spec, phrase):
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(_with(_set("sage-husa-tuned", "b", 1.5))))
+    code = main(["run", "paper000", "--filter", spec.format(bad=bad), "--cache",
+                 str(tmp_path / "cache")])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == "" and phrase in err and err.count("\n") == 1, err
