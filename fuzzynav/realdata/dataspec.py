@@ -24,6 +24,7 @@ Parsing needs no file; :func:`resolve` checks the directory.
 """
 from __future__ import annotations
 
+import os
 import re
 from dataclasses import dataclass, replace
 from pathlib import Path

@@ -21,6 +21,7 @@ import os
 from pathlib import Path
 
 from fuzzynav.errors import DataMissingError, OutputError, UnknownNameError
+from fuzzynav.fileio import make_dir
 from fuzzynav.realdata.datasets import DATASETS, Dataset, fetch_home
 
 #: environment variable replacing :data:`DEFAULT_BASE_URL` (a mirror laid out alike)
@@ -83,6 +84,18 @@ def _quiet_pooch():
         logger.setLevel(level)
 
 
+@contextlib.contextmanager
+def _no_empty_directory(path: Path):
+    """Remove ``path`` afterwards if it is left empty (a fetch that failed at once leaves
+    no sign of a dataset, so ``data list`` and ``--data`` still say to fetch it)."""
+    try:
+        yield
+    finally:
+        with contextlib.suppress(OSError):
+            if not any(path.iterdir()):
+                path.rmdir()
+
+
 def _fetcher(ds: Dataset, home: Path, url: str, retries: int):
     import pooch
 
@@ -129,7 +142,7 @@ def fetch(name: str, dest=None, url: str | None = None, retries: int | None = No
         No network or a server error (one line: what to download, where to put it), or a
         download whose hash does not match (nothing of it is kept).
     OutputError
-        The data directory cannot be written.
+        The data directory cannot be made or written, or is a system directory.
     """
     import pooch
     import requests
@@ -137,9 +150,10 @@ def fetch(name: str, dest=None, url: str | None = None, retries: int | None = No
     ds = get_dataset(name)
     home = Path(dest).expanduser() if dest is not None else fetch_home()
     url = base_url() if url is None else (url if url.endswith("/") else url + "/")
+    make_dir(home / ds.name, "data directory")   # (refuses a system directory, names a failure)
     getter = _fetcher(ds, home, url, RETRIES if retries is None else int(retries))
     downloader = pooch.HTTPDownloader(timeout=TIMEOUT_S, progressbar=False)
-    with _quiet_pooch():
+    with _quiet_pooch(), _no_empty_directory(home / ds.name):
         for f in ds.files:
             target = home / ds.name / f.path
             if _holds(target, f.sha256):

@@ -160,7 +160,7 @@ def test_a_file_missing_on_the_server_is_one_line_with_the_status(server, home):
     with pytest.raises(FetchError, match=r"\(HTTP 404\)") as err:
         fetch(TINY.name)
     assert TINY.files[0].url in str(err.value) and "\n" not in str(err.value)
-    assert not any((home / TINY.name).iterdir())          # nothing written
+    assert not (home / TINY.name).exists()                # nothing written
 
 
 def _dead_url() -> str:
@@ -179,7 +179,7 @@ def test_offline_fetch_is_one_line_saying_what_to_download_and_where(home, monke
     assert out == "" and err.count("\n") == 1
     assert "cannot download" in err and "no connection" in err
     assert "fuzzynav data list akit --files" in err and str(home / "akit") in err
-    assert not any(home.rglob("*.csv"))
+    assert not (home / "akit").exists()                       # not even an empty directory
 
 
 def test_data_list_says_size_presence_and_where(home, capsys):
@@ -203,6 +203,13 @@ def test_data_list_says_size_presence_and_where(home, capsys):
     main(["data", "list", "akit", "--files"])
     files = capsys.readouterr().out.splitlines()
     assert len(files) == 40 and files[0].split()[1].startswith("https://raw.githubusercontent")
+
+
+def test_a_system_directory_is_refused_before_any_download(server, capsys):
+    target = Path("/etc/fuzzynav-test-must-not-exist")
+    assert main(["data", "fetch", "rtklib-drive", "--dest", str(target)]) == 2
+    assert str(target) in capsys.readouterr().err
+    assert not target.exists() and server.requested == []
 
 
 def test_unknown_dataset_is_one_line(home, capsys):
