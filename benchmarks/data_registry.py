@@ -61,14 +61,14 @@ def _drive_files() -> list:
 #: dataset name -> (recording kind, description, source, licence, files)
 LAYOUT = {
     "akit": ("akit",
-             "A-KIT AUV: INS (100 Hz), DVL and post-processed reference, trajectories 1-8 "
-             "(Cohen & Klein, EAAI 146 (2025) 110221: cite it)",
+             ("A-KIT AUV: INS (100 Hz), DVL and post-processed reference, trajectories 1-8 "
+              "(Cohen & Klein, EAAI 146 (2025) 110221: cite it)"),
              f"https://github.com/{AKIT_REPO}",
              "no licence file: validate with it, do not redistribute",
              _akit_files()),
     "rtklib-drive": ("rtklib",
-                     "car drive, Boulder 2025-07-08, 549 s: consumer MEMS IMU (100 Hz) + "
-                     "RTK GNSS (4 Hz), RTKLIB formats",
+                     ("car drive, Boulder 2025-07-08, 549 s: consumer MEMS IMU (100 Hz) + "
+                      "RTK GNSS (4 Hz), RTKLIB formats"),
                      f"https://github.com/{DRIVE_REPO}",
                      "BSD-3-Clause (LICENSE beside the data)",
                      _drive_files()),

@@ -32,9 +32,19 @@ from pathlib import Path
 import numpy as np
 
 from fuzzynav.errors import DataMissingError, FuzzynavError
-from fuzzynav.realdata.datasets import (DATA_DIR_ENV, DATASETS, data_dirs, find_directory,
-                                       missing_dataset_message)
-from fuzzynav.realdata.sources import SOURCES, data_options, split_dataset_spec, split_options
+from fuzzynav.realdata.datasets import (
+    DATA_DIR_ENV,
+    DATASETS,
+    data_dirs,
+    find_directory,
+    missing_dataset_message,
+)
+from fuzzynav.realdata.sources import (
+    SOURCES,
+    data_options,
+    split_dataset_spec,
+    split_options,
+)
 
 _WINDOW_RE = re.compile(r"^\s*(\d+(?:\.\d*)?)\s*-\s*(\d+(?:\.\d*)?)\s*(%?)\s*$")
 

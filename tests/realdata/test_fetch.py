@@ -16,9 +16,10 @@ import pytest
 
 from fuzzynav.cli import main
 from fuzzynav.errors import DataMissingError, InputFileError
-from fuzzynav.realdata import datasets, fetch as fetch_mod
-from fuzzynav.realdata.dataspec import parse_recording_spec, resolve
+from fuzzynav.realdata import datasets
+from fuzzynav.realdata import fetch as fetch_mod
 from fuzzynav.realdata.datasets import DATA_DIR_ENV, DATASETS, Dataset, load_registry
+from fuzzynav.realdata.dataspec import parse_recording_spec, resolve
 from fuzzynav.realdata.fetch import DATA_URL_ENV, FetchError, fetch
 from fuzzynav.realdata.sources import data_options, parse_data_spec
 from tests.conftest import datasets_dir
