@@ -60,6 +60,7 @@ def test_the_built_package_carries_the_named_filters_rules(tmp_path):
                    cwd=src, check=True, capture_output=True, env=_clean_env())
     shipped = sorted(p.name for p in (lib / "fuzzynav" / "rules").glob("*.json"))
     assert shipped == sorted(p.name for p in (ROOT / "rules").glob("*.json"))
+    assert (lib / "fuzzynav" / "realdata" / "datasets.json").is_file()  # fuzzynav data fetch
     elsewhere = tmp_path / "elsewhere"  # no rules/ here, and not the checkout
     elsewhere.mkdir()
     # (no JIT: importing the filters would compile their kernels for this new path; only

@@ -45,9 +45,10 @@ def register(sub) -> None:
 def add_source_arguments(p) -> None:
     p.add_argument("scenario", nargs="?", help="built-in scenario name or scenario TOML file")
     p.add_argument("--data", metavar="KIND:DIR[:SESSION]",
-                   help="a recording instead of a scenario, e.g. rtklib:../shared/datasets/"
-                        "rtklib-drive; SESSION picks one of several recordings in DIR (the "
-                        "<id> of imu_<id>.csv)")
+                   help="a recording instead of a scenario, e.g. rtklib:path/to/drive, or a "
+                        "dataset of fuzzynav data list: rtklib-drive, akit:3 (after fuzzynav "
+                        "data fetch NAME); SESSION picks one of several recordings in DIR "
+                        "(the <id> of imu_<id>.csv)")
 
 
 def add_recording_arguments(p) -> None:
@@ -80,7 +81,8 @@ def _cmd_scenarios(args) -> int:
     for name in list_scenarios():
         scn = load_scenario(name)
         print(f"  {name:<24} {scn.duration_s:7.0f} s  {scn.description}")
-    print("\ndata sources (--data KIND:DIR[:SESSION]):")
+    print("\ndata sources (--data KIND:DIR[:SESSION], or a dataset NAME[:SESSION] of "
+          "fuzzynav data list):")
     for kind, desc in data_sources().items():
         print(f"  {kind:<24} {desc}")
     print("\nfilters (--filter NAME):")

@@ -4,9 +4,13 @@ windows.
 A study (``[train] recordings = [...]``, ``docs/studies.md``) names recordings by the
 ``--data`` syntax (:func:`fuzzynav.realdata.sources.parse_data_spec`) with two differences:
 
-* a relative ``DIR`` is looked up in the **data directory** -- ``$FUZZYNAV_DATA``, or
-  ``../shared/datasets`` beside the repository when it exists -- so a study file commits no
-  absolute path (``akit:akit:1-4`` is ``$FUZZYNAV_DATA/akit``, trajectories 1-4);
+* a relative ``DIR`` is looked up in the **data directories**
+  (:mod:`fuzzynav.realdata.datasets`: ``$FUZZYNAV_DATA`` when set, else the user cache
+  ``fuzzynav data fetch`` writes into), so a study file commits no absolute path
+  (``akit:akit:1-4`` is ``<data directory>/akit``, trajectories 1-4); a dataset name is
+  the same recording (``akit:1-4``, ``rtklib-drive@0-50%``; ``akit:N`` is the dataset
+  whenever ``N`` is a trajectory selection) and the run is named the long way
+  (``akit:akit:3``, ``rtklib:rtklib-drive@0-50%``);
 * ``@A-B`` (seconds after the recording's first IMU sample) or ``@A-B%`` (percent of its
   span) keeps a **time window**: the filter runs from the recording's start (its
   initialisation needs the start) up to ``B`` and is scored on the epochs in ``[A, B]`` only,
@@ -28,12 +32,20 @@ from pathlib import Path
 import numpy as np
 
 from fuzzynav.errors import DataMissingError, FuzzynavError
-from fuzzynav.realdata.sources import SOURCES, data_options, split_options
+from fuzzynav.realdata.datasets import (
+    DATA_DIR_ENV,
+    DATASETS,
+    data_dirs,
+    find_directory,
+    missing_dataset_message,
+)
+from fuzzynav.realdata.sources import (
+    SOURCES,
+    data_options,
+    split_dataset_spec,
+    split_options,
+)
 
-#: environment variable naming the directory relative recording specs are read from
-DATA_DIR_ENV = "FUZZYNAV_DATA"
-#: the default data directory, relative to the repository (the package's parent)
-DEFAULT_DATA_DIR = Path("..") / "shared" / "datasets"
 _WINDOW_RE = re.compile(r"^\s*(\d+(?:\.\d*)?)\s*-\s*(\d+(?:\.\d*)?)\s*(%?)\s*$")
 
 
@@ -91,7 +103,8 @@ def parse_window(text: str) -> Window:
 
 
 def parse_recording_spec(text) -> RecordingSpec:
-    """Split ``KIND:DIR[:SESSION][@WINDOW]`` (no file is read).
+    """Split ``KIND:DIR[:SESSION][@WINDOW]`` or ``NAME[:SESSION][@WINDOW]`` (a dataset; the
+    spec is then ``KIND:NAME[:SESSION]``, as if written the long way; no file is read).
 
     Raises
     ------
@@ -106,10 +119,17 @@ def parse_recording_spec(text) -> RecordingSpec:
     if options is not None:
         data_options(text)      # a bad option is refused here, naming it
     body, at, win = bare.partition("@")
+    short = split_dataset_spec(body, directory_exists=lambda _: False)
+    if short is not None:
+        kind, name, session = short
+        if session == "":
+            raise FuzzynavError(f"{text!r}: empty session after {name}:")
+        return RecordingSpec(kind, name, session, parse_window(win) if at else None, options)
     kind, sep, rest = body.partition(":")
     if not sep or not kind or not rest:
-        raise FuzzynavError(f"{text!r}: expected KIND:DIR[:SESSION][@A-B[%]] "
-                            "(e.g. akit:akit:1-4 or rtklib:rtklib-drive@0-50%)")
+        raise FuzzynavError(f"{text!r}: expected KIND:DIR[:SESSION][@A-B[%]] or a dataset "
+                            "NAME[:SESSION][@A-B[%]] (e.g. akit:akit:1-4, akit:1-4 or "
+                            "rtklib-drive@0-50%)")
     if kind not in SOURCES:
         raise FuzzynavError(f"{text!r}: unknown recording kind {kind!r} "
                             f"(known: {', '.join(sorted(SOURCES))})")
@@ -121,37 +141,36 @@ def parse_recording_spec(text) -> RecordingSpec:
     return RecordingSpec(kind, directory, session, parse_window(win) if at else None, options)
 
 
-def data_dir() -> Path | None:
-    """The data directory: ``$FUZZYNAV_DATA``, else ``../shared/datasets`` beside the
-    repository if it exists, else ``None``."""
-    env = os.environ.get(DATA_DIR_ENV)
-    if env:
-        return Path(env).expanduser()
-    default = (Path(__file__).resolve().parents[2] / DEFAULT_DATA_DIR).resolve()
-    return default if default.is_dir() else None
+def data_dir() -> Path:
+    """The first data directory (:func:`fuzzynav.realdata.datasets.data_dirs`):
+    ``$FUZZYNAV_DATA`` when set, else the user cache."""
+    return data_dirs()[0]
 
 
 def resolve(spec: RecordingSpec) -> Path:
-    """The recording directory of a spec (relative ones under :func:`data_dir`).
+    """The recording directory of a spec (relative ones: the first of the data
+    directories holding it, :func:`fuzzynav.realdata.datasets.find_directory`).
 
     Raises
     ------
     DataMissingError
-        When it does not exist (the message says where it was looked for and how to set
-        the data directory).
+        When it does not exist (the message says where it was looked for and how to get
+        it: ``fuzzynav data fetch NAME`` for a dataset, ``$FUZZYNAV_DATA`` otherwise).
     """
     path = Path(spec.directory).expanduser()
-    if not path.is_absolute():
-        base = data_dir()
-        if base is None:
-            raise DataMissingError(f"{spec}: no data directory: set {DATA_DIR_ENV} to the "
-                                   f"directory that holds {spec.directory!r}")
-        path = base / path
-    if not path.is_dir():
-        raise DataMissingError(f"{spec}: recording directory {path} not found (relative "
-                               f"directories are read from {DATA_DIR_ENV} or "
-                               f"{DEFAULT_DATA_DIR} beside the repository)")
-    return path
+    if path.is_absolute():
+        if not path.is_dir():
+            raise DataMissingError(f"{spec}: recording directory {path} not found")
+        return path
+    found = find_directory(path)
+    if found is not None:
+        return found
+    if spec.directory in DATASETS:
+        raise DataMissingError(f"{spec}: {missing_dataset_message(spec.directory)}")
+    looked = ", ".join(str(b) for b in data_dirs())
+    raise DataMissingError(f"{spec}: recording directory {spec.directory} not found in "
+                           f"{looked} (relative directories are read from {DATA_DIR_ENV} "
+                           f"when set, else from the user cache)")
 
 
 def expand(spec: RecordingSpec) -> list[RecordingSpec]:

@@ -1,5 +1,8 @@
 """Recording kinds usable with ``--data KIND:DIR[:SESSION]`` and the parsing of that argument.
 
+``--data NAME[:SESSION]`` names a public dataset instead (``rtklib-drive``, ``akit:3``;
+:mod:`fuzzynav.realdata.datasets`), found where ``fuzzynav data fetch NAME`` put it.
+
 A kind is one :class:`DataSource` in :data:`SOURCES`: a description and a loader taking the
 recording directory (any copy of a recording of that kind) and returning an object with
 ``imu`` (:class:`~fuzzynav.sim.imu.ImuData`), ``gnss`` (all fixes, kind ``gnss``),
@@ -57,7 +60,7 @@ def register_source(kind: str, description: str, split: Callable | None = None):
 
 
 @register_source("rtklib", "RTKLIB car recording: imu_<id>.csv + .tag + gnss_<id>*.pos "
-                           "(e.g. ../shared/datasets/rtklib-drive)")
+                           "(e.g. --data rtklib-drive, after fuzzynav data fetch rtklib-drive)")
 def _load_rtklib(directory, mounting="auto", imu_delay_s=None, span_s=None, session=None,
                  options=None):
     from fuzzynav.sim.loaders.rtklib import load_rtklib
@@ -75,7 +78,8 @@ def _akit_split(session):
 
 
 @register_source("akit", "A-KIT AUV recordings: IMU/DVL/GT_trajectoryN.csv + corrected/ "
-                         "(akit:DIR:N, N = 3, 1-8 or 1,4; e.g. ../shared/datasets/akit)",
+                         "(akit:DIR:N, N = 3, 1-8 or 1,4; e.g. --data akit:3 after "
+                         "fuzzynav data fetch akit)",
                  split=_akit_split)
 def _load_akit(directory, mounting="auto", imu_delay_s=None, span_s=None, session=None,
                options=None):
@@ -132,7 +136,8 @@ def split_options(spec: str) -> tuple[str, str | None]:
     A ``?`` that belongs to an existing directory's name is kept in it.
     """
     head, mark, query = str(spec).rpartition("?")
-    if not mark or _is_dir(Path(str(spec).partition(":")[2]).expanduser()):
+    rest = str(spec).partition(":")[2]   # (an empty one is no directory: rtklib-drive?...)
+    if not mark or (rest and _is_dir(Path(rest).expanduser())):
         return str(spec), None
     return head, query
 
@@ -146,8 +151,47 @@ def data_options(spec: str):
     return None if query is None else parse_start_options(query, bare)
 
 
+def split_dataset_spec(body: str, directory_exists=_is_dir):
+    """``NAME[:SESSION]`` of a registered dataset -> ``(kind, name, session)``; ``None``
+    when ``body`` (a spec without ``?options`` and ``@window``) is not of that form.
+
+    A dataset named like its kind (``akit``) is the dataset only when what follows the
+    colon is a valid session of the kind (``akit:3``, ``akit:1-4``) that
+    ``directory_exists`` denies, so ``akit:DIR`` and ``akit:DIR:N`` keep their meaning.
+    """
+    from fuzzynav.realdata.datasets import DATASETS
+
+    name, sep, rest = body.partition(":")
+    ds = DATASETS.get(name)
+    if ds is None:
+        return None
+    if sep and name in SOURCES:
+        split = SOURCES[name].split
+        if split is None or ":" in rest or not rest or directory_exists(Path(rest).expanduser()):
+            return None
+        try:
+            split(rest)
+        except FuzzynavError:
+            return None
+    return ds.kind, name, (rest if sep else None)
+
+
+def _dataset(spec: str, short) -> tuple:
+    """(source, directory, session) of a dataset spec; a missing one names ``--data``."""
+    from fuzzynav.realdata.datasets import locate
+
+    kind, name, session = short
+    if session == "":
+        raise FuzzynavError(f"--data {spec}: empty session after {name}:")
+    try:
+        return SOURCES[kind], locate(name), session
+    except DataMissingError as exc:
+        raise DataMissingError(f"--data {spec}: {exc}") from None
+
+
 def parse_data_spec(spec: str) -> tuple[DataSource, Path, str | None]:
-    """Split ``KIND:DIR[:SESSION][?OPTIONS]`` and check the parts (the options are read by
+    """Split ``KIND:DIR[:SESSION][?OPTIONS]`` or ``NAME[:SESSION][?OPTIONS]`` (a dataset,
+    :func:`split_dataset_spec`) and check the parts (the options are read by
     :func:`data_options`).
 
     ``SESSION`` chooses one recording of a directory that holds several (for ``rtklib``
@@ -167,17 +211,22 @@ def parse_data_spec(spec: str) -> tuple[DataSource, Path, str | None]:
     UnknownNameError
         For a kind not in :data:`SOURCES`.
     DataMissingError
-        When the directory does not exist.
+        When the directory does not exist, or the dataset is not found (the message says
+        ``fuzzynav data fetch NAME``).
     """
     spec = split_options(spec)[0]
+    short = split_dataset_spec(spec)
+    if short is not None:
+        return _dataset(spec, short)
     kind, sep, rest = spec.partition(":")
     directory, session = rest, None
     head, colon, tail = rest.rpartition(":")
     if colon and not _is_dir(Path(rest).expanduser()):
         directory, session = head, tail
     if not sep or not kind or not directory or session == "":
-        raise FuzzynavError(f"--data: expected KIND:DIR or KIND:DIR:SESSION (e.g. rtklib:"
-                            f"../shared/datasets/rtklib-drive), got {spec!r}")
+        raise FuzzynavError(f"--data: expected KIND:DIR, KIND:DIR:SESSION or a dataset "
+                            f"NAME[:SESSION] (e.g. rtklib:path/to/drive, rtklib-drive or "
+                            f"akit:3; fuzzynav data list), got {spec!r}")
     if kind not in SOURCES:
         raise UnknownNameError("data source kind", kind, SOURCES)
     path = Path(directory).expanduser()

@@ -20,7 +20,7 @@ def test_spec_parts_and_round_trip():
     assert parse_recording_spec(str(a)) == a
 
 
-@pytest.mark.parametrize("text", ["akit", "nope:dir", "akit::3", "akit:dir:", "akit:d@50-10",
+@pytest.mark.parametrize("text", ["akitt", "nope:dir", "akit::3", "akit:dir:", "akit:d@50-10",
                                   "akit:d@0-120%", "akit:d@half", 3])
 def test_bad_specs_are_refused(text):
     with pytest.raises(FuzzynavError):
