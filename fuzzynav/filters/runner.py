@@ -73,9 +73,11 @@ def _imu_arrays(imu):
 
 def _sensor_tables(sensors, adapters, options, gate_probability):
     """Per-sensor kernel ids, parameters, adapter arrays and gates; the merged event list."""
-    meas_fns, meas_index = measurements.kernel_table()
     names = sorted(sensors)
     models = [measurements.get(sensors[nm].kind) for nm in names]
+    # only the models this run uses are compiled (the others' slots hold a stand-in)
+    meas_fns, meas_index = measurements.kernel_table({measurements.MODELS.index()[m.kind]
+                                                      for m in models})
     M = max([mdl.max_rows for mdl in models], default=1)
     rows = [mdl.rows(sensors[nm]) for nm, mdl in zip(names, models)]
     bounds = [adapters.get(nm, NoAdaptation()).bind(mdl, r)
@@ -158,7 +160,7 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
     ev = dict(r=np.full((E, M), np.nan), S=np.full((E, M), np.nan), nis=np.full(E, np.nan),
               flag=np.zeros(E, np.int64), diag=np.full((E, N_DIAG), np.nan))
     nav0 = strapdown.make_nav(init.lla, init.vel_n, init.q_bn)
-    adapt_fns, _ = adaptation.kernel_table()
+    adapt_fns, _ = adaptation.kernel_table(used=tb["s_adapt"])  # the used policies only
     status, done = loop.run_loop(
         loop.Imu(dth, dv, time_s), loop.Start(nav0, np.zeros(n - N_CORE)),
         loop.Model(blk_start, blk_kind, blk_inv_tau, em),
