@@ -9,9 +9,14 @@ runs also the kernels compiled and the top list of compile times per kernel (fro
 be compiled; first repeat).
 
     python benchmarks/bench_cold_start.py --repeat 3 -- run paper000 --filter ekf
+    git worktree add /tmp/base BASE_REV
+    python benchmarks/bench_cold_start.py --base /tmp/base --write -- run paper000 --filter ekf
 
-The child prints the command's own output to /dev/null; the numbers go to stdout (and with
-``--json FILE`` to a file).
+``--base`` measures a checkout of another revision too, the two taking turns.  The command's
+own output goes to /dev/null; the figures to stdout, with ``--json FILE`` to a file and with
+``--write`` into the ``cold-start`` section of docs/benchmarks.md.  Under load, read the CPU
+seconds: a cold run is compilation, which is CPU-bound, and its wall time mostly measures
+what else the machine runs.
 """
 from __future__ import annotations
 
@@ -87,48 +92,84 @@ def top_kernels(compiles, n):
     return sorted(((s, count[k], k) for k, s in own.items()), reverse=True)[:n]
 
 
+def measure(argv, repeat, trees):
+    """Cold then warm runs of ``argv`` per tree (``{label: source dir or None}``: None the
+    installed/imported fuzzynav), the trees taking turns within each repeat."""
+    runs = {label: {"cold": [], "warm": []} for label in trees}
+    for _ in range(repeat):
+        for label, src in trees.items():
+            with tempfile.TemporaryDirectory() as nb_dir, tempfile.TemporaryDirectory() as sim:
+                env = dict(os.environ, NUMBA_CACHE_DIR=nb_dir, FUZZYNAV_CACHE=sim)
+                env.pop("FUZZYNAV_NUMBA_CACHE", None)  # the keyed cache, as installed
+                if src is not None:
+                    env["PYTHONPATH"] = os.pathsep.join([src, env.get("PYTHONPATH", "")])
+                runs[label]["cold"].append(_run(argv, env))
+                runs[label]["warm"].append(_run(argv, env))
+    out = {}
+    for label, r in runs.items():
+        res = {}
+        for case in ("cold", "warm"):
+            rs = r[case]
+            res[case] = {"wall_s": _summary([x[0] for x in rs]),
+                         "cpu_s": _summary([x[1] for x in rs]),
+                         "compiles": statistics.median(len(x[2]["compiles"]) for x in rs),
+                         "compile_s": statistics.median(sum(c[2] for c in x[2]["compiles"])
+                                                        for x in rs)}
+        res["top"] = top_kernels(r["cold"][0][2]["compiles"], 10 ** 6)
+        out[label] = res
+    return out
+
+
+def report(command, results, top, repeat) -> str:
+    """The figures as markdown: a table of the cases, then each tree's top kernels."""
+    lines = [f"`fuzzynav {command}`, empty numba and simulation caches (cold) and then the "
+             f"same caches again (warm); min / median of {repeat} run(s) each, whole "
+             "process (wall and CPU = user + system seconds); compile = the compilations' "
+             "own times summed (numba's `numba:compile` event).", "",
+             "| tree | case | wall (s) | CPU (s) | compilations | compile (s) |",
+             "|---|---|---|---|---|---|"]
+    for label, res in results.items():
+        for case in ("cold", "warm"):
+            r = res[case]
+            lines.append(f"| {label} | {case} | {r['wall_s']['min']:.1f} / "
+                         f"{r['wall_s']['median']:.1f} | {r['cpu_s']['min']:.1f} / "
+                         f"{r['cpu_s']['median']:.1f} | {r['compiles']:.0f} | "
+                         f"{r['compile_s']:.1f} |")
+    for label, res in results.items():
+        lines += ["", f"Top kernels by own compile time, {label} (first cold run):", "",
+                  "| s | compilations | kernel |", "|---|---|---|"]
+        lines += [f"| {s:.2f} | {c} | `{k}` |" for s, c, k in res["top"][:top]]
+    return "\n".join(lines)
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--repeat", type=int, default=3)
     p.add_argument("--top", type=int, default=15)
+    p.add_argument("--base", help="also measure this source tree (a checkout of the base "
+                   "revision), taking turns with this one")
     p.add_argument("--json", help="also write the figures to this file")
+    p.add_argument("--write", action="store_true",
+                   help="write the section of docs/benchmarks.md")
     p.add_argument("--child", help=argparse.SUPPRESS)
     p.add_argument("argv", nargs="+", help="the fuzzynav command (after --)")
     a = p.parse_args()
     if a.child:
         sys.exit(_child(a.argv, a.child))
-    cold, warm, first = [], [], None
-    for _ in range(a.repeat):
-        with tempfile.TemporaryDirectory() as numba_dir, tempfile.TemporaryDirectory() as sim:
-            env = dict(os.environ, NUMBA_CACHE_DIR=numba_dir, FUZZYNAV_CACHE=sim)
-            env.pop("FUZZYNAV_NUMBA_CACHE", None)  # the keyed cache, as installed
-            cold.append(_run(a.argv, env))
-            warm.append(_run(a.argv, env))
-        first = first or cold[0][2]
-    res = {"command": "fuzzynav " + " ".join(a.argv), "cpu_count": os.cpu_count(),
-           "python": sys.version.split()[0]}
-    import numba
+    trees = {"this tree": None} if a.base is None else {"base": a.base, "this tree": None}
+    results = measure(a.argv, a.repeat, trees)
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from _report import machine, write_section
 
-    res["numba"] = numba.__version__
-    for name, runs in (("cold", cold), ("warm", warm)):
-        res[name] = {"wall_s": _summary([r[0] for r in runs]),
-                     "cpu_s": _summary([r[1] for r in runs]),
-                     "compiles": statistics.median(len(r[2]["compiles"]) for r in runs)}
-    res["compile_s"] = sum(r[2] for r in first["compiles"])
-    res["top"] = top_kernels(first["compiles"], a.top)
-    print(f"{res['command']}  ({res['cpu_count']} cores, Python {res['python']}, "
-          f"numba {res['numba']}; min / median of {a.repeat})")
-    for name in ("cold", "warm"):
-        r = res[name]
-        print(f"  {name}: wall {r['wall_s']['min']:.1f} / {r['wall_s']['median']:.1f} s, "
-              f"cpu {r['cpu_s']['min']:.1f} / {r['cpu_s']['median']:.1f} s, "
-              f"{r['compiles']:.0f} compilations")
-    print(f"  compile time (first cold run, exclusive sum): {res['compile_s']:.1f} s; top kernels:")
-    for s, c, k in res["top"]:
-        print(f"    {s:6.2f} s  x{c}  {k}")
+    text = report(" ".join(a.argv), results, a.top, a.repeat)
+    print(machine())
+    print(text)
     if a.json:
         with open(a.json, "w", encoding="utf-8") as f:
-            json.dump(res, f, indent=2)
+            json.dump({"machine": machine(), "results": results}, f, indent=2)
+    if a.write:
+        write_section("cold-start", "## A run on a cold kernel cache "
+                      "(`benchmarks/bench_cold_start.py`)\n\n" + machine() + "\n\n" + text)
 
 
 if __name__ == "__main__":

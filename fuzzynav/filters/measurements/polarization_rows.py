@@ -45,7 +45,8 @@ def fill_extra(aops, sun, frames, out):
     row that lacks them)."""
     k = aops.size
     trig = aop_trig(aops)
-    out[:2 * k] = trig
+    for i in range(2 * k):  # not a slice assignment: that compiles numba's shape-error
+        out[i] = trig[i]  # message formatting, seconds on a cold cache
     out[2 * k] = math.atan2(sun[1], sun[0])
     sx, sy, sz, used = sun_from_aops(aops, trig, frames)
     out[2 * k + 1], out[2 * k + 2], out[2 * k + 3], out[2 * k + 4] = sx, sy, sz, used
