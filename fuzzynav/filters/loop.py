@@ -369,15 +369,20 @@ def _make_loop(BANK: bool, ST: bool):
     return memoise_table_types(run_loop)  # the kernel tables: typed once per tuple
 
 
-#: the loops by ``(bank, st)`` (:func:`loop_for`); ``run_loop`` takes any run
-LOOPS = {(bank, st): _make_loop(bank, st) for bank in (False, True) for st in (False, True)}
-run_loop = LOOPS[True, True]
+#: the plain loop (a single filter, phi model: the EKF and the policies) and the full one;
+#: two copies, not one per combination, so that a test run or a comparison across filter
+#: kinds compiles the loop at most twice
+PLAIN_LOOP = _make_loop(False, False)
+run_loop = _make_loop(True, True)
 
 
 def loop_for(n_local: int, error_model: int, controller_on: int):
-    """The smallest compiled loop that runs a filter of ``n_local`` locals, error model
-    code ``error_model`` and share controller on or off (each compiled on first use)."""
-    return LOOPS[n_local > 1 or bool(controller_on), error_model == EM_ST]
+    """The compiled loop for a filter of ``n_local`` locals, error model code
+    ``error_model``, share controller on or off: :data:`PLAIN_LOOP` for a single phi-model
+    filter, else :func:`run_loop` (each compiled on first use)."""
+    if n_local == 1 and not controller_on and error_model != EM_ST:
+        return PLAIN_LOOP
+    return run_loop
 
 
 @nb.njit(cache=True, error_model="numpy")
