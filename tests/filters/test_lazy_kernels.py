@@ -10,10 +10,13 @@ import numba as nb
 import numpy as np
 from numba import types
 
-from fuzzynav.filters import adaptation, measurements
+from fuzzynav.filters import adaptation, loop, measurements
 from fuzzynav.filters.adaptation import ADAPT_SIG, none_kernel
+from fuzzynav.filters.error_st import EM_PHI, EM_ST
 from fuzzynav.filters.lazy import OneSignatureDispatcher, njit_signature, table_of
 from fuzzynav.filters.measurements import MEAS_SIG, unused_kernel
+from fuzzynav.filters.runner import run_filter
+from tests.filters.simple_data import CONFIG, run_inputs, trajectory
 
 SIG = types.float64(types.float64[:], types.int64)
 
@@ -67,3 +70,22 @@ def test_tables_of_used_kernels_type_as_the_full_tables():
     full, _ = measurements.kernel_table()
     assert len(full) == len(meas) and unused_kernel not in full
 
+
+
+def test_a_single_phi_model_filter_takes_the_plain_loop():
+    assert loop.loop_for(1, EM_PHI, 0) is loop.PLAIN_LOOP
+    for n_local, em, ctl in ((2, EM_PHI, 0), (1, EM_ST, 0), (1, EM_PHI, 1), (3, EM_ST, 1)):
+        assert loop.loop_for(n_local, em, ctl) is loop.run_loop
+
+
+def test_the_plain_loop_gives_the_full_loops_numbers(monkeypatch):
+    """Bit for bit: the plain copy is the full loop without branches this run never takes
+    (both compiled by the suite anyway: single filters and banks)."""
+    tr = trajectory(1)
+    imu, gnss, init, _, _ = run_inputs(tr, 5)
+    plain = run_filter(imu, {"gnss": gnss}, init, CONFIG)
+    monkeypatch.setattr(loop, "loop_for", lambda *args: loop.run_loop)
+    full = run_filter(imu, {"gnss": gnss}, init, CONFIG)
+    for name in ("lla", "vel_n", "sigma"):
+        np.testing.assert_array_equal(getattr(plain, name), getattr(full, name))
+    np.testing.assert_array_equal(plain.events["gnss"].nis, full.events["gnss"].nis)
