@@ -17,7 +17,7 @@ import threading
 from pathlib import Path
 
 #: a cold ``fuzzynav run paper000 --filter ekf`` [s] on a 2-core machine (docs/benchmarks.md)
-COLD_RUN_S = 40
+COLD_RUN_S = 50
 
 #: the line when the keyed cache is empty
 COLD_TEXT = f"compiling numba kernels (first run, ~{COLD_RUN_S} s) …"
