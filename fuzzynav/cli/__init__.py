@@ -93,7 +93,16 @@ def one_line(message: str) -> str:
 
 
 def main(argv=None) -> int:
-    """Entry point: parse ``argv`` and run the chosen command; return the exit code."""
+    """Entry point: parse ``argv`` and run the chosen command; return the exit code.
+
+    Called as the command (``argv`` None: ``sys.argv``), a command that compiles numba
+    kernels says so in one line on stderr (:mod:`fuzzynav.compile_notice`); called with
+    ``argv`` (tests, scripts reading the output) it does not.
+    """
+    if argv is None:
+        from fuzzynav import compile_notice
+
+        compile_notice.install()
     parser = build_parser()
     stdout = sys.stdout
     sys.stdout = _GuardedStdout(stdout)

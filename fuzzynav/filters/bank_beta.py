@@ -63,6 +63,9 @@ from typing import NamedTuple
 import numba as nb
 import numpy as np
 
+from numba import types
+
+from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.fuzzy.kernels import eval_compiled
 
 #: the statistics a share controller reads (binding ``statistic``) -> kernel code
@@ -80,7 +83,11 @@ class ShareControl(NamedTuple):
     ``fp``, ``ip`` the compiled fuzzy system, ``codes`` the statistic of each fuzzy input,
     ``out_index`` the output giving the weight, ``floor`` the smallest share, ``stat``
     (L, :func:`stat_size`) each local's innovation ring; then scratch: ``x``, ``y``,
-    ``fwork`` (the system's inputs, outputs, work), ``w`` and ``new`` (L,).
+    ``fwork`` (the system's inputs, outputs, work), ``w`` and ``new`` (L,); ``weigh``,
+    a 1-tuple of the kernel evaluating the system (:func:`fuzzy_weight`, or the stand-in
+    :func:`no_weight` when off).  The kernel is a first-class function (:data:`WEIGH_SIG`):
+    the loop's code does not contain the fuzzy engine, which a bank without a controller
+    (every filter but the fuzzy-beta ones) then never compiles.
     """
 
     on: int
@@ -95,6 +102,24 @@ class ShareControl(NamedTuple):
     fwork: np.ndarray
     w: np.ndarray
     new: np.ndarray
+    weigh: tuple
+
+
+#: ``status = weigh(fp, ip, x, y, fwork)``: the share controller's fuzzy evaluation
+WEIGH_SIG = types.int64(types.float64[::1], types.int64[::1], types.float64[::1],
+                        types.float64[::1], types.float64[::1])
+
+
+@njit_signature(WEIGH_SIG)
+def fuzzy_weight(fp, ip, x, y, fwork):
+    """Evaluate the controller's compiled fuzzy system (:func:`eval_compiled`)."""
+    return eval_compiled(fp, ip, x, y, fwork)
+
+
+@njit_signature(WEIGH_SIG)
+def no_weight(fp, ip, x, y, fwork):
+    """Stand-in of :func:`fuzzy_weight` for fixed shares (never called)."""
+    return 0
 
 
 def stat_size(window: int) -> int:
@@ -106,14 +131,15 @@ def share_control(n_local: int, cf=None, codes=(), out_index: int = 0,
                   floor: float = DEFAULT_FLOOR, window: int = 0) -> ShareControl:
     """The loop's :class:`ShareControl`: of compiled fuzzy system ``cf``, or off (None)."""
     on = cf is not None
-    return ShareControl(int(on), cf.fparams if on else np.zeros(1),
-                        cf.iparams if on else np.zeros(1, np.int64),
+    return ShareControl(int(on), np.ascontiguousarray(cf.fparams) if on else np.zeros(1),
+                        np.ascontiguousarray(cf.iparams) if on else np.zeros(1, np.int64),
                         np.asarray(codes or (0,), np.int64), int(out_index), float(floor),
                         np.zeros((n_local, stat_size(window))),
                         np.zeros(max(cf.n_inputs if on else 1, 1)),
                         np.zeros(max(cf.n_outputs if on else 1, 1)),
                         np.zeros(max(cf.work_size if on else 1, 1)),
-                        np.zeros(n_local), np.zeros(n_local))
+                        np.zeros(n_local), np.zeros(n_local),
+                        (fuzzy_weight if on else no_weight,))
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -186,11 +212,12 @@ def update_shares(ctl, beta, qd):
     """
     fp, ip, codes, out_index, floor = ctl.fp, ctl.ip, ctl.codes, ctl.out_index, ctl.floor
     stat, x, y, fwork, w, new = ctl.stat, ctl.x, ctl.y, ctl.fwork, ctl.w, ctl.new
+    weigh = ctl.weigh[0]
     L = beta.size
     for k in range(L):
         for j in range(codes.size):
             x[j] = window_stat(stat[k], codes[j])
-        eval_compiled(fp, ip, x, y, fwork)
+        weigh(fp, ip, x, y, fwork)
         w[k] = y[out_index]
         if not (math.isfinite(w[k]) and w[k] > 0.0):
             return False

@@ -20,7 +20,6 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numba as nb
-import numpy as np
 
 from fuzzynav.filters import sized
 from fuzzynav.filters.kalman import diagonal_tail, square_tail

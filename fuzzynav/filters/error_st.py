@@ -16,7 +16,9 @@ phi-model piece mapped through ``A`` (derivation in docs/navigation.md):
   and ``P`` re-expressed about the corrected velocity (:func:`st_reset`);
 * covariances ``P_ST = A P A^T`` (:func:`st_covariance`, for P0).
 
-The loop selects a model by the integer codes of :data:`ERROR_MODELS`, so it compiles once.
+The loop selects a model by the integer codes of :data:`ERROR_MODELS`, so one compiled loop
+serves both (:func:`fuzzynav.filters.loop.run_loop`; its plain copy, for single phi-model
+filters, leaves the ST branches out).
 """
 from __future__ import annotations
 

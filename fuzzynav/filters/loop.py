@@ -24,8 +24,9 @@ from fuzzynav.filters.adaptation import context
 from fuzzynav.filters.bank_beta import ShareControl, push_innovation, update_shares
 from fuzzynav.filters.bank_fusion import FUSED_NOW, SHARED, STALE, after_propagation, fuse, \
     fusion_work, local_residual, master_covariance, propagate_locals, share
-from fuzzynav.filters.error_st import EM_ST, st_fused, st_measurement, st_regauge, st_reset, \
-    st_to_phi
+from fuzzynav.filters.dispatch import memoise_table_types
+from fuzzynav.filters.error_st import EM_PHI, EM_ST, st_fused, st_measurement, st_regauge, \
+    st_reset, st_to_phi
 from fuzzynav.filters.feedback import bias_totals, feedback
 from fuzzynav.filters.layout import AUX_FORCE, AUX_RATE, AUX_XS
 from fuzzynav.filters.record import record_output
@@ -147,209 +148,241 @@ EV_PENDING, EV_ACCEPTED, EV_GATED, EV_EMPTY, EV_BAD_S, EV_BEFORE_START = 0, 1, 2
 ST_OK, ST_COVARIANCE = 0, 1
 
 
-@nb.njit(cache=True, error_model="numpy")
-def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fns, settings,
-             out, evout):
-    """Run the filter bank over all IMU samples; returns ``(status, samples_done)``.
+def _make_loop(BANK: bool, ST: bool):
+    """The compiled loop; ``BANK`` / ``ST`` False: a copy without the code of a bank of
+    several locals (and of the share controller) / of the ST error model.
 
-    Arguments are the named tuples above (:class:`Imu`, :class:`Start`, :class:`Model`,
-    :class:`Events`, :class:`Sensors`, :class:`Bank`, :class:`BankState`,
-    :class:`Settings`, :class:`Outputs`, :class:`EventOutputs`) and the kernel tuples of the
-    measurement models and adaptation policies.  ``imu.time_s`` has N+1 entries (increment
-    k spans ``time_s[k]..time_s[k+1]``).  Outputs are written into the preallocated ``out``
-    arrays (every ``out_stride`` samples, starting with the initial state) and ``evout``
-    (one row per event); ``sensors.ast`` (adapter states) and ``state`` are updated in place.
+    The flags are constants of the copy: numba drops the branches they turn off before
+    typing, so their kernels are not compiled for it.  Every copy runs the same operations
+    in the same order for the runs it takes (:func:`loop_for`), so results are the same
+    whichever runs them; each copy has its own entry in numba's cache.
     """
-    # plain local names: the loop body reads as the algorithm, and numba sees bare arrays
-    dth, dv, time_s = imu
-    nav0, xs0 = start
-    blk_start, blk_kind, blk_inv_tau, em = model
-    ev_t, ev_s, ev_data = events
-    s_meas, s_mpar, s_adapt, afp, afp_off, aip, aip_off, ast, ast_off, s_gate = sensors
-    s_local, beta, reset, period, ctl = bank
-    P3, X, QD, Pg, xg = state
-    max_prop_dt, out_stride = settings
-    ev_r, ev_S, ev_nis, ev_flag, ev_diag = evout
-    NL, n = X.shape
-    M = ev_r.shape[1]
-    N = dth.shape[0]
-    E = ev_t.size
-    # a local's estimate survives between updates only in a bank of several locals that
-    # does not reset to the fused solution after every update
-    carry = NL > 1 and (reset == 0 or period > 0.0)
-    # only a policy may scale the predicted covariance by the noise since the last update
-    keep_q = np.any(s_adapt != NO_ADAPTER)
-    nav = nav0.copy()
-    prev = np.zeros(PREV_SIZE)
-    init_prev(nav, prev)
-    xs = xs0.copy()
-    C = np.zeros((3, 3))
-    quat_to_dcm_into(nav, C)
-    sumC = np.zeros((3, 3))
-    sumf = np.zeros(3)
-    dv_sf = np.zeros(3)
-    Cm = np.zeros((3, 3))
-    fm = np.zeros(3)
-    F = np.zeros((n, n))
-    Phi = np.zeros((n, n))
-    Qd = np.zeros((n, n))
-    Qacc3 = np.zeros((NL, n, n))
-    Qc, work, AP = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
-    H, z, R = np.zeros((M, n)), np.zeros(M), np.zeros(M)
-    chan = np.zeros(M, dtype=np.int64)
-    PHt = np.zeros((n, M))
-    APHt = np.zeros((n, M))
-    K = np.zeros((n, M))
-    HPH, S, L = np.zeros((M, M)), np.zeros((M, M)), np.zeros((M, M))
-    dx = np.zeros(n)
-    wv = np.zeros(max(n, M))
-    out_a = np.zeros(2 + M)
-    diag = np.zeros(ev_diag.shape[1])
-    ctx = np.zeros(context.size(M, ev_data.shape[1]))  # what a policy sees besides r
-    ctx[context.CTX_M] = M
-    aux = np.zeros(AUX_XS + xs.size)  # rate, force, then the sensor states (for the models)
-    bg = np.zeros(3)
-    ba = np.zeros(3)
-    dth_c = np.zeros(3)
-    dv_c = np.zeros(3)
-    fwork = fusion_work(n)
-    Pf = np.zeros((n, n))
-    xf = np.zeros(n)
-    xphi = np.zeros(n)
-    fstate = SHARED  # every local starts from P0 / beta_i
-    t_fused = -math.inf
-    tau = 0.0
-    e = 0
-    # bias totals change only with xs (feedback, Gauss-Markov decay): formed then, not per sample
-    bias_totals(xs, blk_start, blk_kind, bg, ba)
-    since_out = 0  # samples since the last recorded output
-    while e < E and ev_t[e] < time_s[0] - 1e-9:
-        ev_flag[e] = EV_BEFORE_START
-        e += 1
-    record_output(0, time_s[0], nav, xs, state,
-                  P3[0] if NL == 1 else master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork),
-                  beta, out, em)
-    for k in range(N):
-        dt = time_s[k + 1] - time_s[k]
-        for i in range(3):
-            dth_c[i] = dth[k, i] - bg[i] * dt
-            dv_c[i] = dv[k, i] - ba[i] * dt
-        mech_step(nav, prev, dth_c, dv_c, dt, dv_sf, C)  # C follows the new attitude
-        for i in range(3):
-            sumf[i] += dv_sf[i]  # the interval's mean force is sumf / tau
-            for j in range(3):
-                sumC[i, j] += C[i, j] * dt
-        tau += dt
-        t = time_s[k + 1]
-        while e < E and ev_t[e] <= t + 1e-9:
-            if tau > 0.0:
-                propagate_locals(state, Qacc3, keep_q, carry, xs, nav, sumC, sumf, tau, Cm, fm,
-                                 F, Phi, Qd, work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
-                tau = 0.0
-                fstate = after_propagation(fstate, reset)
-                bias_totals(xs, blk_start, blk_kind, bg, ba)
-            s = ev_s[e]
-            a = s_adapt[s]
-            P, x, qd, Qacc = P3[s_local[s]], X[s_local[s]], QD[s_local[s]], Qacc3[s_local[s]]
-            H[:, :] = 0.0
-            for i in range(3):  # the latest interval's rate and force, for the models only
-                aux[AUX_RATE + i] = dth_c[i] / dt
-                aux[AUX_FORCE + i] = dv_c[i] / dt
-            for i in range(xs.size):
-                aux[AUX_XS + i] = xs[i]
-            m = meas_fns[s_meas[s]](nav, C, aux, ev_data[e], s_mpar[s], t - ev_t[e], z, H, R,
-                                    chan)
-            if m == 0:
-                ev_flag[e] = EV_EMPTY
-                e += 1
-                continue
-            if em == EM_ST:  # the models write phi-model rows: H_ST = H A^-1
-                st_measurement(H, m, nav)
-            if carry:
-                local_residual(z, H, m, x)
-            kalman.innovation_cov(P, H, m, PHt, HPH)
-            out_a[0] = 1.0
-            if a != NO_ADAPTER:  # what the plain EKF's policy would return: ones, no diag
-                context.fill(ctx, nav, aux, R, m, ev_data[e])
-                adapt_fns[a](afp[afp_off[s]:afp_off[s + 1]], aip[aip_off[s]:aip_off[s + 1]],
-                             ast[ast_off[s]:ast_off[s + 1]], z[:m], HPH, R, chan, m, out_a,
-                             diag, ctx)
-                for i in range(qd.size):
-                    qd[i] *= out_a[1]
-                for i in range(m):
-                    R[i] *= out_a[2 + i]
-            for i in range(diag.size):
-                ev_diag[e, i] = diag[i]
-            ok = _innovation(HPH, R, m, S, L, z, wv, ev_r, ev_S, ev_nis, e)
-            if not ok:
-                ev_flag[e] = EV_BAD_S
-                e += 1
-                continue
-            if ctl.on:  # the share controller reads every formed innovation, gated or not
-                push_innovation(ctl.stat[s_local[s]], ev_nis[e], m, z, S)
-            thr = s_gate[s, m]
-            if thr > 0.0 and ev_nis[e] > thr:
-                ev_flag[e] = EV_GATED
-                e += 1
-                continue
-            if out_a[0] != 1.0:
-                kalman.scale_predicted(P, Qacc, out_a[0], H, m, dx)
+
+    @nb.njit(cache=True, error_model="numpy")
+    def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fns, settings,
+                 out, evout):
+        """Run the filter bank over all IMU samples; returns ``(status, samples_done)``.
+
+        Arguments are the named tuples above (:class:`Imu`, :class:`Start`, :class:`Model`,
+        :class:`Events`, :class:`Sensors`, :class:`Bank`, :class:`BankState`,
+        :class:`Settings`, :class:`Outputs`, :class:`EventOutputs`) and the kernel tuples of the
+        measurement models and adaptation policies.  ``imu.time_s`` has N+1 entries (increment
+        k spans ``time_s[k]..time_s[k+1]``).  Outputs are written into the preallocated ``out``
+        arrays (every ``out_stride`` samples, starting with the initial state) and ``evout``
+        (one row per event); ``sensors.ast`` (adapter states) and ``state`` are updated in place.
+        """
+        # plain local names: the loop body reads as the algorithm, and numba sees bare arrays
+        dth, dv, time_s = imu
+        nav0, xs0 = start
+        blk_start, blk_kind, blk_inv_tau, em = model
+        if not ST:  # a constant: the callees compile without their ST branches
+            em = EM_PHI
+        ev_t, ev_s, ev_data = events
+        s_meas, s_mpar, s_adapt, afp, afp_off, aip, aip_off, ast, ast_off, s_gate = sensors
+        s_local, beta, reset, period, ctl = bank
+        P3, X, QD, Pg, xg = state
+        max_prop_dt, out_stride = settings
+        ev_r, ev_S, ev_nis, ev_flag, ev_diag = evout
+        NL, n = X.shape
+        M = ev_r.shape[1]
+        N = dth.shape[0]
+        E = ev_t.size
+        # a local's estimate survives between updates only in a bank of several locals that
+        # does not reset to the fused solution after every update
+        carry = BANK and NL > 1 and (reset == 0 or period > 0.0)
+        # only a policy may scale the predicted covariance by the noise since the last update
+        keep_q = np.any(s_adapt != NO_ADAPTER)
+        nav = nav0.copy()
+        prev = np.zeros(PREV_SIZE)
+        init_prev(nav, prev)
+        xs = xs0.copy()
+        C = np.zeros((3, 3))
+        quat_to_dcm_into(nav, C)
+        sumC = np.zeros((3, 3))
+        sumf = np.zeros(3)
+        dv_sf = np.zeros(3)
+        Cm = np.zeros((3, 3))
+        fm = np.zeros(3)
+        F = np.zeros((n, n))
+        Phi = np.zeros((n, n))
+        Qd = np.zeros((n, n))
+        Qacc3 = np.zeros((NL, n, n))
+        Qc, work, AP = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
+        H, z, R = np.zeros((M, n)), np.zeros(M), np.zeros(M)
+        chan = np.zeros(M, dtype=np.int64)
+        PHt = np.zeros((n, M))
+        APHt = np.zeros((n, M))
+        K = np.zeros((n, M))
+        HPH, S, L = np.zeros((M, M)), np.zeros((M, M)), np.zeros((M, M))
+        dx = np.zeros(n)
+        wv = np.zeros(max(n, M))
+        out_a = np.zeros(2 + M)
+        diag = np.zeros(ev_diag.shape[1])
+        ctx = np.zeros(context.size(M, ev_data.shape[1]))  # what a policy sees besides r
+        ctx[context.CTX_M] = M
+        aux = np.zeros(AUX_XS + xs.size)  # rate, force, then the sensor states (for the models)
+        bg = np.zeros(3)
+        ba = np.zeros(3)
+        dth_c = np.zeros(3)
+        dv_c = np.zeros(3)
+        fwork = fusion_work(n)
+        Pf = np.zeros((n, n))
+        xf = np.zeros(n)
+        xphi = np.zeros(n)
+        fstate = SHARED  # every local starts from P0 / beta_i
+        t_fused = -math.inf
+        tau = 0.0
+        e = 0
+        # bias totals change only with xs (feedback, Gauss-Markov decay): formed then, not
+        # per sample
+        bias_totals(xs, blk_start, blk_kind, bg, ba)
+        since_out = 0  # samples since the last recorded output
+        while e < E and ev_t[e] < time_s[0] - 1e-9:
+            ev_flag[e] = EV_BEFORE_START
+            e += 1
+        record_output(0, time_s[0], nav, xs, state,
+                      master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork) if BANK and NL > 1
+                      else P3[0],
+                      beta, out, em)
+        for k in range(N):
+            dt = time_s[k + 1] - time_s[k]
+            for i in range(3):
+                dth_c[i] = dth[k, i] - bg[i] * dt
+                dv_c[i] = dv[k, i] - ba[i] * dt
+            mech_step(nav, prev, dth_c, dv_c, dt, dv_sf, C)  # C follows the new attitude
+            for i in range(3):
+                sumf[i] += dv_sf[i]  # the interval's mean force is sumf / tau
+                for j in range(3):
+                    sumC[i, j] += C[i, j] * dt
+            tau += dt
+            t = time_s[k + 1]
+            while e < E and ev_t[e] <= t + 1e-9:
+                if tau > 0.0:
+                    propagate_locals(state, Qacc3, keep_q, carry, xs, nav, sumC, sumf, tau, Cm, fm,
+                                     F, Phi, Qd, work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
+                    tau = 0.0
+                    fstate = after_propagation(fstate, reset)
+                    bias_totals(xs, blk_start, blk_kind, bg, ba)
+                s = ev_s[e]
+                a = s_adapt[s]
+                P, x, qd, Qacc = P3[s_local[s]], X[s_local[s]], QD[s_local[s]], Qacc3[s_local[s]]
+                H[:, :] = 0.0
+                for i in range(3):  # the latest interval's rate and force, for the models only
+                    aux[AUX_RATE + i] = dth_c[i] / dt
+                    aux[AUX_FORCE + i] = dv_c[i] / dt
+                for i in range(xs.size):
+                    aux[AUX_XS + i] = xs[i]
+                m = meas_fns[s_meas[s]](nav, C, aux, ev_data[e], s_mpar[s], t - ev_t[e], z, H, R,
+                                        chan)
+                if m == 0:
+                    ev_flag[e] = EV_EMPTY
+                    e += 1
+                    continue
+                if ST and em == EM_ST:  # the models write phi-model rows: H_ST = H A^-1
+                    st_measurement(H, m, nav)
+                if carry:
+                    local_residual(z, H, m, x)
                 kalman.innovation_cov(P, H, m, PHt, HPH)
-                _form_S(HPH, R, m, S)
-                if not kalman.cholesky(S, m, L):  # the weighted S broke: skip the update
+                out_a[0] = 1.0
+                if a != NO_ADAPTER:  # what the plain EKF's policy would return: ones, no diag
+                    context.fill(ctx, nav, aux, R, m, ev_data[e])
+                    adapt_fns[a](afp[afp_off[s]:afp_off[s + 1]], aip[aip_off[s]:aip_off[s + 1]],
+                                 ast[ast_off[s]:ast_off[s + 1]], z[:m], HPH, R, chan, m, out_a,
+                                 diag, ctx)
+                    for i in range(qd.size):
+                        qd[i] *= out_a[1]
+                    for i in range(m):
+                        R[i] *= out_a[2 + i]
+                for i in range(diag.size):
+                    ev_diag[e, i] = diag[i]
+                ok = _innovation(HPH, R, m, S, L, z, wv, ev_r, ev_S, ev_nis, e)
+                if not ok:
                     ev_flag[e] = EV_BAD_S
                     e += 1
                     continue
-            kalman.correct(L, P, H, R, m, z, PHt, K, dx, AP, APHt, wv)
-            if keep_q:
-                Qacc[:, :] = 0.0
-            for i in range(n):
-                x[i] += dx[i]
-            ev_flag[e] = EV_ACCEPTED
-            t_meas = ev_t[e]  # the fusion clock runs on measurement times, not IMU times
-            e += 1
-            fstate = STALE
-            if NL == 1:
-                if em == EM_ST:
-                    st_to_phi(x, nav)
-                    st_reset(P, x)
-                feedback(nav, prev, xs, x)
-                x[:] = 0.0
-                ok = kalman.covariance_ok(P)
-            elif period <= 0.0 or t_meas - t_fused >= period - 1e-9:
-                if ctl.on:  # new shares first: a reset shares P_g by them
-                    update_shares(ctl, beta, QD)
-                ok = fuse(P3, X, Pg, xg, fwork)
-                if ok:
-                    fb = xg  # the ST model fuses ST states, feeds back their phi form
-                    if em == EM_ST:
-                        fb = st_fused(xg, Pg, nav, xphi)
-                    share(P3, X, Qacc3, Pg, xg, beta, reset)
-                    if em == EM_ST and not reset:
-                        st_regauge(P3, X, fb)
-                    feedback(nav, prev, xs, fb)
-                    t_fused = t_meas
-                    fstate = FUSED_NOW
-                    ok = kalman.covariance_ok(Pg)
-            else:
-                ok = kalman.covariance_ok(P)
-            quat_to_dcm_into(nav, C)
-            bias_totals(xs, blk_start, blk_kind, bg, ba)
-            if not ok:
-                return ST_COVARIANCE, k + 1
-        if tau >= max_prop_dt - 1e-12:
-            propagate_locals(state, Qacc3, keep_q, carry, xs, nav, sumC, sumf, tau, Cm, fm, F,
-                             Phi, Qd, work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
-            tau = 0.0
-            fstate = after_propagation(fstate, reset)
-            bias_totals(xs, blk_start, blk_kind, bg, ba)  # Gauss-Markov decay of xs
-        since_out += 1
-        if since_out == out_stride:
-            since_out = 0
-            record_output((k + 1) // out_stride, t, nav, xs, state, P3[0] if NL == 1 else
-                          master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork), beta, out,
-                          em)
-    return ST_OK, N
+                if BANK and ctl.on:  # the share controller reads every formed innovation
+                    push_innovation(ctl.stat[s_local[s]], ev_nis[e], m, z, S)
+                thr = s_gate[s, m]
+                if thr > 0.0 and ev_nis[e] > thr:
+                    ev_flag[e] = EV_GATED
+                    e += 1
+                    continue
+                if out_a[0] != 1.0:
+                    kalman.scale_predicted(P, Qacc, out_a[0], H, m, dx)
+                    kalman.innovation_cov(P, H, m, PHt, HPH)
+                    _form_S(HPH, R, m, S)
+                    if not kalman.cholesky(S, m, L):  # the weighted S broke: skip the update
+                        ev_flag[e] = EV_BAD_S
+                        e += 1
+                        continue
+                kalman.correct(L, P, H, R, m, z, PHt, K, dx, AP, APHt, wv)
+                if keep_q:
+                    Qacc[:, :] = 0.0
+                for i in range(n):
+                    x[i] += dx[i]
+                ev_flag[e] = EV_ACCEPTED
+                t_meas = ev_t[e]  # the fusion clock runs on measurement times, not IMU times
+                e += 1
+                fstate = STALE
+                if not (BANK and NL > 1):
+                    if ST and em == EM_ST:
+                        st_to_phi(x, nav)
+                        st_reset(P, x)
+                    feedback(nav, prev, xs, x)
+                    x[:] = 0.0
+                    ok = kalman.covariance_ok(P)
+                elif period <= 0.0 or t_meas - t_fused >= period - 1e-9:
+                    if ctl.on:  # new shares first: a reset shares P_g by them
+                        update_shares(ctl, beta, QD)
+                    ok = fuse(P3, X, Pg, xg, fwork)
+                    if ok:
+                        fb = xg  # the ST model fuses ST states, feeds back their phi form
+                        if ST and em == EM_ST:
+                            fb = st_fused(xg, Pg, nav, xphi)
+                        share(P3, X, Qacc3, Pg, xg, beta, reset)
+                        if ST and em == EM_ST and not reset:
+                            st_regauge(P3, X, fb)
+                        feedback(nav, prev, xs, fb)
+                        t_fused = t_meas
+                        fstate = FUSED_NOW
+                        ok = kalman.covariance_ok(Pg)
+                else:
+                    ok = kalman.covariance_ok(P)
+                quat_to_dcm_into(nav, C)
+                bias_totals(xs, blk_start, blk_kind, bg, ba)
+                if not ok:
+                    return ST_COVARIANCE, k + 1
+            if tau >= max_prop_dt - 1e-12:
+                propagate_locals(state, Qacc3, keep_q, carry, xs, nav, sumC, sumf, tau, Cm, fm, F,
+                                 Phi, Qd, work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
+                tau = 0.0
+                fstate = after_propagation(fstate, reset)
+                bias_totals(xs, blk_start, blk_kind, bg, ba)  # Gauss-Markov decay of xs
+            since_out += 1
+            if since_out == out_stride:
+                since_out = 0
+                record_output((k + 1) // out_stride, t, nav, xs, state,
+                              master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork)
+                              if BANK and NL > 1 else P3[0], beta, out, em)
+        return ST_OK, N
+
+    return memoise_table_types(run_loop)  # the kernel tables: typed once per tuple
+
+
+#: the plain loop (a single filter, phi model: the EKF and the policies) and the full one;
+#: two copies, not one per combination, so that a test run or a comparison across filter
+#: kinds compiles the loop at most twice
+PLAIN_LOOP = _make_loop(False, False)
+run_loop = _make_loop(True, True)
+
+
+def loop_for(n_local: int, error_model: int, controller_on: int):
+    """The compiled loop for a filter of ``n_local`` locals, error model code
+    ``error_model``, share controller on or off: :data:`PLAIN_LOOP` for a single phi-model
+    filter, else :func:`run_loop` (each compiled on first use)."""
+    if n_local == 1 and not controller_on and error_model != EM_ST:
+        return PLAIN_LOOP
+    return run_loop
 
 
 @nb.njit(cache=True, error_model="numpy")

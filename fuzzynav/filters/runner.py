@@ -15,13 +15,13 @@ from fuzzynav.filters.config import FilterConfig
 from fuzzynav.filters.error_st import EM_ST, error_model_code, st_covariance
 from fuzzynav.filters.layout import N_CORE
 from fuzzynav.filters import loop
-from fuzzynav.filters.dispatch import memoise_kernel_addresses, memoise_table_types
+from fuzzynav.filters.dispatch import memoise_kernel_addresses
 from fuzzynav.filters.result import EventLog, FilterResult, LocalStates
 from fuzzynav.nav import strapdown
 from fuzzynav.nav.layout import LLA_SLICE, NAV_SIZE, Q_SLICE, VEL_SLICE
 
-# the kernel tables are the same few tuples run after run: numba types them once
-memoise_table_types(loop.run_loop)
+# the kernel tables are the same few tuples run after run: numba types them once (every
+# loop's tables: fuzzynav.filters.loop), and looks their kernels' addresses up once
 memoise_kernel_addresses()
 
 
@@ -73,9 +73,11 @@ def _imu_arrays(imu):
 
 def _sensor_tables(sensors, adapters, options, gate_probability):
     """Per-sensor kernel ids, parameters, adapter arrays and gates; the merged event list."""
-    meas_fns, meas_index = measurements.kernel_table()
     names = sorted(sensors)
     models = [measurements.get(sensors[nm].kind) for nm in names]
+    # only the models this run uses are compiled (the others' slots hold a stand-in)
+    meas_fns, meas_index = measurements.kernel_table({measurements.MODELS.index()[m.kind]
+                                                      for m in models})
     M = max([mdl.max_rows for mdl in models], default=1)
     rows = [mdl.rows(sensors[nm]) for nm, mdl in zip(names, models)]
     bounds = [adapters.get(nm, NoAdaptation()).bind(mdl, r)
@@ -158,8 +160,10 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
     ev = dict(r=np.full((E, M), np.nan), S=np.full((E, M), np.nan), nis=np.full(E, np.nan),
               flag=np.zeros(E, np.int64), diag=np.full((E, N_DIAG), np.nan))
     nav0 = strapdown.make_nav(init.lla, init.vel_n, init.q_bn)
-    adapt_fns, _ = adaptation.kernel_table()
-    status, done = loop.run_loop(
+    adapt_fns, _ = adaptation.kernel_table(used=tb["s_adapt"])  # the used policies only
+    # the loop without the bank's / the ST model's code when the run has none (cold start)
+    run_loop = loop.loop_for(NL, em, bank.ctl.on)
+    status, done = run_loop(
         loop.Imu(dth, dv, time_s), loop.Start(nav0, np.zeros(n - N_CORE)),
         loop.Model(blk_start, blk_kind, blk_inv_tau, em),
         loop.Events(tb["ev_t"], tb["ev_s"], tb["ev_data"]),

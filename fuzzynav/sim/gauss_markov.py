@@ -84,7 +84,8 @@ def _propagate(coef, b0, w):
     n, m = w.shape[0], w.shape[2]
     b = np.empty((n + 1, m))
     integral = np.empty((n, m))
-    b[0] = b0
+    for j in range(m):  # element by element: a row assignment compiles numba's shape-error
+        b[0, j] = b0[j]  # message formatting, seconds on a cold cache
     for k in range(n):
         phi, c_int, l11, l21, l22 = coef[k, 0], coef[k, 1], coef[k, 2], coef[k, 3], coef[k, 4]
         for j in range(m):

@@ -8,35 +8,33 @@ kernels from the cache.  With a warm cache it does nothing.
 """
 from __future__ import annotations
 
-import os
+import sys
 import threading
 from contextlib import contextmanager
-from pathlib import Path
 
 from tqdm.auto import tqdm
 
-MESSAGE = "compiling kernels (first run only, about a minute and a half)"
+from fuzzynav import compile_notice
+
+#: the live count's label (on a terminal; the one-line notice is
+#: :mod:`fuzzynav.compile_notice`'s, printed whether stderr is a terminal or not)
+MESSAGE = "numba kernels compiled"
 
 
 def kernel_cache():
     """numba's cache directory keyed to this package's sources (None when not keyed:
     ``FUZZYNAV_NUMBA_CACHE=0`` leaves numba's own per-file caches, not counted here)."""
-    import numba
-
-    if os.environ.get("FUZZYNAV_NUMBA_CACHE", "1") == "0" or not numba.config.CACHE_DIR:
-        return None
-    return Path(numba.config.CACHE_DIR)
+    return compile_notice.kernel_cache()
 
 
 def compiled_count(cache) -> int:
     """Compiled kernels in the cache (one index file each)."""
-    return sum(1 for _ in cache.rglob("*.nbi")) if cache is not None and cache.is_dir() else 0
+    return compile_notice.compiled_count(cache)
 
 
 def is_cold(cache=None) -> bool:
     """Whether the keyed kernel cache is empty (the next run compiles everything)."""
-    cache = kernel_cache() if cache is None else cache
-    return cache is not None and compiled_count(cache) == 0
+    return compile_notice.cache_is_cold(cache)
 
 
 def compile_by_running(cfg, cache_dir=None, evaluator=None):
@@ -55,8 +53,9 @@ def compile_by_running(cfg, cache_dir=None, evaluator=None):
 
 @contextmanager
 def compiling(progress: bool = True):
-    """Say that kernels are being compiled, with a live count, while the body runs -- if the
-    kernel cache is cold when it starts; yields whether it is.
+    """Say that kernels are being compiled (:func:`fuzzynav.compile_notice.announce`, and a
+    live count on a terminal) while the body runs -- if the kernel cache is cold when it
+    starts; yields whether it is.
 
     Enter it before anything imports the filters: importing them (loading a study config
     does) already compiles the kernels that have explicit signatures.
@@ -65,8 +64,10 @@ def compiling(progress: bool = True):
     if not is_cold(cache):
         yield False
         return
-    bar = tqdm(desc=MESSAGE, total=None, unit=" kernels", disable=not progress,
-               bar_format="{desc}: {n} kernels compiled, {elapsed}")
+    compile_notice.announce()  # the one line, before loading the config compiles
+    bar = tqdm(desc=MESSAGE, total=None, unit=" kernels",
+               disable=not (progress and sys.stderr.isatty()),
+               bar_format="{desc}: {n}, {elapsed}")
     done = threading.Event()
 
     def count():

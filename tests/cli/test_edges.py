@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+from fuzzynav import compile_notice
 from fuzzynav.cli import EXIT_BROKEN_PIPE, MAX_MESSAGE, main
 from fuzzynav.cli.nav import MAX_MC
 from tests.cli.test_bad_values import _one_line, _run
@@ -84,7 +85,10 @@ def test_a_closed_pipe_as_a_real_process():
         proc = _cli(["fis", "surface", GPS, "--csv", "--grid", "200"], w)
     finally:
         os.close(w)
-    assert proc.returncode == EXIT_BROKEN_PIPE and proc.stderr == ""
+    # nothing but, on a cold kernel cache, the one line saying it compiles
+    said = [ln for ln in proc.stderr.splitlines()
+            if ln not in (compile_notice.COLD_TEXT, compile_notice.PARTIAL_TEXT)]
+    assert proc.returncode == EXIT_BROKEN_PIPE and said == []
 
 
 @pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")

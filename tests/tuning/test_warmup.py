@@ -2,9 +2,12 @@
 the trials start; a warm cache prints nothing and compiles nothing here."""
 from __future__ import annotations
 
+import io
+
 import numba
 import pytest
 
+from fuzzynav import compile_notice
 from fuzzynav.tuning import warmup
 
 
@@ -27,16 +30,21 @@ def fake_compile(tmp_path, monkeypatch):
     return cache, calls
 
 
-def test_a_cold_cache_is_compiled_here_under_a_message(fake_compile, capsys):
+def test_a_cold_cache_is_compiled_here_under_a_message(fake_compile, monkeypatch, capsys):
+    """The command's one notice (fuzzynav.compile_notice) comes before the compiling, once,
+    to stderr that is not a terminal (no live count there)."""
     cache, calls = fake_compile
+    said = io.StringIO()
+    monkeypatch.setattr(compile_notice, "_INSTALLED", compile_notice.CompileNotice(said))
     assert warmup.is_cold()
     assert warmup.warm_up(cfg=None, cache_dir="sim") is True
-    err = capsys.readouterr().err
-    assert "compiling kernels (first run only, about a minute and a half): 2 kernels compiled" in err
+    assert said.getvalue() == compile_notice.COLD_TEXT + "\n"
+    assert capsys.readouterr().err == ""  # no progress bar off a terminal
     assert calls == ["sim"] and not warmup.is_cold()
     # warm now: nothing compiled, nothing said
     assert warmup.warm_up(cfg=None, cache_dir="sim") is False
     assert calls == ["sim"] and capsys.readouterr().err == ""
+    assert said.getvalue() == compile_notice.COLD_TEXT + "\n"
 
 
 def test_no_keyed_cache_no_warm_up(fake_compile, monkeypatch, capsys):

@@ -23,10 +23,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba as nb
 import numpy as np
 from numba import types
 
+from fuzzynav.filters.numba_lazy import njit_signature, table_of
 from fuzzynav.registry import Registry
 
 ADAPT_SIG = types.int64(types.float64[:], types.int64[:], types.float64[:], types.float64[:],
@@ -77,7 +77,7 @@ class Adapter:
                      np.ascontiguousarray(st, dtype=float), tuple(self.diag_names))
 
 
-@nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
+@njit_signature(ADAPT_SIG)
 def none_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     out[0] = 1.0
     out[1] = 1.0
@@ -111,7 +111,12 @@ def get(name: str) -> type:
     return ADAPTERS.lookup(name)
 
 
-def kernel_table():
-    """``(tuple of kernels, {name: index})`` for the filter loop."""
+def kernel_table(used=None):
+    """``(tuple of kernels, {name: index})`` for the filter loop.
+
+    ``used``: the kernel ids the run calls; the other entries are the plain EKF's
+    :func:`none_kernel`, so that only the used policies get compiled (the table's numba
+    type, and so the loop's cache entry, is the same either way).  None: every policy.
+    """
     index = ADAPTERS.index()
-    return tuple(ADAPTERS[k].kernel for k in index), index
+    return table_of([ADAPTERS[k].kernel for k in index], used, none_kernel), index

@@ -22,6 +22,7 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.filters.adaptation import ADAPT_SIG, Adapter, register
+from fuzzynav.filters.numba_lazy import njit_signature
 
 _MAXROWS = 16
 
@@ -34,7 +35,7 @@ def _ones(out, m):
         out[2 + i] = 1.0
 
 
-@nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
+@njit_signature(ADAPT_SIG)
 def constant_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     out[0] = 1.0
     out[1] = 1.0
@@ -61,7 +62,7 @@ class ConstantScale(Adapter):
         return fp, np.zeros(1, np.int64), np.zeros(1)
 
 
-@nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
+@njit_signature(ADAPT_SIG)
 def sage_husa_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     b, floor, cap = fp[0], fp[1], fp[2]
     k = st[0]
@@ -99,7 +100,7 @@ class SageHusa(Adapter):
                 np.zeros(1 + _MAXROWS))
 
 
-@nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
+@njit_signature(ADAPT_SIG)
 def huber_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     gamma = fp[0]
     out[0] = 1.0
@@ -129,7 +130,7 @@ class Huber(Adapter):
         return np.array([self.gamma]), np.zeros(1, np.int64), np.zeros(1)
 
 
-@nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
+@njit_signature(ADAPT_SIG)
 def fading_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     rho, beta, lam_max = fp[0], fp[1], fp[2]
     trv, trr, trh = 0.0, 0.0, 0.0
@@ -172,7 +173,7 @@ class FadingMemory(Adapter):
                 np.zeros(2 + _MAXROWS))
 
 
-@nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
+@njit_signature(ADAPT_SIG)
 def vb_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     rho, n_iter = fp[0], int(fp[1])
     a = st[1:1 + _MAXROWS]

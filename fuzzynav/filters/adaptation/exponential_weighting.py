@@ -19,18 +19,18 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 
 from fuzzynav.filters.adaptation import ADAPT_SIG, register
 from fuzzynav.filters.adaptation.fuzzy_common import IP_OUT, evaluate, log_inputs
 from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
+from fuzzynav.filters.numba_lazy import njit_signature
 
 
 #: lowest fading factor the kernel applies (an output below is raised to it)
 ALPHA_MIN = 0.1
 
 
-@nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
+@njit_signature(ADAPT_SIG)
 def alpha_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     status, x, y = evaluate(fp, ip, st, r, HPH, R, chan, m, ctx)
     alpha = y[ip[IP_OUT]]

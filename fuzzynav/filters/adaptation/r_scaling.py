@@ -13,6 +13,7 @@ import numba as nb
 from fuzzynav.filters.adaptation import ADAPT_SIG, register
 from fuzzynav.filters.adaptation.fuzzy_common import IP_OUT, evaluate, log_inputs, scalars
 from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
+from fuzzynav.filters.numba_lazy import njit_signature
 
 S_MIN, S_MAX = 1e-3, 1e3
 
@@ -41,7 +42,7 @@ def r_step(fp, ip, st, r, HPH, R, chan, m, ctx):
     return status, x, y, s, t
 
 
-@nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
+@njit_signature(ADAPT_SIG)
 def rscale_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     status, x, y, s, t = r_step(fp, ip, st, r, HPH, R, chan, m, ctx)
     out[0] = 1.0

@@ -11,12 +11,12 @@ would compound their factors: bind at most one.  Logged per epoch: ``r_scale``, 
 """
 from __future__ import annotations
 
-import numba as nb
 
 from fuzzynav.filters.adaptation import ADAPT_SIG, register
 from fuzzynav.filters.adaptation.fuzzy_common import log_inputs, scalars
 from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
 from fuzzynav.filters.adaptation.r_scaling import S_MAX, S_MIN, r_step
+from fuzzynav.filters.numba_lazy import njit_signature
 
 #: bounds of the process-noise level
 Q_MIN, Q_MAX = 1e-2, 1e2
@@ -24,7 +24,7 @@ Q_MIN, Q_MAX = 1e-2, 1e2
 IP_QOUT = 6
 
 
-@nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
+@njit_signature(ADAPT_SIG)
 def rq_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     status, x, y, s, t = r_step(fp, ip, st, r, HPH, R, chan, m, ctx)
     sc = scalars(st)

@@ -24,17 +24,17 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
 
 from fuzzynav.filters.adaptation import ADAPT_SIG, Adapter, register
+from fuzzynav.filters.numba_lazy import njit_signature
 
 _MAXROWS = 16
 #: fp layout: rho, beta, lam_max, then H Q H^T per measurement channel
 _FP_HQH = 3
 
 
-@nb.njit(ADAPT_SIG, cache=True, error_model="numpy")
+@njit_signature(ADAPT_SIG)
 def strong_tracking_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     rho, beta, lam_max = fp[0], fp[1], fp[2]
     first = st[0] == 0.0

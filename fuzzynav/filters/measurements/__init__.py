@@ -28,6 +28,7 @@ import numpy as np
 from numba import types
 
 from fuzzynav.errors import UnknownNameError
+from fuzzynav.filters.numba_lazy import njit_signature, table_of
 from fuzzynav.registry import Registry
 
 MEAS_SIG = types.int64(types.float64[:], types.float64[:, :], types.float64[:],
@@ -102,7 +103,19 @@ def get(kind: str) -> MeasurementModel:
     return MODELS.lookup(kind)
 
 
-def kernel_table():
-    """``(tuple of kernels, {kind: index})`` for the filter loop."""
+@njit_signature(MEAS_SIG)
+def unused_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
+    """Stands in a kernel table for the models a run does not use (never called: no rows)."""
+    return 0
+
+
+def kernel_table(used=None):
+    """``(tuple of kernels, {kind: index})`` for the filter loop.
+
+    ``used``: the indices the run dispatches to; the other entries are
+    :func:`unused_kernel`, so that only the used models get compiled (the table's numba
+    type, and so the loop's cache entry, is the same either way).  None: every model.
+    """
     index = MODELS.index()
-    return tuple(MODELS[k].kernel for k in index), index
+    kernels = [MODELS[k].kernel for k in index]
+    return table_of(kernels, used, unused_kernel), index

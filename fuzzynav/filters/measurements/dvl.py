@@ -31,6 +31,7 @@ import numpy as np
 
 from fuzzynav import units
 from fuzzynav.filters.layout import AUX_XS, N_CORE, X_ATT, X_VEL
+from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.nav.layout import NAV_VEL
 
@@ -84,7 +85,7 @@ def _rows_states(G, mu, u, w, k, i, s_k, s_mu, s_l, H, m, X):
             H[m, s_l + j] = -(G[i, 0] * X[0, j] + G[i, 1] * X[1, j] + G[i, 2] * X[2, j])
 
 
-@nb.njit(MEAS_SIG, cache=True, error_model="numpy")
+@njit_signature(MEAS_SIG)
 def dvl_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
     s_k, s_mu, s_l = int(par[3]), int(par[4]), int(par[5])
     k = _state(aux, s_k, 0, 0.0)

@@ -17,16 +17,16 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
 
 from fuzzynav.filters.layout import X_ATT, X_POS, X_VEL
+from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, default_rows, register
 from fuzzynav.nav.earth import radii_nb
 from fuzzynav.nav.layout import NAV_H, NAV_LAT, NAV_LON, NAV_VEL
 
 
-@nb.njit(MEAS_SIG, cache=True, error_model="numpy")
+@njit_signature(MEAS_SIG)
 def gnss_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
     lx, ly, lz = par[0], par[1], par[2]
     # antenna offset in ENU and its velocity from the body rotation

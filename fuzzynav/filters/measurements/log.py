@@ -29,6 +29,7 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.filters.layout import AUX_XS, COUPLE_NONE, N_CORE, X_ATT, X_VEL, register_block
+from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.nav.layout import NAV_VEL
 
@@ -47,7 +48,7 @@ def _state(aux, par, j):
     return aux[AUX_XS + int(par[j]) - N_CORE] if par[j] >= 0.0 else 0.0
 
 
-@nb.njit(MEAS_SIG, cache=True, error_model="numpy")
+@njit_signature(MEAS_SIG)
 def log_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
     sig = row[1]
     if not (sig > 0.0 and math.isfinite(row[0])):

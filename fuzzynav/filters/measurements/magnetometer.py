@@ -31,6 +31,7 @@ import numpy as np
 
 from fuzzynav.errors import FuzzynavError, UnknownNameError
 from fuzzynav.filters.layout import X_ATT
+from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.filters.measurements.polarization import euler_jacobian
 
@@ -72,7 +73,7 @@ def _vector_rows(C, row, par, z, H, R, chan):
     return m
 
 
-@nb.njit(MEAS_SIG, cache=True, error_model="numpy")
+@njit_signature(MEAS_SIG)
 def magnetometer_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
     if int(par[0]) == 1:
         return _vector_rows(C_bn, row, par, z, H, R, chan)

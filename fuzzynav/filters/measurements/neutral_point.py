@@ -21,6 +21,7 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.filters.layout import X_ATT
+from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.nav.neutral_points import pair_beta
 
@@ -44,7 +45,7 @@ def _tilted(C_bn, axis, eps, out):
         out[2, j] = c2 + phi[1] * c0 - phi[0] * c1
 
 
-@nb.njit(MEAS_SIG, cache=True, error_model="numpy")
+@njit_signature(MEAS_SIG)
 def neutral_point_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
     sig = row[5]
     if not (sig > 0.0 and math.isfinite(row[0])):

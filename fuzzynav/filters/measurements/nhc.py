@@ -13,15 +13,15 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
 
 from fuzzynav.filters.layout import X_ATT, X_VEL
+from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.nav.layout import NAV_VEL
 
 
-@nb.njit(MEAS_SIG, cache=True, error_model="numpy")
+@njit_signature(MEAS_SIG)
 def nhc_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
     ve, vn, vu = nav[NAV_VEL], nav[NAV_VEL + 1], nav[NAV_VEL + 2]
     m = 0

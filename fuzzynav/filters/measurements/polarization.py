@@ -37,6 +37,7 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.filters.layout import X_ATT
+from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.nav import polarization as ps
 from fuzzynav.nav.polarization_geometry import TWO_PI, fold_half_pi, mod_pos, wrap_pi
@@ -157,7 +158,7 @@ def _raw(C, aops, frames, sun, sigmas, z, H, R, chan):
     return m
 
 
-@nb.njit(MEAS_SIG, cache=True, error_model="numpy")
+@njit_signature(MEAS_SIG)
 def polarization_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):
     kind, k, mode = int(par[0]), int(par[1]), int(par[2])
     frames = par[_HDR:_HDR + FRAME * k]  # a view of the parameters: nothing copied

@@ -21,8 +21,10 @@ import weakref
 
 import numba as nb
 import numpy as np
+from numba import types
 
 from fuzzynav.errors import FuzzynavError
+from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.nav.polarization_imaging import aop_trig, sun_from_aops, view_frames
 
 
@@ -43,13 +45,16 @@ def fill_extra(aops, sun, frames, out):
     row that lacks them)."""
     k = aops.size
     trig = aop_trig(aops)
-    out[:2 * k] = trig
+    for i in range(2 * k):  # not a slice assignment: that compiles numba's shape-error
+        out[i] = trig[i]  # message formatting, seconds on a cold cache
     out[2 * k] = math.atan2(sun[1], sun[0])
     sx, sy, sz, used = sun_from_aops(aops, trig, frames)
     out[2 * k + 1], out[2 * k + 2], out[2 * k + 3], out[2 * k + 4] = sx, sy, sz, used
 
 
-@nb.njit(cache=True, error_model="numpy")
+# typed with generic (A) layouts, as the measurement kernel sees its rows: fill_extra and
+# what it calls are then compiled once for both, not again for C arrays (cold start)
+@njit_signature(types.float64[:, ::1](types.float64[:, :], types.float64[:], types.int64))
 def _imaging_columns(z, frames, k):
     """:func:`fill_extra` of every row of ``z = [aop_1..k, sun_e, sun_n, sun_u]``."""
     out = np.empty((z.shape[0], 2 * k + 5))
