@@ -93,7 +93,7 @@ def _record(log, filter_name, options, monkeypatch):
         return kept
 
     monkeypatch.setattr(adapter, "arrays", arrays)
-    monkeypatch.setattr(adaptation, "kernel_table", lambda: (table, index))
+    monkeypatch.setattr(adaptation, "kernel_table", lambda used=None: (table, index))
     monkeypatch.setattr(runner, "_sensor_tables", keep_tables)
     setup = dataclasses.replace(setup, adapters={"gps": adapter}, use_sensors=("gps",))
     res = run_on_log(log, filter_name, setup=setup).result
