@@ -5,13 +5,26 @@ Subpackages
 fuzzy
     Generic Mamdani/Sugeno engine, rule files (knows nothing of navigation).
 nav
-    Earth model, attitude maths, strapdown mechanization, error models.
+    Earth model, attitude maths, strapdown mechanization, polarization geometry.
 sim
-    Trajectories, IMU and aiding-sensor simulation, scenarios, real-data loaders.
+    Trajectories, IMU and aiding-sensor simulation, scenarios, recording loaders.
 filters
-    Error-state Kalman filters, adaptation policies (fuzzy and classical).
+    Error-state Kalman filters, measurement models, adaptation policies, filter banks.
+realdata
+    Recorded sessions (car drive, A-KIT AUV): sources, datasets and their download,
+    validation protocol, scoring.
+align
+    Initial alignment (paper 002): coarse, 10/12-state Kalman filters, fuzzy R-scaling.
 tuning
-    Optuna / PSO studies that learn fuzzy rules, export of tuned rule files.
+    Optuna / PSO studies that learn fuzzy rules or tune classical filters; export, reports.
+claims
+    The source papers' published figures, shown beside measured results (never asserted).
+cli
+    The ``fuzzynav`` command.
+
+Top-level modules: ``experiment`` (simulate, run named filters, score), ``metrics``,
+``report``, ``plots``, and ``errors``, ``units``, ``fileio``, ``registry``,
+``compile_notice`` used by every layer.
 """
 import warnings as _warnings
 

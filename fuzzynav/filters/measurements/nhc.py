@@ -48,13 +48,3 @@ def _pack(data, options) -> np.ndarray:
 
 MODEL = register(MeasurementModel(kind="nhc", kernel=nhc_kernel, max_rows=2,
                                   channels=("constraint",), pack=_pack))
-
-
-def constraint_stream(time_s, sigma_mps=(0.1, 0.1)):
-    """A ``SensorData``-like stream of zero lateral/vertical body velocity at ``time_s``."""
-    from types import SimpleNamespace
-
-    t = np.asarray(time_s, float)
-    z = np.zeros((t.size, 2))
-    sig = np.tile(np.asarray(sigma_mps, float), (t.size, 1))
-    return SimpleNamespace(kind="nhc", time_s=t, z=z, sigma=sig, meta={})
