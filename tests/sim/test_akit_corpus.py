@@ -124,6 +124,7 @@ CASES = [
     ("latitude and longitude swapped", _columns(GT, _swap(1, 2)), GT, "swapped"),
     ("gt time in ms", _columns(GT, _set(0, lambda t: t * 1e3)), GT, "milliseconds?"),
     ("gt cut short", _rows(GT, lambda r: r[:40]), GT, "truncated"),
+    ("pitch sign reversed", _columns(GT, _set(8, lambda p: -p)), GT, "reversed sign"),
     ("gt speed 1e3", _columns(GT, _set(4, 1e3, row=8)), GT, "MAX_SPEED_MPS"),
     # -- files of another trajectory
     ("dvl of another trajectory", _from_other(DVL), DVL, "another trajectory's DVL"),

@@ -256,6 +256,7 @@ def _load(d: Path, n: int, files: dict) -> AkitRecording:
     checks.imu_of(files["imu"], imu)
     checks.dvl_of(files["dvl"], dvl)
     checks.reference_of(files["reference"], gt)
+    checks.pitch_sign(files["reference"], imu, gt)
     checks.spans(files, imu[:, 0], dvl[:, 0], gt[:, 0])
     clock = reference_clock(imu, gt, dvl)
     full = imu_increments(imu[:, 0], imu[:, 1:4], imu[:, 4:7])

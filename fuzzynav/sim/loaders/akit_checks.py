@@ -43,6 +43,12 @@ MAX_DVL_FORWARD_RMS_MPS = 0.1
 GRAVITY_TOLERANCE = 0.5
 #: largest plausible |rate - 1| of the reference clock against the IMU (measured: 0.25 %)
 MAX_RATE_DEVIATION = 0.01
+#: the forward specific force follows +g sin(pitch) over windows of this length [s] (10-s
+#: means: a clock offset of up to 2 s hardly matters); the real trajectories correlate
+#: 0.90-0.998, their pitch with the sign reversed -0.90 to -0.998
+PITCH_WINDOW_S = 10.0
+#: a correlation below minus this is a reversed pitch column
+MIN_PITCH_CORRELATION = 0.3
 #: fastest plausible AUV [m/s]
 MAX_SPEED_MPS = 20.0
 #: altitude of the reference (minus the depth) [m]: the deepest ocean to a high lake
@@ -138,6 +144,35 @@ def reference_of(path, gt) -> None:
                              f"(at most {MAX_TRACK_VELOCITY_RMS_MPS:g}: "
                              "MAX_TRACK_VELOCITY_RMS_MPS): longitude and latitude swapped "
                              "(the top-level files' order?) or in other units")
+
+
+def pitch_correlation(imu, gt) -> float:
+    """Correlation of :data:`PITCH_WINDOW_S` means of the forward specific force (the IMU
+    file's ACC X) with g sin(pitch) of the reference (NaN when the pitch hardly varies)."""
+    lo, hi = max(imu[0, 0], gt[0, 0]), min(imu[-1, 0], gt[-1, 0])
+    edges = np.arange(lo, hi + 1e-9, PITCH_WINDOW_S)
+    if edges.size < 6:
+        return float("nan")
+    f = np.array([imu[(imu[:, 0] >= a) & (imu[:, 0] < b), 1].mean()
+                  for a, b in zip(edges[:-1], edges[1:])])
+    g_sin = units.G0 * np.sin(gt[:, 8])
+    p = np.array([g_sin[(gt[:, 0] >= a) & (gt[:, 0] < b)].mean()
+                  for a, b in zip(edges[:-1], edges[1:])])
+    ok = np.isfinite(f) & np.isfinite(p)
+    if ok.sum() < 5 or np.std(p[ok]) < 1e-3 * units.G0:
+        return float("nan")
+    return float(np.corrcoef(f[ok], p[ok])[0, 1])
+
+
+def pitch_sign(path, imu, gt) -> None:
+    """Refuse a reference whose pitch has the other sign than the IMU sees (the top-level
+    GT files' convention copied into ``corrected/``)."""
+    c = pitch_correlation(imu, gt)
+    if c < -MIN_PITCH_CORRELATION:
+        raise InputFileError(path, "column Pitch [rad]", f"the forward specific force follows "
+                             f"-g sin(pitch) (correlation {c:.2f} of {PITCH_WINDOW_S:g}-s "
+                             "means): the pitch has the reversed sign of the top-level GT "
+                             "files; corrected/ files give the sign the IMU sees")
 
 
 def dvl_of(path, dvl) -> None:
