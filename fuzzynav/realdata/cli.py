@@ -63,6 +63,27 @@ def unused_recording_options(args) -> list:
             if getattr(args, dest, None) not in (None, "auto")]
 
 
+def refuse_unused_options(spec, args) -> None:
+    """Options of the validation protocol (simulated outages, fed noise, seeds, ``--t-start``)
+    given for a source whose run does not use them: one error naming them (they used to
+    change nothing, silently)."""
+    from fuzzynav.realdata.sources import parse_data_spec
+
+    source = parse_data_spec(spec)[0]
+    if source.protocol:
+        return
+    given = [flag for dest, flag in _RECORDING_ONLY.items()
+             if dest in _SETTINGS and getattr(args, dest, None) is not None]
+    given += ["--t-start"] * bool(getattr(args, "t_start", 0.0))
+    given += ["--mc"] * (getattr(args, "mc", 1) != 1)
+    if given:
+        verb = "do" if len(given) > 1 else "does"
+        raise FuzzynavError(f"{', '.join(given)}: {verb} not apply to {source.kind} recordings "
+                            "(the filter starts from the reference, is fed the recorded sensors "
+                            "without simulated outages or noise, and is scored over the whole "
+                            "run: nothing depends on a seed)")
+
+
 def settings_from(args):
     """:class:`ProtocolSettings` from parsed arguments."""
     from fuzzynav.realdata.protocol import ProtocolSettings
@@ -106,8 +127,14 @@ def run_recording(spec, filter_name, options, args) -> int:
     """
     from fuzzynav.realdata.validate import check_finite, metrics_table, validate
 
+    refuse_unused_options(spec, args)
     settings = settings_from(args)
     rec = load_recording(spec, args)
+    span = max(float(r.imu.time_s[-1] - r.imu.time_s[0])
+               for r in (rec if isinstance(rec, list) else [rec]))
+    if getattr(args, "t_start", 0.0) and not args.t_start < span:
+        raise FuzzynavError(f"--t-start {args.t_start:g} s: the recording runs {span:.0f} s; "
+                            "nothing would be scored")
     if isinstance(rec, list):  # several recordings of one kind (akit trajectories)
         from fuzzynav.realdata.akit_cli import run_akit
 

@@ -43,17 +43,21 @@ class DataSource:
     description: str
     load: Callable
     split: Callable | None = None
+    #: whether ``run --data`` runs the validation protocol on it (simulated outages, fed
+    #: noise, seeds, ``--t-start``); a source without it refuses those options by name
+    protocol: bool = True
 
 
 SOURCES: dict[str, DataSource] = {}
 
 
-def register_source(kind: str, description: str, split: Callable | None = None):
-    """Decorator registering a loader function under ``kind`` (``split``: see
+def register_source(kind: str, description: str, split: Callable | None = None,
+                    protocol: bool = True):
+    """Decorator registering a loader function under ``kind`` (``split``, ``protocol``: see
     :class:`DataSource`)."""
 
     def deco(fn):
-        SOURCES[kind] = DataSource(kind, description, fn, split)
+        SOURCES[kind] = DataSource(kind, description, fn, split, protocol)
         return fn
 
     return deco
@@ -80,7 +84,7 @@ def _akit_split(session):
 @register_source("akit", "A-KIT AUV recordings: IMU/DVL/GT_trajectoryN.csv + corrected/ "
                          "(akit:DIR:N, N = 3, 1-8 or 1,4; e.g. --data akit:3 after "
                          "fuzzynav data fetch akit)",
-                 split=_akit_split)
+                 split=_akit_split, protocol=False)
 def _load_akit(directory, mounting="auto", imu_delay_s=None, span_s=None, session=None,
                options=None):
     from fuzzynav.sim.loaders.akit import load_akit

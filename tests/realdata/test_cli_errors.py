@@ -65,3 +65,27 @@ def test_scenarios_lists_the_recording_kinds():
 def test_recording_options_are_refused_for_a_scenario():
     code, _, err = _run("run", "paper000", "--noise", "3", "--span", "0,10")
     assert code == 2 and "--noise, --span: only with --data" in err
+
+
+@pytest.mark.parametrize("extra, flags", [
+    (["--noise", "5"], "--noise: does not apply"),
+    (["--nhc", "0.1", "--outage-period", "30"], "--outage-period, --nhc: do not apply"),
+    (["--mc", "3"], "--mc: does not apply"),
+    (["--t-start", "100"], "--t-start: does not apply"),
+    (["--outage-duration", "0", "--first-outage", "10", "--vel-noise", "0.1"],
+     "do not apply"),
+])
+def test_options_an_akit_run_would_ignore_are_refused_by_name(tmp_path, extra, flags):
+    """They used to give output identical to a plain A-KIT run; refused before any file is
+    read (the directory need not hold a recording)."""
+    (tmp_path / "akit").mkdir()
+    code, out, err = _run("run", "--data", f"akit:{tmp_path / 'akit'}:1", "--filter", "ekf",
+                          *extra)
+    assert code == 2 and out == "" and flags in err and "akit recordings" in err, err
+
+
+def test_t_start_beyond_a_recording_is_refused_not_diverged(rtklib_drive, tmp_path):
+    code, out, err = _run("run", "--data", f"rtklib:{rtklib_drive}", "--filter", "ekf",
+                          "--t-start", "1e6", "--cache", str(tmp_path))
+    assert code == 2 and out == "" and "--t-start 1e+06 s: the recording runs" in err, err
+    assert "diverged" not in err
