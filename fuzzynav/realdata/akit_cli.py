@@ -12,6 +12,7 @@ from pathlib import Path
 import pandas as pd
 
 from fuzzynav.errors import FuzzynavError
+from fuzzynav.metrics import check_finite_metrics
 
 POOLED = "all"
 
@@ -94,6 +95,15 @@ def run_akit(spec, recs, filter_name, options, args) -> int:
     from fuzzynav.realdata.akit import run_all
 
     df, results = run_all(recs, filter_name, options)
+    # the guarantee every source keeps: non-finite metrics print nothing and exit 3 (the
+    # attitude is not scored against the reference here: its RMS columns are NaN by design)
+    scored = [c for c in df.columns if c.startswith(("rms_pos", "max_pos", "rms_vel"))]
+    check_finite_metrics(df.assign(scenario=[f"{spec} ({f})" for f in df["filter"]],
+                                   filter=filter_name), pd.DataFrame(True, df.index, scored),
+                         source="recording")
+    if (df["completed"] < 1).any():
+        raise FuzzynavError(f"{spec}: the filter stopped early on some trajectory "
+                            "(covariance lost)")
     if args.json:
         print(json.dumps(json_summary(spec, recs, filter_name, df), indent=2))
     else:
@@ -103,7 +113,4 @@ def run_akit(spec, recs, filter_name, options, args) -> int:
 
         for path in write_figures(recs, results, Path(args.plot), filter_name):
             print(f"wrote {path}")
-    if (df["completed"] < 1).any():
-        raise FuzzynavError(f"{spec}: the filter stopped early on some trajectory "
-                            "(covariance lost)")
     return 0

@@ -89,3 +89,28 @@ def test_t_start_beyond_a_recording_is_refused_not_diverged(rtklib_drive, tmp_pa
                           "--t-start", "1e6", "--cache", str(tmp_path))
     assert code == 2 and out == "" and "--t-start 1e+06 s: the recording runs" in err, err
     assert "diverged" not in err
+
+
+@pytest.mark.parametrize("as_json", [False, True])
+def test_an_akit_run_with_non_finite_metrics_prints_nothing_and_exits_3(monkeypatch, as_json):
+    """A-KIT runs skipped the finite-metrics check: a table with only "distance travelled"
+    (JSON ``rms_pos_h_m: null``) and exit 0."""
+    import math
+
+    import pandas as pd
+
+    import fuzzynav.realdata.akit as akit
+    import fuzzynav.realdata.cli as rcli
+
+    class _Rec:
+        trajectory = 3
+        imu = type("I", (), {"time_s": __import__("numpy").array([0.0, 400.0])})()
+
+    monkeypatch.setattr(rcli, "load_recording", lambda spec, args: [_Rec()])
+    monkeypatch.setattr(rcli, "refuse_unused_options", lambda spec, args: None)
+    df = pd.DataFrame([{"filter": "traj 3", "seed": 3, "trajectory": 3, "rms_pos_h_m": math.nan,
+                        "rms_vel_h_mps": 0.1, "distance_m": 600.0, "completed": 1.0}])
+    monkeypatch.setattr(akit, "run_all", lambda recs, name, options: (df, {}))
+    code, out, err = _run("run", "--data", "akit:x:3", "--filter", "ekf",
+                          *(["--json"] if as_json else []))
+    assert code == 3 and out == "" and "diverged" in err and "rms_pos_h_m" in err, err
