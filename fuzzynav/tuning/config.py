@@ -33,8 +33,8 @@ from fuzzynav.errors import FuzzynavError, InputFileError, brief
 from fuzzynav.fileio import study_output
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
 from fuzzynav.tuning.controller_config import parse_controller, user_file
-from fuzzynav.tuning.recording_config import (check_no_attitude, check_recordings_held_out,
-                                              recording_runs)
+from fuzzynav.tuning.recording_config import (check_no_attitude, check_no_t_start,
+                                              check_recordings_held_out, recording_runs)
 from fuzzynav.tuning.samplers import get_optimiser, optimiser_names
 
 PRUNERS = ("none", "median", "wilcoxon")
@@ -293,6 +293,7 @@ def study_config_from_dict(doc: dict, path: Path | None = None,
     tt.finish()
     _check_held_out(tt, train, test)
     check_no_attitude(ob, train + test, weights)
+    check_no_t_start(ob, train + test, t_start)
     if t_start >= min(shortest, shortest_test):
         raise ob.error("t_start_s", f"{t_start:g} s is at or after the end of the shortest "
                                     f"run ({min(shortest, shortest_test):g} s): nothing "

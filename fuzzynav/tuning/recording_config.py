@@ -50,3 +50,12 @@ def check_no_attitude(ob, runs: tuple, weights: dict) -> None:
             raise ob.error(f"weights.{group}", "recordings have no attitude truth: set "
                                                f"weights = {{ pos = ..., vel = ..., {group} "
                                                "= 0.0 }")
+
+
+def check_no_t_start(ob, runs: tuple, t_start: float) -> None:
+    """A recording is scored in its own window: ``t_start_s`` (which it would ignore) must
+    not be set in a study that has recordings."""
+    if t_start > 0 and any(is_recording_name(n) for n, _ in runs):
+        raise ob.error("t_start_s", f"{t_start:g} s: applies to simulated runs only; a "
+                                    "recording is scored in its own window (give it as "
+                                    "KIND:DIR:SESSION@A-B), so t_start_s would be ignored there")

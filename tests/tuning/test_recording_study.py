@@ -170,3 +170,13 @@ def test_a_window_with_nothing_to_score_is_refused_naming_the_study_entry(tmp_pa
     with pytest.raises(FuzzynavError, match=rf"{path}: train\.recordings \(akit:auv:1"
                                             rf"{window}\): .*MIN_SCORED_S"):
         ev.baseline(f"akit:auv:1{window}", 0)
+
+
+@pytest.mark.parametrize("t_start", [1e6, 5.0])
+def test_t_start_is_refused_in_a_study_with_recordings(tmp_path, with_data, t_start):
+    """A recording is scored in its window and ignored t_start_s (1e6 was accepted)."""
+    doc = _doc(["akit:auv:1"], ["akit:auv:2"])
+    doc["objective"] = {**doc["objective"], "t_start_s": t_start}
+    with pytest.raises(InputFileError, match=r"objective\.t_start_s: .*applies to simulated "
+                                             r"runs only"):
+        load_study_config(write_study(tmp_path, doc))
