@@ -14,14 +14,13 @@ run length apart from the outputs (every ``out_stride`` samples) and the per-epo
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
 
 import numba as nb
 import numpy as np
 
 from fuzzynav.filters import kalman
 from fuzzynav.filters.adaptation import context
-from fuzzynav.filters.bank_beta import ShareControl, push_innovation, update_shares
+from fuzzynav.filters.bank_beta import push_innovation, update_shares
 from fuzzynav.filters.bank_fusion import FUSED_NOW, SHARED, STALE, after_propagation, fuse, \
     fusion_work, local_residual, master_covariance, propagate_locals, share
 from fuzzynav.filters.dispatch import memoise_table_types
@@ -29,115 +28,12 @@ from fuzzynav.filters.error_st import EM_PHI, EM_ST, st_fused, st_measurement, s
     st_reset, st_to_phi
 from fuzzynav.filters.feedback import bias_totals, feedback
 from fuzzynav.filters.layout import AUX_FORCE, AUX_RATE, AUX_XS
+# the argument bundles, named here too: callers build them as loop.Imu(...), ...
+from fuzzynav.filters.loop_args import (  # noqa: F401
+    Bank, BankState, EventOutputs, Events, Imu, Model, Outputs, Sensors, Settings, Start)
 from fuzzynav.filters.record import record_output
 from fuzzynav.nav.layout import PREV_SIZE
 from fuzzynav.nav.strapdown import init_prev, mech_step, quat_to_dcm_into
-
-
-class Imu(NamedTuple):
-    """IMU increments: ``dth``, ``dv`` (N, 3) [rad, m/s] and ``time_s`` (N+1,)."""
-
-    dth: np.ndarray
-    dv: np.ndarray
-    time_s: np.ndarray
-
-
-class Start(NamedTuple):
-    """Initial state: ``nav0`` (nav layout) and sensor states ``xs0``."""
-
-    nav0: np.ndarray
-    xs0: np.ndarray
-
-
-class Bank(NamedTuple):
-    """The bank: local filter of each sensor, information shares ``beta`` (per local;
-    written when ``ctl`` sets them), reset mode (1) or not (0), fusion period [s] (0 = after
-    every accepted update), the share controller (:mod:`fuzzynav.filters.bank_beta`)."""
-
-    local: np.ndarray
-    beta: np.ndarray
-    reset: int
-    period: float
-    ctl: ShareControl
-
-
-class BankState(NamedTuple):
-    """Per-local covariance ``P`` (L, n, n), error state ``x`` (L, n) and process-noise
-    densities ``qd`` (L, n) (initial values in, final values out); the last fused ``Pg``
-    (n, n) and ``xg`` (n,)."""
-
-    P: np.ndarray
-    x: np.ndarray
-    qd: np.ndarray
-    Pg: np.ndarray
-    xg: np.ndarray
-
-
-class Model(NamedTuple):
-    """Error model: the sensor blocks' start, coupling and 1/tau, and the error-model code
-    (:data:`fuzzynav.filters.error_st.ERROR_MODELS`)."""
-
-    blk_start: np.ndarray
-    blk_kind: np.ndarray
-    blk_inv_tau: np.ndarray
-    error_model: int
-
-
-class Events(NamedTuple):
-    """Measurement epochs in time order: time, sensor index, data row."""
-
-    t: np.ndarray
-    s: np.ndarray
-    data: np.ndarray
-
-
-class Sensors(NamedTuple):
-    """Per sensor: measurement-kernel id and constants, adapter id (:data:`NO_ADAPTER` for
-    none) and its flat arrays (``afp[afp_off[s]:afp_off[s + 1]]`` ...), chi-square gate
-    per row count."""
-
-    meas: np.ndarray
-    mpar: np.ndarray
-    adapt: np.ndarray
-    afp: np.ndarray
-    afp_off: np.ndarray
-    aip: np.ndarray
-    aip_off: np.ndarray
-    ast: np.ndarray
-    ast_off: np.ndarray
-    gate: np.ndarray
-
-
-class Settings(NamedTuple):
-    """Longest propagation interval [s] and the output stride [samples]."""
-
-    max_prop_dt: float
-    out_stride: int
-
-
-class Outputs(NamedTuple):
-    """Recorded solution (every ``out_stride`` samples): time, nav, sensor states, the
-    fused sigma, per local filter its error state ``xl`` and sigma ``sigl`` (K, L, n), and
-    the information shares ``beta`` (K, L).  A bank of one writes none of the last three
-    (:func:`~fuzzynav.filters.record.record_output`): they may be placeholders of any length."""
-
-    t: np.ndarray
-    nav: np.ndarray
-    xs: np.ndarray
-    sig: np.ndarray
-    xl: np.ndarray
-    sigl: np.ndarray
-    beta: np.ndarray
-
-
-class EventOutputs(NamedTuple):
-    """Per event: residual, S diagonal, NIS, flag, adaptation diagnostics."""
-
-    r: np.ndarray
-    S: np.ndarray
-    nis: np.ndarray
-    flag: np.ndarray
-    diag: np.ndarray
 
 
 #: adapter id of a sensor without adaptation (the loop skips the policy's call)
@@ -258,8 +154,9 @@ def _make_loop(BANK: bool, ST: bool):
             t = time_s[k + 1]
             while e < E and ev_t[e] <= t + 1e-9:
                 if tau > 0.0:
-                    propagate_locals(state, Qacc3, keep_q, carry, xs, nav, sumC, sumf, tau, Cm, fm,
-                                     F, Phi, Qd, work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
+                    propagate_locals(state, Qacc3, keep_q, carry, xs, nav, sumC, sumf, tau, Cm,
+                                     fm, F, Phi, Qd, work, dx, blk_start, blk_kind, blk_inv_tau,
+                                     em, Qc)
                     tau = 0.0
                     fstate = after_propagation(fstate, reset)
                     bias_totals(xs, blk_start, blk_kind, bg, ba)
