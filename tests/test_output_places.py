@@ -13,6 +13,7 @@ import pytest
 from fuzzynav.cli import main
 from fuzzynav.errors import InputFileError, OutputError
 from fuzzynav.fileio import check_place, is_inside, make_dir, staged, study_output, write_atomic
+from tests.tuning.test_baselines import TINY
 
 ROOT = Path(__file__).resolve().parents[1]
 TARGET = "/etc/fuzzynav-test-must-not-exist"
@@ -64,22 +65,11 @@ def test_a_symlink_out_of_the_study_directory_is_refused(tmp_path):
         study_output("escape/x.json", tmp_path / "s" / "b.toml", "baselines.out")
 
 
-BASELINE = """
-name = "b"
-[study]
-sampler = "random"
-trials = 2
-{storage}
-[train]
-scenarios = ["paper000-steps"]
-seeds = [0]
-[test]
-scenarios = ["paper000"]
-seeds = [100]
-[baselines]
-tune = ["huber-tuned"]
-out = "{out}"
-"""
+def _baseline_study(out: str, storage: str) -> str:
+    """The baseline tests' tiny study, writing to ``out`` with the ``[study]`` line
+    ``storage`` (may be empty)."""
+    text = TINY.format(tune='["huber-tuned"]').replace('out = "tuned.json"', f'out = "{out}"')
+    return text.replace("[study]\n", f"[study]\n{storage}\n")
 
 
 @pytest.mark.parametrize("out, storage, key", [
@@ -89,7 +79,7 @@ out = "{out}"
 ])
 def test_study_run_refuses_before_writing(tmp_path, capsys, out, storage, key):
     cfg = tmp_path / "b.toml"
-    cfg.write_text(BASELINE.format(out=out, storage=storage))
+    cfg.write_text(_baseline_study(out, storage))
     code = main(["study", "run", str(cfg), "--cache", str(tmp_path / "cache"), "--no-summary"])
     _, err = capsys.readouterr()
     assert code == 2 and f"{key}: " in err and "outside the study's directory" in err, err

@@ -92,19 +92,12 @@ def test_a_closed_pipe_as_a_real_process():
 
 
 @pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
-def test_dev_full_as_a_real_process():
-    """The output is small enough to sit in the buffer until exit: still one line."""
+@pytest.mark.parametrize("argv", [["scenarios"], ["--help"]])
+def test_dev_full_as_a_real_process(argv):
+    """The output is small enough to sit in the buffer until exit (``--help``: until
+    argparse exits): still one line."""
     with open("/dev/full", "w") as full:
-        proc = _cli(["scenarios"], full)
-    assert proc.returncode == 2 and _one_line(proc.stderr), proc.stderr
-    assert "No space left on device" in proc.stderr
-
-
-@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
-def test_help_to_dev_full_as_a_real_process():
-    """``fuzzynav --help >/dev/full``: the help sits in the buffer until argparse exits."""
-    with open("/dev/full", "w") as full:
-        proc = _cli(["--help"], full)
+        proc = _cli(argv, full)
     assert proc.returncode == 2 and _one_line(proc.stderr), proc.stderr
     assert "No space left on device" in proc.stderr
 
