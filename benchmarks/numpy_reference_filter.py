@@ -4,13 +4,15 @@ Written the way such a filter usually is: a Python loop over IMU samples, small 
 the mechanization and the error-state covariance propagated **every sample** with
 ``Phi = I + F dt``, ``P = Phi P Phi^T + Q dt``, Joseph updates at GNSS epochs and closed-loop
 feedback.  Same physics and state definition as :mod:`fuzzynav.filters` (phi-angle model,
-position error in ENU metres, random-constant biases) but independent code.  It is kept here
-as the benchmark's reference, not in the package.
+position error in ENU metres, random-constant biases) but independent of the compiled loop:
+the predict and update are the package's plain numpy ones (:mod:`fuzzynav.filters.reference`).
+It is kept here as the benchmark's reference, not in the package.
 """
 from __future__ import annotations
 
 import numpy as np
 
+from fuzzynav.filters import reference
 from fuzzynav.nav import earth
 
 OMEGA = earth.OMEGA_IE
@@ -105,7 +107,7 @@ class NumpyEKF:
         self.v, self.p = v1, np.array([lat1, lon1, h1])
         F = _system_matrix(self.v, self.p[0], self.p[2], _q2dcm(self.q), dvn / dt)
         Phi = np.eye(15) + F * dt
-        self.P = Phi @ self.P @ Phi.T + np.diag(self.qd) * dt
+        _, self.P = reference.predict(None, self.P, Phi, np.diag(self.qd) * dt)
 
     def update_gnss(self, row):
         lat, h = self.p[0], self.p[2]
@@ -116,11 +118,7 @@ class NumpyEKF:
         H[0:3, 6:9] = np.eye(3)
         H[3:6, 3:6] = np.eye(3)
         R = np.diag(np.square(row[6:12]))
-        S = H @ self.P @ H.T + R
-        K = self.P @ H.T @ np.linalg.inv(S)
-        x = K @ z
-        A = np.eye(15) - K @ H
-        self.P = A @ self.P @ A.T + K @ R @ K.T
+        x, self.P = reference.update(np.zeros(15), self.P, z, H, R)
         self.q = _qmul(_rv2q(x[0:3]), self.q)
         self.v = self.v - x[3:6]
         d = np.array([x[7] / (rm + h), x[6] / ((rn + h) * np.cos(lat)), x[8]])

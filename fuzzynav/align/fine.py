@@ -15,6 +15,7 @@ import numpy as np
 
 from fuzzynav.align.layout import AlignLayout
 from fuzzynav.align.model import AlignNoise, measurement_matrix, transition
+from fuzzynav.filters.reference import predict, update
 
 
 @dataclass(frozen=True)
@@ -75,16 +76,6 @@ class FineResult:
         return self.x[:, self.layout[block]]
 
 
-def _update(x, P, z, H, R):
-    r = z - H @ x
-    S = H @ P @ H.T + R
-    K = np.linalg.solve(S, H @ P).T
-    x = x + K @ r
-    IKH = np.eye(P.shape[0]) - K @ H
-    P = IKH @ P @ IKH.T + K @ R @ K.T       # Joseph form: P stays symmetric PSD
-    return x, 0.5 * (P + P.T)
-
-
 def run_fine(epochs: Epochs, layout: AlignLayout, noise: AlignNoise = AlignNoise(),
              policy=None, P0=None) -> FineResult:
     """Run the alignment filter over all epochs.
@@ -119,14 +110,12 @@ def run_fine(epochs: Epochs, layout: AlignLayout, noise: AlignNoise = AlignNoise
     Phis = transition(layout, epochs.C_bn[:-1], epochs.f_n[1:], epochs.lat_rad,
                       noise.period_s)
     for k in range(1, K + 1):
-        Phi = Phis[k - 1]
-        x = Phi @ x
-        P = Phi @ P @ Phi.T + Qd
+        x, P = predict(x, P, Phis[k - 1], Qd)
         z = epochs.vel_n[k, :m]
         if policy is not None:
             R = policy.factor(z - H @ x, H @ P @ H.T + R) * R
             ror[k] = policy.last_ror
-        x, P = _update(x, P, z, H, R)
+        x, P = update(x, P, z, H, R)
         x_hist[k], P_hist[k] = x, P
         scale[k] = np.trace(R) / np.trace(R0)
     return FineResult(epochs.time_s, x_hist, P_hist, scale, ror, layout)

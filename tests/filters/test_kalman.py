@@ -1,7 +1,7 @@
 """Kalman kernels against textbook numpy formulas."""
 import numpy as np
 
-from fuzzynav.filters import kalman
+from fuzzynav.filters import kalman, reference
 
 
 def _spd(rng, n):
@@ -30,8 +30,7 @@ def test_joseph_update_matches_textbook():
     Hm = H[:m]
     S = Hm @ P @ Hm.T + np.diag(R[:m])
     K_ref = P @ Hm.T @ np.linalg.inv(S)
-    A = np.eye(n) - K_ref @ Hm
-    P_ref = A @ P @ A.T + K_ref @ np.diag(R[:m]) @ K_ref.T
+    P_ref = reference.joseph(P, K_ref, Hm, np.diag(R[:m]))
     PHt, HPH, L = np.zeros((n, M)), np.zeros((M, M)), np.zeros((M, M))
     kalman.innovation_cov(P, H, m, PHt, HPH)
     Sm = HPH.copy()
@@ -103,8 +102,7 @@ def test_joseph_update_is_the_joseph_form_for_any_gain():
     K = np.zeros((n, M))
     K[:, :m] = rng.normal(size=(n, m))
     Hm = H[:m]
-    A = np.eye(n) - K[:, :m] @ Hm
-    P_ref = A @ P @ A.T + K[:, :m] @ np.diag(R[:m]) @ K[:, :m].T
+    P_ref = reference.joseph(P, K[:, :m], Hm, np.diag(R[:m]))
     PHt, HPH = np.zeros((n, M)), np.zeros((M, M))
     kalman.innovation_cov(P, H, m, PHt, HPH)
     np.testing.assert_allclose(HPH[:m, :m], Hm @ P @ Hm.T, rtol=1e-13)
