@@ -23,8 +23,8 @@ from fuzzynav.align.layout import LAYOUT_10, LAYOUT_12, NORTH, UP
 from fuzzynav.align.mechanize import mechanize
 from fuzzynav.align.scenario import AlignScenario
 from fuzzynav.align.simulate import AlignLog, simulate_alignment
-from fuzzynav.errors import UnknownNameError
 from fuzzynav.nav import attitude, earth
+from fuzzynav.registry import Registry
 from fuzzynav.sim.log import component_rng
 
 
@@ -40,21 +40,22 @@ class AlignFilter:
     fast: bool = False
 
 
-ALIGN_FILTERS = {f.name: f for f in (
+#: the named alignment filters (a :class:`fuzzynav.registry.Registry`: all built in here)
+ALIGN_FILTERS = Registry("alignment filter", "fuzzynav.align")
+for _f in (
     AlignFilter("align-kf", "paper 002's 10-state alignment KF, fixed R0", LAYOUT_10),
     AlignFilter("align-kf12", "12-state velocity-matching alignment KF", LAYOUT_12),
     AlignFilter("align-kf-fast", "align-kf + fast azimuth estimate", LAYOUT_10, fast=True),
     AlignFilter("align-fuzzy", "align-kf + fuzzy R-scaling (ROR -> t)", LAYOUT_10, fuzzy=True),
     AlignFilter("align-fuzzy-fast", "align-fuzzy + fast azimuth estimate", LAYOUT_10,
                 fuzzy=True, fast=True),
-)}
+):
+    ALIGN_FILTERS.add(_f.name, _f)
 
 
 def get_align_filter(name: str) -> AlignFilter:
-    """A named alignment filter."""
-    if name not in ALIGN_FILTERS:
-        raise UnknownNameError("alignment filter", name, ALIGN_FILTERS)
-    return ALIGN_FILTERS[name]
+    """A named alignment filter (:class:`~fuzzynav.errors.UnknownNameError` if unknown)."""
+    return ALIGN_FILTERS.lookup(name)
 
 
 @dataclass(frozen=True)

@@ -15,6 +15,7 @@ from fuzzynav.align.model import AlignNoise
 from fuzzynav.align.simulate import Sway
 from fuzzynav.errors import InputFileError, UnknownNameError
 from fuzzynav.sim.imu import ImuSpec
+from fuzzynav.sim.scenario import merge_tables
 from fuzzynav.sim.tomltable import Table, parse_toml, read_toml, with_path
 
 #: [filter] keys in datasheet units -> (AlignNoise field, SI factor)
@@ -82,14 +83,6 @@ def is_alignment_scenario(name_or_path) -> bool:
     return False
 
 
-def _merge(base: dict, over: dict) -> dict:
-    out = dict(base)
-    for k, v in over.items():
-        both = isinstance(v, dict) and isinstance(base.get(k), dict)
-        out[k] = _merge(base[k], v) if both else v
-    return out
-
-
 def _document(name_or_path, depth=0):
     doc, stem, label = _read(name_or_path)
     if "base" in doc:
@@ -97,7 +90,7 @@ def _document(name_or_path, depth=0):
         if not isinstance(base, str) or base not in list_alignment_scenarios() or depth > 8:
             raise InputFileError(label, "base", f"must name a built-in alignment scenario "
                                                 f"({', '.join(list_alignment_scenarios())})")
-        doc = _merge(_document(base, depth + 1)[0], doc)
+        doc = merge_tables(_document(base, depth + 1)[0], doc)
     return doc, stem, label
 
 

@@ -43,7 +43,7 @@ from fuzzynav.sim.start_options import StartOptions
 
 
 @dataclass(frozen=True)
-class InitialState:
+class StartEstimate:
     """Initial navigation state estimated from the data.
 
     Attributes
@@ -260,7 +260,7 @@ def _heading(imu, gnss, t1, c_level, w, method, options, kw) -> float:
 
 
 def initial_state(imu, gnss, heading_rad=None, forward_known=False, options=None,
-                  **kw) -> InitialState:
+                  **kw) -> StartEstimate:
     """Initial state at the end of the opening rest.
 
     Parameters
@@ -293,5 +293,5 @@ def initial_state(imu, gnss, heading_rad=None, forward_known=False, options=None
     att = np.array([pitch, roll, heading])
     g = _gnss_at(gnss, t1)
     w_ie_b = attitude.euler_to_dcm(att).T @ earth.omega_ie_n(g[0])
-    return InitialState(time_s=t1, lla=g[:3], vel_n=g[3:], att=att, gyro_bias_rps=w - w_ie_b,
+    return StartEstimate(time_s=t1, lla=g[:3], vel_n=g[3:], att=att, gyro_bias_rps=w - w_ie_b,
                         f_rest_mps2=float(np.linalg.norm(f)), rest_s=(t0, t1), method=method)

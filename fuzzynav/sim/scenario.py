@@ -217,11 +217,11 @@ def _looks_like_path(name_or_path) -> bool:
     return isinstance(name_or_path, Path) or s.endswith(".toml") or "/" in s or "\\" in s
 
 
-def _merge(base: dict, over: dict) -> dict:
+def merge_tables(base: dict, over: dict) -> dict:
     """``over`` on top of ``base``: tables merge key by key, everything else replaces."""
     out = dict(base)
     for k, v in over.items():
-        out[k] = _merge(base[k], v) if isinstance(v, dict) and isinstance(base.get(k), dict) \
+        out[k] = merge_tables(base[k], v) if isinstance(v, dict) and isinstance(base.get(k), dict) \
             else v
     return out
 
@@ -268,7 +268,7 @@ def _load(name_or_path, depth=0) -> Scenario:
                 parent = _load(base, depth + 1)
             except (UnknownNameError, DataMissingError) as exc:  # name this file and key
                 raise InputFileError(None, "base", str(exc)) from None
-            doc = _merge(parent.to_dict(), doc)
+            doc = merge_tables(parent.to_dict(), doc)
         return scenario_from_dict(doc, default_name=stem)
 
 
