@@ -18,7 +18,7 @@ import numpy as np
 from fuzzynav import units
 from fuzzynav.align import coarse, run as R
 from fuzzynav.align.fine import run_fine
-from fuzzynav.align.fuzzy_r import DEFAULT_RULES, FuzzyRScaling
+from fuzzynav.align.fuzzy_r import policy_for
 from fuzzynav.align.mechanize import mechanize
 from fuzzynav.align.model import AlignNoise
 from fuzzynav.errors import FuzzynavError
@@ -82,8 +82,7 @@ def align_on_rest(log, align_filter="align-kf", rules=None):
     C, v, f = mechanize(_slice_imu(imu, k0, k1), c.C_bn, lat, h, step)
     ep = R.Epochs(imu.time_s[k0:k1 + 1:step], C, v, f, lat)
     noise = _noise(log, c.cov_phi)
-    policy = FuzzyRScaling(DEFAULT_RULES if rules is None else rules) if spec.fuzzy else None
-    res = run_fine(ep, spec.layout, noise, policy=policy)
+    res = run_fine(ep, spec.layout, noise, policy=policy_for(spec.fuzzy, rules))
     phi = res.estimate("att")[-1]
     return k1, attitude.rotvec_to_dcm(phi) @ C[-1], res.sigma("att")[-1]
 

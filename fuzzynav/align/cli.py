@@ -5,7 +5,7 @@ import json
 
 from fuzzynav.align.experiment import ALIGN_ROWS, monte_carlo_alignment
 from fuzzynav.align.scenario import load_alignment_scenario
-from fuzzynav.align.fuzzy_r import FuzzyRScaling
+from fuzzynav.align.fuzzy_r import AlignRScaling
 from fuzzynav.align.run import get_align_filter
 from fuzzynav.errors import FuzzynavError, brief
 from fuzzynav.metrics import mean_ci
@@ -35,7 +35,7 @@ def compare_alignment(args, filters, claims=None, claim_labels=(), rows=()) -> i
         raise FuzzynavError(f"--rules: no filter of {', '.join(filters)} takes a rule file "
                             "(the fuzzy ones do: align-fuzzy, align-fuzzy-fast)")
     if args.rules:
-        FuzzyRScaling(args.rules[0])  # a file that is not a ROR -> t controller: refused now
+        AlignRScaling(args.rules[0])  # a file that is not a ROR -> t controller: refused now
     thr = getattr(args, "align_threshold", None)
     if thr is not None and not 0 < thr <= MAX_THRESHOLD_ARCMIN:
         raise FuzzynavError(f"--align-threshold must be in (0, {MAX_THRESHOLD_ARCMIN:g}] "
@@ -86,7 +86,7 @@ def parse_align_spec(text: str):
         raise FuzzynavError(f"--align {brief(text)}: {name} takes no rule file (the fuzzy "
                             "aligners do: align-fuzzy, align-fuzzy-fast)")
     if rules:
-        FuzzyRScaling(rules)  # refused now if it is not a ROR -> t controller
+        AlignRScaling(rules)  # refused now if it is not a ROR -> t controller
     return name, rules or None
 
 

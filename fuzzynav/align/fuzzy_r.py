@@ -46,8 +46,10 @@ def _check_controller(fis, path) -> None:
                                    "> 0 over the whole range")
 
 
-class FuzzyRScaling:
-    """The ROR -> t controller as an alignment-filter policy.
+class AlignRScaling:
+    """The ROR -> t controller as an alignment-filter policy, stepped epoch by epoch in
+    numpy (the navigation loop's compiled ``r-scaling`` policy is
+    :class:`fuzzynav.filters.adaptation.r_scaling.FuzzyRScaling`).
 
     Parameters
     ----------
@@ -104,3 +106,21 @@ class FuzzyRScaling:
         self._x[0] = ror
         eval_compiled(self._cf.fparams, self._cf.iparams, self._x, self._y, self._work)
         return float(self._y[0])
+
+
+#: the former name (it clashed with the navigation loop's policy); kept for the
+#: alignment study driver until issue 23's branches are merged
+FuzzyRScaling = AlignRScaling
+
+
+def policy_for(fuzzy: bool, rules=None):
+    """The R-scaling policy of an alignment filter (None if it does not adapt R).
+
+    Parameters
+    ----------
+    fuzzy : bool
+        Whether the filter adapts R (:attr:`fuzzynav.align.run.AlignFilter.fuzzy`).
+    rules : str, path or FuzzySystem, optional
+        The ROR -> t controller (default: the paper's, :data:`DEFAULT_RULES`).
+    """
+    return AlignRScaling(DEFAULT_RULES if rules is None else rules) if fuzzy else None

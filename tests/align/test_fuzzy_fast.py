@@ -5,7 +5,7 @@ import numpy as np
 
 from fuzzynav import units
 from fuzzynav.align import run as R
-from fuzzynav.align.fuzzy_r import DEFAULT_RULES, FuzzyRScaling
+from fuzzynav.align.fuzzy_r import DEFAULT_RULES, AlignRScaling
 from fuzzynav.align.layout import UP
 from fuzzynav.align.scenario import load_alignment_scenario
 from fuzzynav.sim.imu import ImuSpec
@@ -13,7 +13,7 @@ from fuzzynav.sim.imu import ImuSpec
 
 def _factor_at(ror, window=4):
     """The factor t when the measured innovations are exactly ``ror`` times ``D``."""
-    pol = FuzzyRScaling(DEFAULT_RULES, window=window)
+    pol = AlignRScaling(DEFAULT_RULES, window=window)
     pol.reset(np.eye(2))
     D = np.eye(2)
     r = np.sqrt(ror) * np.array([1.0, 1.0])      # r r^T has trace 2 ror = ror tr D
@@ -32,7 +32,7 @@ def test_a_consistent_filter_keeps_R_and_a_mismatched_one_moves_it_the_right_way
 
 
 def test_the_scale_of_R_stays_within_its_bounds():
-    pol = FuzzyRScaling(DEFAULT_RULES, window=2, scale_max=3.0)
+    pol = AlignRScaling(DEFAULT_RULES, window=2, scale_max=3.0)
     pol.reset(np.eye(2))
     scale = 1.0
     for _ in range(50):
