@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["predict", "update", "joseph"]
+__all__ = ["joseph", "predict", "update"]
 
 
 def predict(x, P, Phi, Qd):
