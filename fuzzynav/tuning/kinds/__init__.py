@@ -1,0 +1,79 @@
+"""Study kinds: what a study file tunes, plugged into the one study driver.
+
+Every study file -- fuzzy controllers (``[[controllers]]``), classical baselines
+(``[baselines]``), the alignment filter's rules (``kind = "alignment"``) -- runs through the
+same driver (:func:`fuzzynav.tuning.run.run_plan`): its workers, storages (journal file,
+PostgreSQL), slot locks, reaping, resume, export and report.  A kind is one module here
+with a *plan* class and one :func:`register_kind` call; the driver reads only the plan.
+
+A plan is a study file opened with its simulation cache.  It has
+
+``name``, ``path``
+    the file's study name and path;
+``parts()``
+    the keys of the Optuna studies it runs, in order (``""`` for one study; a baseline
+    file runs one study per searched filter);
+``config(key)``
+    the :class:`~fuzzynav.tuning.config.StudyConfig` of a part (name, storage, sampler,
+    seed, trials, pruner, stale-trial period: what the driver reads);
+``warm(processes, progress)``
+    load what every trial needs, once, in the parent before workers fork (idempotent);
+``objective(key, worker)``
+    the part's :class:`~fuzzynav.tuning.objective.TrialObjective` for worker ``worker``;
+``finish(studies, storage)``
+    after the parts ran (``key -> optuna.Study``; ``storage``: the URL given, if any): write the kind's product (a baseline
+    parameter file, a tuned alignment rule file; nothing for fuzzy studies) and return
+    the lines to print;
+``summary(studies)``, ``export(studies, out, trial)``, ``report(studies, out, evaluate)``
+    what ``fuzzynav study run | export | report`` print and write.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from fuzzynav.registry import Registry
+
+
+@dataclass(frozen=True)
+class StudyKind:
+    """One kind of study file.
+
+    Attributes
+    ----------
+    name : str
+    detect : callable
+        ``detect(doc) -> bool``: whether a study file's parsed TOML is of this kind (the
+        kinds are asked in registration order; the last, ``fuzzy``, takes the rest).
+    load : callable
+        ``load(path, cache_dir) -> plan`` (errors name the file and the key).
+    description : str
+    """
+
+    name: str
+    detect: Callable
+    load: Callable
+    description: str = ""
+
+
+KINDS = Registry("study kind", "fuzzynav.tuning.kinds", ("baselines", "alignment", "fuzzy"))
+
+
+def register_kind(kind: StudyKind) -> StudyKind:
+    """Add a study kind under its name; returns it."""
+    return KINDS.add(kind.name, kind)
+
+
+def kind_of(path) -> StudyKind:
+    """The kind of the study file ``path`` (read once, not checked beyond that)."""
+    from fuzzynav.sim.tomltable import read_toml
+
+    doc = read_toml(Path(path), "study file")
+    kinds = list(KINDS.load().values())
+    return next((k for k in kinds if k.detect(doc)), KINDS.lookup("fuzzy"))
+
+
+def load_plan(path, cache_dir=None):
+    """The plan of the study file ``path`` (see the module docstring)."""
+    return kind_of(path).load(Path(path), cache_dir)
