@@ -202,18 +202,6 @@ def write_params(bcfg: BaselineConfig, found: dict, scores: dict, trials: dict,
                         what="tuned-parameter file")
 
 
-def run_baselines(bcfg: BaselineConfig, trials=None, storage=None, cache_dir=None,
-                  workers: int = 1, progress: bool = False) -> Path:
-    """Tune every filter of the config (ALS: estimate) with the one study driver
-    (:func:`fuzzynav.tuning.run.run_plan`) and write their parameter file; returns it."""
-    from fuzzynav.tuning.kinds.baselines import BaselinePlan
-    from fuzzynav.tuning.run import run_plan
-
-    plan = BaselinePlan(bcfg, cache_dir)
-    run_plan(plan, trials, workers, storage, progress)
-    return bcfg.out
-
-
 def train_score(ev, name: str, params: dict) -> float:
     """The mean training score of filter ``name`` with ``params`` (as a trial's)."""
     runs = ev.config.train

@@ -1,4 +1,5 @@
-"""Paper 004's APSO as a baseline study on the PSO sampler: config, swarm, result file, alias."""
+"""Paper 004's APSO as a baseline study on the PSO sampler (``fuzzynav study run``):
+config, swarm, result file."""
 import json
 from dataclasses import replace
 from pathlib import Path
@@ -12,7 +13,6 @@ from fuzzynav.experiment import run_on_log
 from fuzzynav.realdata.dataspec import DATA_DIR_ENV
 from fuzzynav.sim.log import simulate
 from fuzzynav.sim.scenario import load_scenario
-from fuzzynav.tuning.apso import main as apso_main
 from fuzzynav.tuning.baselines import SPACES, _sub_config, load_baseline_config
 from fuzzynav.tuning.pso import PsoSampler, history
 from tests.tuning.studies import TINY
@@ -102,11 +102,3 @@ def test_a_parameter_file_without_apso_names_the_field(tmp_path):
     path.write_text(json.dumps({"filters": {"apso": {"r_scale": 1.0}}}))  # not a study's file
     with pytest.raises(InputFileError, match=r"\$\.format: must be 'fuzzynav-baselines'"):
         read_multipliers(path)
-
-
-def test_alias_refuses_a_study_without_apso(tmp_path, capsys):
-    bad = tmp_path / "b.toml"
-    bad.write_text((ROOT / "studies" / "paper000_baselines.toml").read_text())
-    assert apso_main([str(bad)]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "apso" in err[0]

@@ -44,8 +44,8 @@ class StudyKind:
     ----------
     name : str
     detect : callable
-        ``detect(doc) -> bool``: whether a study file's parsed TOML is of this kind (the
-        kinds are asked in registration order; the last, ``fuzzy``, takes the rest).
+        ``detect(doc) -> bool``: whether a study file's parsed TOML is of this kind (a file
+        no other kind claims is a :data:`DEFAULT` study).
     load : callable
         ``load(path, cache_dir) -> plan`` (errors name the file and the key).
     description : str
@@ -57,6 +57,8 @@ class StudyKind:
     description: str = ""
 
 
+#: the kind of a study file that no other kind claims
+DEFAULT = "fuzzy"
 KINDS = Registry("study kind", "fuzzynav.tuning.kinds", ("baselines", "alignment", "fuzzy"))
 
 
@@ -70,8 +72,8 @@ def kind_of(path) -> StudyKind:
     from fuzzynav.sim.tomltable import read_toml
 
     doc = read_toml(Path(path), "study file")
-    kinds = list(KINDS.load().values())
-    return next((k for k in kinds if k.detect(doc)), KINDS.lookup("fuzzy"))
+    claimed = [k for name, k in KINDS.load().items() if name != DEFAULT and k.detect(doc)]
+    return claimed[0] if claimed else KINDS.lookup(DEFAULT)
 
 
 def load_plan(path, cache_dir=None):

@@ -1,16 +1,153 @@
 """The alignment study: paper 002's ROR -> t rules of the fuzzy alignment filter.
 
-A file with ``kind = "alignment"`` (or a top-level ``template``; :mod:`fuzzynav.align.tune`)
+A file with ``kind = "alignment"`` (or a top-level ``template``)
 is one Optuna study run by the one driver; a trial is a candidate rule set scored on the
-simulated alignment runs (:class:`fuzzynav.align.tune.AlignmentObjective`).
+simulated alignment runs (:class:`AlignmentObjective`).
 :meth:`AlignmentPlan.finish` writes the tuned rule file with its ``expected`` block.
 """
 from __future__ import annotations
 
+import json
+from dataclasses import dataclass
 from pathlib import Path
 
-from fuzzynav.errors import FuzzynavError
+from fuzzynav.errors import FuzzynavError, InputFileError
+from fuzzynav.fileio import study_output
+from fuzzynav.sim.tomltable import Table, read_toml, with_path
 from fuzzynav.tuning.kinds import StudyKind, register_kind
+from fuzzynav.tuning.objective import TrialObjective
+
+#: the sampler of an alignment study unless its file names one (Optuna's default TPE,
+#: which the study used before it ran on the one driver)
+DEFAULT_SAMPLER = "tpe-univariate"
+
+
+@dataclass(frozen=True)
+class AlignmentConfig:
+    """A parsed alignment tuning file.
+
+    Attributes
+    ----------
+    study : StudyConfig
+        What the study driver reads: name (default: the file's stem), storage (default: a
+        journal file next to it), sampler (default :data:`DEFAULT_SAMPLER`), seed
+        (``sampler_seed``), trials (``n_trials``), ``stale_after_s``; the train and test
+        runs; no pruner (a trial is scored on every training run).
+    template, output : Path
+        The hand rule file searched around, and where the tuned rule file is written.
+    template_doc : dict
+        The template's JSON document.
+    filter : str
+        The alignment filter run (``align-fuzzy``).
+    azimuth_weight : float
+    expected : tuple
+        ``(scenario, seed)`` whose metrics the tuned file records.
+    """
+
+    study: object
+    template: Path
+    template_doc: dict
+    output: Path
+    filter: str
+    azimuth_weight: float
+    expected: tuple
+
+
+def _names(doc: dict, key: str, kind, path) -> list:
+    value = doc.pop(key, [])
+    if not isinstance(value, list) or not all(isinstance(v, kind) and not isinstance(v, bool)
+                                              for v in value):
+        raise InputFileError(str(path), key, f"must be an array of {kind.__name__}")
+    return value
+
+
+def load_alignment_config(path) -> AlignmentConfig:
+    """Read and check an alignment tuning file (errors name the file and the key)."""
+    from fuzzynav.align.tune import SPACE
+    from fuzzynav.tuning.config import PsoConfig, StudyConfig
+    from fuzzynav.tuning.samplers import get_optimiser
+
+    path = Path(path)
+    doc = dict(read_toml(path, "alignment tuning file"))
+    lists = {k: _names(doc, k, str if k in ("train", "test") else int, path)
+             for k in ("train", "test", "train_seeds", "test_seeds")}
+    t = Table(doc)
+    here = path.parent
+    with with_path(str(path)):
+        if t.string("kind", "alignment") != "alignment":
+            raise t.error("kind", "must be \"alignment\" in an alignment tuning file")
+        sampler = t.string("sampler", DEFAULT_SAMPLER)
+        why_not = get_optimiser(sampler).check(False)
+        if why_not:
+            raise t.error("sampler", why_not)
+        study = StudyConfig(
+            name=t.string("name", path.stem), description=t.string("description", ""),
+            path=path.resolve(), sampler=sampler,
+            seed=t.integer("sampler_seed", 0, lo=0),
+            trials=t.integer("n_trials", 30, lo=1, hi=100000), pruner="none",
+            multi_objective=False, storage=t.string("storage", ""),
+            stale_after_s=t.number("stale_after_s", 300.0, lo=0.0, lo_open=True),
+            pso=PsoConfig(), weights={}, baseline="paper rules", t_start_s=0.0,
+            train=tuple((s, d) for s in lists["train"] for d in lists["train_seeds"]),
+            test=tuple((s, d) for s in lists["test"] for d in lists["test_seeds"]),
+            compare=(), controllers=(), filter=t.string("filter", "align-fuzzy"),
+            space=tuple((k, lo, hi, kind) for k, (lo, hi, kind) in SPACE.items()))
+        if not study.train:
+            raise t.error("train", "the study needs at least one training run "
+                                   "(train and train_seeds)")
+        template = (here / t.string("template")).resolve()
+        acfg = AlignmentConfig(
+            study=study, template=template, template_doc=_read_template(template, path),
+            output=study_output(t.string("output"), path, "output").resolve(),
+            filter=study.filter, azimuth_weight=t.number("azimuth_weight", 1.0, lo=0.0),
+            expected=(t.string("expected_scenario"), t.integer("expected_seed", lo=0)))
+        t.finish()
+    return acfg
+
+
+def _read_template(template: Path, path: Path) -> dict:
+    try:
+        return json.loads(template.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise InputFileError(str(path), "template",
+                             f"cannot read {template} ({type(exc).__name__})") from None
+
+
+class AlignmentObjective(TrialObjective):
+    """Optuna objective of an alignment study: the mean over the training runs of
+    ``align_time_s / duration_s + azimuth_weight * final_azimuth_arcmin / threshold``.
+
+    Parameters
+    ----------
+    acfg : AlignmentConfig
+    train : Runs
+        The training runs, prepared (shared by forked workers).
+    worker : int
+    """
+
+    def __init__(self, acfg, train, worker: int = 0):
+        super().__init__(acfg.study, worker)
+        self.acfg, self.train = acfg, train
+
+    def _run(self, trial):
+        self.claim(trial)
+        from fuzzynav.align.tune import candidate, suggest
+        from fuzzynav.fuzzy import load_fis
+
+        fis = load_fis(candidate(self.acfg.template_doc, suggest(trial)))
+        value = self.train.score(fis, self.acfg.filter, self.acfg.azimuth_weight)[0]
+        trial.set_user_attr("n_runs", len(self.train.items))
+        return value
+
+
+def _names(doc: dict, key: str, kind, path) -> list:
+    value = doc.pop(key, [])
+    if not isinstance(value, list) or not all(isinstance(v, kind) and not isinstance(v, bool)
+                                              for v in value):
+        raise InputFileError(str(path), key, f"must be an array of {kind.__name__}")
+    return value
+
+
 
 
 class AlignmentPlan:
@@ -46,8 +183,6 @@ class AlignmentPlan:
         return self.train
 
     def objective(self, key: str, worker: int = 0):
-        from fuzzynav.align.tune import AlignmentObjective
-
         return AlignmentObjective(self.acfg, self.train, worker)
 
     def _chosen(self, study, trial=None):
@@ -75,8 +210,6 @@ class AlignmentPlan:
 
     def finish(self, studies: dict, storage=None) -> list:
         """Write the tuned rule file of the best trial (the file's ``output``)."""
-        import json
-
         path, self.last_summary = self._write(studies[""], self.acfg.output)
         return [json.dumps(self.last_summary, indent=2), f"wrote {path}"]
 
@@ -102,8 +235,6 @@ def _detect(doc: dict) -> bool:
 
 
 def _load(path, cache_dir=None) -> AlignmentPlan:
-    from fuzzynav.align.tune import load_alignment_config
-
     return AlignmentPlan(load_alignment_config(path), cache_dir)
 
 

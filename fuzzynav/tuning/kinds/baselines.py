@@ -122,6 +122,17 @@ class BaselinePlan:
         return write_baseline_report(self.bcfg, out, self.cache_dir, evaluate)
 
 
+def run_baselines(bcfg, trials=None, storage=None, cache_dir=None,
+                  workers: int = 1, progress: bool = False) -> Path:
+    """Tune every filter of the config (ALS: estimate) with the one study driver
+    (:func:`fuzzynav.tuning.run.run_plan`) and write their parameter file; returns it."""
+    from fuzzynav.tuning.run import run_plan
+
+    plan = BaselinePlan(bcfg, cache_dir)
+    run_plan(plan, trials, workers, storage, progress)
+    return bcfg.out
+
+
 def _load(path, cache_dir=None) -> BaselinePlan:
     from fuzzynav.tuning.baselines import load_baseline_config
 

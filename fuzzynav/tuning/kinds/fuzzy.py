@@ -33,13 +33,13 @@ class FuzzyPlan:
 
     def warm(self, processes: int = 1, progress: bool = True):
         """Compile the kernels if the cache is cold (saying so), then a warm evaluator made
-        by ``processes`` processes (:func:`fuzzynav.tuning.run.warm_evaluator`)."""
-        from fuzzynav.tuning.run import warm_evaluator
+        by ``processes`` processes (:func:`fuzzynav.tuning.prefetch.warm_shared`)."""
+        from fuzzynav.tuning.prefetch import warm_shared
         from fuzzynav.tuning.warmup import warm_up
 
         if self.evaluator is None:
             warm_up(self.cfg, self.cache_dir, progress)  # a cold cache compiles: say so here
-            self.evaluator = warm_evaluator(self.cfg, self.cache_dir, processes)
+            self.evaluator = warm_shared(self.cfg, self.cache_dir, processes)
         return self.evaluator
 
     def objective(self, key: str, worker: int = 0):
@@ -96,5 +96,5 @@ def load(path, cache_dir=None) -> FuzzyPlan:
     return FuzzyPlan(load_study_config(Path(path)), cache_dir)
 
 
-register_kind(StudyKind("fuzzy", lambda doc: True, load,
+register_kind(StudyKind("fuzzy", lambda doc: "controllers" in doc, load,
                         "fuzzy controllers ([[controllers]]) scored against the baseline"))
