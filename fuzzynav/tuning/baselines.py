@@ -135,7 +135,7 @@ class BaselineObjective(TrialObjective):
     Parameters
     ----------
     cfg : StudyConfig
-        The filter's study (:func:`_sub_config`).
+        The filter's study (:func:`sub_config`).
     evaluator : Evaluator
         Shared by every filter of the baseline study.
     name : str
@@ -166,7 +166,7 @@ class BaselineObjective(TrialObjective):
         return float(np.mean(scores))
 
 
-def _sub_config(cfg, name: str, space=None):
+def sub_config(cfg, name: str, space=None):
     """The study of one tuned filter (its parameters as ``space``, for a PSO swarm)."""
     from dataclasses import replace
 

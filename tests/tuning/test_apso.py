@@ -13,7 +13,7 @@ from fuzzynav.experiment import run_on_log
 from fuzzynav.realdata.dataspec import DATA_DIR_ENV
 from fuzzynav.sim.log import simulate
 from fuzzynav.sim.scenario import load_scenario
-from fuzzynav.tuning.baselines import SPACES, _sub_config, load_baseline_config
+from fuzzynav.tuning.baselines import SPACES, sub_config, load_baseline_config
 from fuzzynav.tuning.pso import PsoSampler, history
 from tests.tuning.studies import TINY
 
@@ -51,7 +51,7 @@ def _bowl_study(iterations=25):
            "test": {"scenarios": [str(TINY)], "seeds": [1], "compare": ["ekf"]}}
     cfg = study_config_from_dict(doc, need_controllers=False)
     cfg = replace(cfg, pso=PsoConfig(particles=8, iterations=iterations, inertia=(0.9, 0.4)))
-    return _sub_config(cfg, "apso", SPACES["apso"])
+    return sub_config(cfg, "apso", SPACES["apso"])
 
 
 def test_swarm_over_the_apso_space_finds_a_known_minimum_on_the_schedule():

@@ -185,7 +185,8 @@ class AlignmentPlan:
     def objective(self, key: str, worker: int = 0):
         return AlignmentObjective(self.acfg, self.train, worker)
 
-    def _chosen(self, study, trial=None):
+    def chosen(self, study, trial=None):
+        """The best complete trial of ``study``, or trial number ``trial`` (complete)."""
         from fuzzynav.tuning.study import best_trials
 
         full = best_trials(study, self.acfg.study)
@@ -203,7 +204,7 @@ class AlignmentPlan:
         from fuzzynav.align.tune import tuned_rules, write_json
         from fuzzynav.tuning.study import n_finished
 
-        chosen = self._chosen(study, trial)
+        chosen = self.chosen(study, trial)
         doc, summary = tuned_rules(self.acfg, chosen.params, chosen.value, n_finished(study),
                                    self.train)
         return write_json(out, doc), summary

@@ -17,7 +17,7 @@ def write_alignment_report(plan, study, out, evaluate: bool = True) -> Path:
     from fuzzynav.align.tune import tuned_rules
     from fuzzynav.tuning.study import n_finished
 
-    acfg, best = plan.acfg, plan._chosen(study)
+    acfg, best = plan.acfg, plan.chosen(study)
     lines = [f"# Alignment study `{plan.name}`", "",
              f"Sampler `{acfg.study.sampler}` (seed {acfg.study.seed}), "
              f"{n_finished(study)} finished trials; filter `{acfg.filter}`, "

@@ -48,13 +48,13 @@ class BaselinePlan:
         return space_of(key, training_channels(self.evaluator, self.bcfg.study.train))
 
     def config(self, key: str):
-        """The study of filter ``key`` (:func:`fuzzynav.tuning.baselines._sub_config`)."""
-        from fuzzynav.tuning.baselines import _sub_config
+        """The study of filter ``key`` (:func:`fuzzynav.tuning.baselines.sub_config`)."""
+        from fuzzynav.tuning.baselines import sub_config
 
         if key not in self.parts():
             raise FuzzynavError(f"{self.path}: [baselines] tune has no searched filter {key!r}")
         if key not in self._configs:
-            self._configs[key] = _sub_config(self.bcfg.study, key, self.space(key))
+            self._configs[key] = sub_config(self.bcfg.study, key, self.space(key))
         return self._configs[key]
 
     def warm(self, processes: int = 1, progress: bool = True):
