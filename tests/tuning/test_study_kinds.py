@@ -133,6 +133,21 @@ def test_baseline_study_runs_with_two_workers_resumes_and_reaps(capsys, tmp_path
     assert doc["filters"]["huber-tuned"] == best.params and doc["trials"]["huber-tuned"] == 5
     assert read_params(tmp_path / "tuned.json")["filters"] == doc["filters"]  # it reads back
 
+    # export (elsewhere) and report read the same studies
+    out = _run(capsys, "study", "export", cfg, "--out", tmp_path / "again.json",
+               "--cache", sim_cache)
+    assert out.strip() == f"wrote {tmp_path / 'again.json'}"
+    assert json.loads((tmp_path / "again.json").read_text())["filters"] == doc["filters"]
+    out = _run(capsys, "study", "report", cfg, "--no-eval", "--cache", sim_cache)
+    assert "huber-tuned" in (tmp_path / "bl_report" / "report.md").read_text()
+
+    # a worker started as a new interpreter (where workers are not forked) finds its part
+    from fuzzynav.tuning.worker import main as worker_main
+
+    assert worker_main([str(cfg), "--total", "5", "--part", "huber-tuned",
+                        "--cache", str(sim_cache)]) == 0
+    assert len(open_study(part).get_trials(states=(TrialState.COMPLETE,))) == 5
+
 
 def test_alignment_study_runs_with_two_workers_resumes_and_reaps(capsys, tmp_path):
     from fuzzynav.align.tune import suggest
