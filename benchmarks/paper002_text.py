@@ -52,6 +52,7 @@ alignment time cut from over 300 s to under 150 s.
 fuzzynav compare paper002 --filters align-kf,align-fuzzy,align-fuzzy-fast --mc 50
 fuzzynav run paper000-nominal --filter ekf --align align-kf      # align, then navigate
 fuzzynav study run studies/align/paper002_tune.toml             # tune ROR -> t
+fuzzynav study export studies/align/paper002_tune.toml --out rules/paper002_ror_tuned.json
 python benchmarks/paper002_results.py                             # this page
 ```
 

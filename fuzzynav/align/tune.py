@@ -83,7 +83,7 @@ class Runs:
         return float(np.mean(vals)), rows
 
 
-def tuned_rules(acfg: AlignmentConfig, params: dict, value: float, trials: int,
+def tuned_rules(acfg, params: dict, value: float, trials: int,
                 train: Runs | None = None) -> tuple:
     """``(rule document, summary)`` of the candidate ``params`` (its training score
     ``value``, found in a study of ``trials`` trials): train and held-out scores against the

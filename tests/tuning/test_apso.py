@@ -13,7 +13,7 @@ from fuzzynav.experiment import run_on_log
 from fuzzynav.realdata.dataspec import DATA_DIR_ENV
 from fuzzynav.sim.log import simulate
 from fuzzynav.sim.scenario import load_scenario
-from fuzzynav.tuning.baselines import SPACES, sub_config, load_baseline_config
+from fuzzynav.tuning.baselines import SPACES, load_baseline_config, sub_config
 from fuzzynav.tuning.pso import PsoSampler, history
 from tests.tuning.studies import TINY
 

@@ -20,7 +20,7 @@ from fuzzynav.errors import InputFileError
 from fuzzynav.filters.baselines import read_params
 from fuzzynav.tuning.kinds import kind_of, load_plan
 from fuzzynav.tuning.study import open_study
-from tests.tuning.studies import RULES, ROOT, TINY
+from tests.tuning.studies import ROOT, RULES, TINY
 
 optuna.logging.set_verbosity(optuna.logging.ERROR)
 
@@ -188,16 +188,24 @@ def test_alignment_study_runs_with_two_workers_resumes_and_reaps(capsys, tmp_pat
 
 def test_an_alignment_file_with_a_bad_sampler_names_file_and_key(tmp_path):
     cfg = _alignment_study(tmp_path, sampler="nsga2-typo")
-    with pytest.raises(Exception, match="nsga2-typo"):
+    with pytest.raises(InputFileError, match=r"al\.toml: sampler: unknown sampler 'nsga2-typo'"):
         load_plan(cfg)
     cfg = _alignment_study(tmp_path, n_trials_typo=3)
     with pytest.raises(InputFileError, match=r"al\.toml.*n_trials_typo"):
         load_plan(cfg)
 
 
+def test_the_shipped_alignment_study_is_one_the_driver_runs():
+    plan = load_plan(ROOT / "studies" / "align" / "paper002_tune.toml")
+    cfg = plan.config("")
+    assert plan.kind == "alignment" and cfg.trials == 30 and cfg.seed == 2
+    assert plan.acfg.output.parent == ROOT / "studies" / "align"  # a study writes only there
+    assert len(cfg.train) == 4 and len(cfg.test) == 9
+
+
 def test_the_removed_entry_points_are_gone():
     for mod in ("fuzzynav/tuning/apso.py",):
         assert not (ROOT / mod).exists()
-    import fuzzynav.align.tune as tune
+    from fuzzynav.align import tune
 
     assert not hasattr(tune, "main") and not hasattr(tune, "tune")

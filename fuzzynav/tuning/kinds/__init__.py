@@ -29,9 +29,9 @@ A plan is a study file opened with its simulation cache.  It has
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 from fuzzynav.registry import Registry
 

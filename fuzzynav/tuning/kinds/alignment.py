@@ -65,7 +65,7 @@ def load_alignment_config(path) -> AlignmentConfig:
     """Read and check an alignment tuning file (errors name the file and the key)."""
     from fuzzynav.align.tune import SPACE
     from fuzzynav.tuning.config import PsoConfig, StudyConfig
-    from fuzzynav.tuning.samplers import get_optimiser
+    from fuzzynav.tuning.samplers import get_optimiser, optimiser_names
 
     path = Path(path)
     doc = dict(read_toml(path, "alignment tuning file"))
@@ -77,6 +77,9 @@ def load_alignment_config(path) -> AlignmentConfig:
         if t.string("kind", "alignment") != "alignment":
             raise t.error("kind", "must be \"alignment\" in an alignment tuning file")
         sampler = t.string("sampler", DEFAULT_SAMPLER)
+        if sampler not in optimiser_names():
+            raise t.error("sampler", f"unknown sampler {sampler!r}; known: "
+                                     f"{', '.join(sorted(optimiser_names()))}")
         why_not = get_optimiser(sampler).check(False)
         if why_not:
             raise t.error("sampler", why_not)
