@@ -74,7 +74,11 @@ class BaselinePlan:
         return BaselineObjective(self.config(key), self.evaluator, key, self.space(key),
                                  worker)
 
-    def finish(self, studies: dict, storage=None, out=None) -> list:
+    def finish(self, studies: dict, storage=None) -> list:
+        """Write the parameter file (the config's ``[baselines] out``)."""
+        return [f"wrote {self.write(studies)}"]
+
+    def write(self, studies: dict, out=None) -> Path:
         """Estimate ALS (if listed), take every study's best trial and write the
         parameter file (``out``: elsewhere than the config's ``[baselines] out``)."""
         from fuzzynav.tuning.baselines import best_params, train_score, write_params
@@ -99,7 +103,7 @@ class BaselinePlan:
             counts[name] = len(study.get_trials(deepcopy=False))
             if bcfg.study.sampler == "pso":
                 hist[name] = swarm_history(study, self.config(name))
-        return [f"wrote {write_params(bcfg, found, scores, counts, hist)}"]
+        return write_params(bcfg, found, scores, counts, hist)
 
     def summary(self, studies: dict) -> None:
         from fuzzynav.tuning.baseline_report import evaluate_baselines
@@ -114,7 +118,7 @@ class BaselinePlan:
         if trial is not None or pareto is not None:
             raise FuzzynavError("a baseline study exports every filter's best trial: "
                                 "--trial and --pareto do not apply")
-        return [Path(line.split(" ", 1)[1]) for line in self.finish(studies, out=out)]
+        return [self.write(studies, out)]
 
     def report(self, studies: dict, out, evaluate: bool = True):
         from fuzzynav.tuning.baseline_report import write_baseline_report
