@@ -67,6 +67,22 @@ def register_kind(kind: StudyKind) -> StudyKind:
     return KINDS.add(kind.name, kind)
 
 
+def study_settings(path, name: str, *, sampler: str, seed: int, trials: int, storage: str = "",
+                   stale_after_s: float = 300.0, train=(), test=(), space=(), **more):
+    """The :class:`~fuzzynav.tuning.config.StudyConfig` of a kind's study that has none of a
+    fuzzy study's controllers, weights or baseline filter: what the driver reads (name,
+    storage, sampler, seed, trials, stale-trial period; ``train``: what ``n_runs`` of a
+    complete trial counts), no pruner, one objective.  ``more``: other fields to set."""
+    from fuzzynav.tuning.config import PsoConfig, StudyConfig
+
+    fields = dict(name=name, description="", path=Path(path).resolve(), sampler=sampler,
+                  seed=seed, trials=trials, pruner="none", multi_objective=False,
+                  storage=storage, stale_after_s=stale_after_s, pso=PsoConfig(), weights={},
+                  baseline="", t_start_s=0.0, train=tuple(train), test=tuple(test),
+                  compare=(), controllers=(), space=tuple(space))
+    return StudyConfig(**{**fields, **more})
+
+
 def kind_of(path) -> StudyKind:
     """The kind of the study file ``path`` (read once, not checked beyond that)."""
     from fuzzynav.sim.tomltable import read_toml

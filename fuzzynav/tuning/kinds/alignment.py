@@ -14,7 +14,7 @@ from pathlib import Path
 from fuzzynav.errors import FuzzynavError, InputFileError
 from fuzzynav.fileio import study_output
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
-from fuzzynav.tuning.kinds import StudyKind, register_kind
+from fuzzynav.tuning.kinds import StudyKind, register_kind, study_settings
 from fuzzynav.tuning.objective import TrialObjective
 
 #: the sampler of an alignment study unless its file names one (Optuna's default TPE,
@@ -64,7 +64,6 @@ def _names(doc: dict, key: str, kind, path) -> list:
 def load_alignment_config(path) -> AlignmentConfig:
     """Read and check an alignment tuning file (errors name the file and the key)."""
     from fuzzynav.align.tune import SPACE
-    from fuzzynav.tuning.config import PsoConfig, StudyConfig
     from fuzzynav.tuning.samplers import get_optimiser, optimiser_names
 
     path = Path(path)
@@ -83,18 +82,16 @@ def load_alignment_config(path) -> AlignmentConfig:
         why_not = get_optimiser(sampler).check(False)
         if why_not:
             raise t.error("sampler", why_not)
-        study = StudyConfig(
-            name=t.string("name", path.stem), description=t.string("description", ""),
-            path=path.resolve(), sampler=sampler,
+        study = study_settings(
+            path, t.string("name", path.stem), sampler=sampler,
             seed=t.integer("sampler_seed", 0, lo=0),
-            trials=t.integer("n_trials", 30, lo=1, hi=100000), pruner="none",
-            multi_objective=False, storage=t.string("storage", ""),
+            trials=t.integer("n_trials", 30, lo=1, hi=100000), storage=t.string("storage", ""),
             stale_after_s=t.number("stale_after_s", 300.0, lo=0.0, lo_open=True),
-            pso=PsoConfig(), weights={}, baseline="paper rules", t_start_s=0.0,
-            train=tuple((s, d) for s in lists["train"] for d in lists["train_seeds"]),
-            test=tuple((s, d) for s in lists["test"] for d in lists["test_seeds"]),
-            compare=(), controllers=(), filter=t.string("filter", "align-fuzzy"),
-            space=tuple((k, lo, hi, kind) for k, (lo, hi, kind) in SPACE.items()))
+            train=((s, d) for s in lists["train"] for d in lists["train_seeds"]),
+            test=((s, d) for s in lists["test"] for d in lists["test_seeds"]),
+            space=((k, lo, hi, kind) for k, (lo, hi, kind) in SPACE.items()),
+            description=t.string("description", ""), baseline="paper rules",
+            filter=t.string("filter", "align-fuzzy"))
         if not study.train:
             raise t.error("train", "the study needs at least one training run "
                                    "(train and train_seeds)")
