@@ -1,7 +1,7 @@
 """The alignment study: paper 002's ROR -> t rules of the fuzzy alignment filter.
 
-A file with ``kind = "alignment"`` (or a top-level ``template``)
-is one Optuna study run by the one driver; a trial is a candidate rule set scored on the
+A file with ``kind = "alignment"`` (or a top-level ``template``) is one Optuna study run by
+the one driver; a trial is a candidate rule set scored on the
 simulated alignment runs (:class:`AlignmentObjective`).
 :meth:`AlignmentPlan.finish` writes the tuned rule file with its ``expected`` block.
 """
@@ -130,24 +130,14 @@ class AlignmentObjective(TrialObjective):
         self.acfg, self.train = acfg, train
 
     def _run(self, trial):
-        self.claim(trial)
         from fuzzynav.align.tune import candidate, suggest
         from fuzzynav.fuzzy import load_fis
 
+        self.claim(trial)
         fis = load_fis(candidate(self.acfg.template_doc, suggest(trial)))
         value = self.train.score(fis, self.acfg.filter, self.acfg.azimuth_weight)[0]
         trial.set_user_attr("n_runs", len(self.train.items))
         return value
-
-
-def _names(doc: dict, key: str, kind, path) -> list:
-    value = doc.pop(key, [])
-    if not isinstance(value, list) or not all(isinstance(v, kind) and not isinstance(v, bool)
-                                              for v in value):
-        raise InputFileError(str(path), key, f"must be an array of {kind.__name__}")
-    return value
-
-
 
 
 class AlignmentPlan:
