@@ -1,7 +1,7 @@
 """Paper 004's APSO study: particle-iterations per minute with warm kernels and loaded data.
 
 Runs the swarm of ``studies/paper004_apso.toml`` (a baseline study on the PSO sampler,
-:func:`fuzzynav.tuning.baselines.tune_one`, as ``fuzzynav study run`` does) with its
+:func:`fuzzynav.tuning.run.run_study`, as ``fuzzynav study run`` does) with its
 particles and iterations set to make ``--budget`` particle-iterations (10 x 10 for 100),
 after the training recordings were loaded and the kernels compiled: the state of a user's
 second run.  Each particle-iteration is one fitness, i.e. one run of the SINS/DVL EKF on
@@ -25,8 +25,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _report import machine, write_section  # noqa: E402
 
 from fuzzynav.errors import DataMissingError, FuzzynavError  # noqa: E402
-from fuzzynav.tuning.baselines import load_baseline_config, tune_one  # noqa: E402
-from fuzzynav.tuning.objective import Evaluator  # noqa: E402
+from fuzzynav.tuning.baselines import load_baseline_config  # noqa: E402
+from fuzzynav.tuning.kinds.baselines import BaselinePlan  # noqa: E402
+from fuzzynav.tuning.run import run_study  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "studies" / "paper004_apso.toml"
@@ -49,7 +50,8 @@ def main(argv=None):
     ap.add_argument("--no-write", action="store_true", help="print, leave docs/ alone")
     args = ap.parse_args(argv)
     bcfg = shaped(load_baseline_config(CONFIG), args.budget)
-    ev = Evaluator(bcfg.study)
+    plan = BaselinePlan(bcfg)
+    ev = plan.evaluator
     t0 = time.perf_counter()
     try:
         logs = [ev.log(sc, sd) for sc, sd in bcfg.study.train]
@@ -58,11 +60,14 @@ def main(argv=None):
         return 0
     t_logs = time.perf_counter() - t0
     with tempfile.TemporaryDirectory() as tmp:
-        warm = dataclasses.replace(bcfg, study=dataclasses.replace(bcfg.study, name="warm"))
-        tune_one(warm, "apso", 2, f"journal:{tmp}/warm.journal", ev)   # kernels compiled
+        # (random: a PSO study would run a whole swarm; the same objective, the same kernels)
+        warm = dataclasses.replace(plan.config("apso"), name="warm", sampler="random")
+        run_study(warm, 2, 1, f"journal:{tmp}/warm.journal", plan=plan, part="apso",
+                  progress=False)   # kernels compiled
         t_warm = time.perf_counter() - t0 - t_logs
         load0, c0, t1 = os.getloadavg()[0], time.process_time(), time.perf_counter()
-        study = tune_one(bcfg, "apso", None, f"journal:{tmp}/bench.journal", ev)
+        study = run_study(plan.config("apso"), None, 1, f"journal:{tmp}/bench.journal",
+                          plan=plan, part="apso", progress=False)
         secs, cpu = time.perf_counter() - t1, time.process_time() - c0
         best = study.best_value
     n_pi = bcfg.study.pso.particles * bcfg.study.pso.iterations
@@ -74,7 +79,7 @@ def main(argv=None):
         f"{bcfg.study.pso.particles} particles x {bcfg.study.pso.iterations} iterations = "
         f"{n_pi} particle-iterations, each a fitness of {len(logs)} training recordings "
         f"(A-KIT 1-4, {run_s:.0f} s, {samples / n_pi:,.0f} IMU samples in all), one process, through "
-        f"`tune_one` as `fuzzynav study run` does; recordings loaded ({t_logs:.1f} s) and "
+        f"`run_study` as `fuzzynav study run` does; recordings loaded ({t_logs:.1f} s) and "
         f"kernels warm ({t_warm:.1f} s) beforehand. Machine: {machine()}; load average "
         f"{load0:.2f} at the start, {os.getloadavg()[0]:.2f} at the end.", "",
         "| particle-iterations | wall time (s) | CPU time (s) | particle-iterations/min "

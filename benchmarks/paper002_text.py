@@ -25,7 +25,7 @@ def _n(runs, scn):
 
 def _tuned_summary() -> str:
     if not TUNED.exists():
-        return "No tuned rule file yet (`python -m fuzzynav.align.tune studies/align/paper002_tune.toml`)."
+        return "No tuned rule file yet (`fuzzynav study run studies/align/paper002_tune.toml`)."
     prov = json.loads(TUNED.read_text())["provenance"]
     o = prov["objective"]
     test = o.get("test") or {}
@@ -51,7 +51,8 @@ alignment time cut from over 300 s to under 150 s.
 ```
 fuzzynav compare paper002 --filters align-kf,align-fuzzy,align-fuzzy-fast --mc 50
 fuzzynav run paper000-nominal --filter ekf --align align-kf      # align, then navigate
-python -m fuzzynav.align.tune studies/align/paper002_tune.toml   # tune ROR -> t
+fuzzynav study run studies/align/paper002_tune.toml             # tune ROR -> t
+fuzzynav study export studies/align/paper002_tune.toml --out rules/paper002_ror_tuned.json
 python benchmarks/paper002_results.py                             # this page
 ```
 
@@ -152,10 +153,11 @@ Runs never within 10 arcmin to the end: {', '.join(f'{f} {n}' for f, n in nv.ite
                    + ", ".join(f"{f} {n}" for f, n in never(runs[v][1]).items()) + "\n")
     out.append("## Tuning the ROR → t controller\n\n" + _tuned_summary() + """
 
-The study is a small Optuna driver (`fuzzynav/align/tune.py`), not a `fuzzynav study` file:
-the study machinery scores navigation filters against the EKF and cannot express an
-alignment objective without larger changes to `fuzzynav/tuning`. The tuned file carries an
-`expected` block (`kind = "alignment"`) re-run by `tests/align/test_tuned_rules.py`.
+The study is an alignment study file (`kind = "alignment"`) run by `fuzzynav study run`, the
+one study driver of every study kind (`fuzzynav/tuning/kinds/alignment.py`; workers, journal or
+PostgreSQL storage, resume, `study export` and `study report` as for the other studies). The
+tuned file carries an `expected` block (`kind = "alignment"`) re-run by
+`tests/align/test_tuned_rules.py`.
 """)
     out.append("## Figures\n\nMisalignment errors (truth − estimate) and the filter's ±3σ "
                "for the plain KF (left) and the fuzzy filter (right), one seed:\n")

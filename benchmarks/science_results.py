@@ -60,14 +60,13 @@ METRICS = ("rms_pos_m", "rms_vel_mps", "rms_att_deg")
 
 # -- tuning ------------------------------------------------------------------------------------
 def tune_baselines(trials: int, work: Path, cache: str):
-    from fuzzynav.tuning.baselines import load_baseline_config, run_baselines
+    from fuzzynav.tuning.baselines import load_baseline_config
+    from fuzzynav.tuning.kinds.baselines import run_baselines
 
     bcfg = load_baseline_config(BASELINES)
     study = replace(bcfg.study, trials=trials, storage=f"journal:{work / 'baselines.journal'}")
     bcfg = replace(bcfg, study=study)
-    run_baselines(bcfg, cache_dir=cache,
-                  progress=lambda n, d, t: print(f"\r{n}: {d}/{t}", end="", file=sys.stderr))
-    print(file=sys.stderr)
+    run_baselines(bcfg, cache_dir=cache, progress=True)
     return bcfg
 
 

@@ -29,7 +29,7 @@ ALLOWED = {
     "align": {"experiment", "filters", "fuzzy", "sim", "metrics", "report", "nav"},
     "realdata": {"filters", "sim", "metrics", "report", "nav", "plots"},
     "tuning": {"experiment", "filters", "fuzzy", "sim", "metrics", "report", "nav", "plots",
-               "realdata"},
+               "realdata", "align"},
     "claims": {"experiment", "filters", "sim", "metrics", "nav"},
     "plots": {"fuzzy", "nav", "metrics"},
     "cli": {"experiment", "filters", "fuzzy", "sim", "metrics", "report", "nav", "tuning",

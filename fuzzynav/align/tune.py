@@ -1,10 +1,14 @@
-"""Tune the ROR -> t controller of the fuzzy alignment filter with Optuna (a small driver).
+"""Tuning the ROR -> t controller of the fuzzy alignment filter: the alignment study kind.
 
-``python -m fuzzynav.align.tune studies/align/paper002_tune.toml`` runs the study (TPE,
-in memory), prints train and held-out scores of the tuned controller against the paper's
-hand rules, and writes the tuned rule file with its provenance and an ``expected`` block
-(``kind = "alignment"``: one scenario and seed, its metrics) that
-``tests/align/test_tuned_rules.py`` re-runs.
+The alignment-side pieces of the alignment study (its search space, the candidate rule
+document, the scored runs, the tuned rule file); the study file, its objective and its runs
+are :mod:`fuzzynav.tuning.kinds.alignment`.  ``fuzzynav study run
+studies/align/paper002_tune.toml`` runs the study with the one study driver (workers,
+journal or PostgreSQL storage, reaping, resume), prints train and held-out scores of the tuned controller against the
+paper's hand rules, and writes the tuned rule file with its provenance and an ``expected``
+block (``kind = "alignment"``: one scenario and seed, its metrics) that
+``tests/align/test_tuned_rules.py`` re-runs.  ``fuzzynav study export`` writes the rule file
+of the best (or a chosen) trial elsewhere, ``fuzzynav study report`` a trials table.
 
 The search space keeps the paper's three rules and changes only numbers: the centre of
 t's ``less1`` in [0.5, 0.99] and of ``more1`` in [1.01, 2.0] (``equal1`` stays at 1 so that a
@@ -16,7 +20,6 @@ from __future__ import annotations
 import copy
 import datetime
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -24,12 +27,14 @@ import numpy as np
 from fuzzynav import __version__
 from fuzzynav.align import run as R
 from fuzzynav.align.experiment import metrics
-from fuzzynav.align.fuzzy_r import FuzzyRScaling
 from fuzzynav.align.scenario import load_alignment_scenario
-from fuzzynav.fileio import publish, study_output
+from fuzzynav.fileio import publish
 from fuzzynav.fuzzy import load_fis
-from fuzzynav.errors import InputFileError
-from fuzzynav.sim.tomltable import Table, read_toml, with_path
+
+#: the searched numbers: key -> (low, high, kind), in the order they are drawn
+SPACE = {"t_less": (0.5, 0.99, "linear"), "t_more": (1.01, 2.0, "linear"),
+         "more_start": (1.0, 2.0, "linear"), "more_rise": (0.2, 2.0, "linear"),
+         "window": (3, 30, "int")}
 
 
 def candidate(template: dict, p: dict) -> dict:
@@ -48,6 +53,12 @@ def candidate(template: dict, p: dict) -> dict:
     doc["inputs"][0]["range"] = [0.0, max(b + 1.0, 3.0)]
     doc["binding"]["window"] = int(p["window"])
     return doc
+
+
+def suggest(trial) -> dict:
+    """Draw one candidate's numbers from an Optuna trial (:data:`SPACE`)."""
+    return {k: (trial.suggest_int(k, lo, hi) if kind == "int" else
+                trial.suggest_float(k, lo, hi)) for k, (lo, hi, kind) in SPACE.items()}
 
 
 class Runs:
@@ -72,91 +83,41 @@ class Runs:
         return float(np.mean(vals)), rows
 
 
-def _names(doc: dict, key: str, kind, path) -> list:
-    value = doc.pop(key, [])
-    if not isinstance(value, list) or not all(isinstance(v, kind) and not isinstance(v, bool)
-                                              for v in value):
-        raise InputFileError(str(path), key, f"must be an array of {kind.__name__}")
-    return value
-
-
-def _config(path: Path) -> dict:
-    doc = read_toml(path, "alignment tuning file")
-    lists = {k: _names(doc, k, str if k in ("train", "test") else int, path)
-             for k in ("train", "test", "train_seeds", "test_seeds")}
-    t = Table(doc)
-    here = path.parent
-    cfg = {"template": (here / t.string("template")).resolve(),
-           "output": study_output(t.string("output"), path, "output").resolve(),
-           "filter": t.string("filter", "align-fuzzy"),
-           "n_trials": t.integer("n_trials", 30, lo=1, hi=100000),
-           "sampler_seed": t.integer("sampler_seed", 0, lo=0),
-           "azimuth_weight": t.number("azimuth_weight", 1.0, lo=0.0),
-           "train": [(s, d) for s in lists["train"] for d in lists["train_seeds"]],
-           "test": [(s, d) for s in lists["test"] for d in lists["test_seeds"]],
-           "expected": (t.string("expected_scenario"), t.integer("expected_seed", lo=0))}
-    with with_path(str(path)):
-        t.finish()
-    return cfg
-
-
-def tune(path) -> dict:
-    """Run the study of a tuning file; write the tuned rule file; return a summary."""
-    import optuna
-
-    path = Path(path)
-    cfg = _config(path)
-    template = json.loads(cfg["template"].read_text(encoding="utf-8"))
-    train = Runs(cfg["train"])
-    filt, w = cfg["filter"], cfg["azimuth_weight"]
-
-    def objective(trial):
-        p = {"t_less": trial.suggest_float("t_less", 0.5, 0.99),
-             "t_more": trial.suggest_float("t_more", 1.01, 2.0),
-             "more_start": trial.suggest_float("more_start", 1.0, 2.0),
-             "more_rise": trial.suggest_float("more_rise", 0.2, 2.0),
-             "window": trial.suggest_int("window", 3, 30)}
-        return train.score(load_fis(candidate(template, p)), filt, w)[0]
-
-    optuna.logging.set_verbosity(optuna.logging.WARNING)
-    study = optuna.create_study(sampler=optuna.samplers.TPESampler(seed=cfg["sampler_seed"]))
-    study.optimize(objective, n_trials=cfg["n_trials"])
-    doc = candidate(template, study.best_params)
-    test = Runs(cfg["test"])
-    summary = {"train": {"paper": train.score(load_fis(template), filt, w)[0],
-                         "tuned": study.best_value},
-               "test": ({"paper": test.score(load_fis(template), filt, w)[0],
+def tuned_rules(acfg, params: dict, value: float, trials: int,
+                train: Runs | None = None) -> tuple:
+    """``(rule document, summary)`` of the candidate ``params`` (its training score
+    ``value``, found in a study of ``trials`` trials): train and held-out scores against the
+    paper's rules, provenance and the ``expected`` block."""
+    filt, w = acfg.filter, acfg.azimuth_weight
+    paper = load_fis(acfg.template_doc)
+    train = train if train is not None else Runs(acfg.study.train)
+    doc = candidate(acfg.template_doc, params)
+    test = Runs(acfg.study.test)
+    summary = {"train": {"paper": train.score(paper, filt, w)[0], "tuned": value},
+               "test": ({"paper": test.score(paper, filt, w)[0],
                          "tuned": test.score(load_fis(doc), filt, w)[0]} if test.items else {}),
-               "best_params": study.best_params}
-    exp = Runs([cfg["expected"]])
-    _, rows = exp.score(load_fis(doc), filt, w)
+               "best_params": dict(params)}
+    _, rows = Runs([acfg.expected]).score(load_fis(doc), filt, w)
     doc["name"] = "paper002-ror-tuned"
-    doc["provenance"] = {"source": "fuzzynav.align.tune", "config": str(path),
-                         "template": str(cfg["template"].name), "filter": filt,
-                         "trials": cfg["n_trials"], "objective": summary,
-                         "train": cfg["train"], "test": cfg["test"],
+    doc["provenance"] = {"source": "fuzzynav study run", "config": str(acfg.study.path),
+                         "template": str(acfg.template.name), "filter": filt,
+                         "trials": trials, "objective": summary,
+                         "train": [list(r) for r in acfg.study.train],
+                         "test": [list(r) for r in acfg.study.test],
                          "package_version": __version__,
                          "created": datetime.datetime.now(datetime.timezone.utc).isoformat(
                              timespec="seconds")}
-    doc["expected"] = {"kind": "alignment", "scenario": cfg["expected"][0],
-                       "seed": cfg["expected"][1], "filter": filt,
+    doc["expected"] = {"kind": "alignment", "scenario": acfg.expected[0],
+                       "seed": acfg.expected[1], "filter": filt,
                        "metrics": {k: v for k, v in rows[0].items()
                                    if k not in ("scenario", "seed")}}
-    _write_json(cfg["output"], doc)
-    return summary
+    return doc, summary
 
 
-def _write_json(path: Path, doc: dict) -> None:
+def write_json(path: Path, doc: dict) -> Path:
+    """Write ``doc`` to ``path`` through a temporary file (never half-written)."""
+    path = Path(path)
     tmp = path.with_name(f".{path.name}.tmp")
     tmp.write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
     publish(tmp, path)
-
-
-def main(argv=None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
-    print(json.dumps(tune(argv[0]), indent=2))
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
+    return path

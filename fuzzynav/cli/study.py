@@ -1,18 +1,22 @@
-"""``fuzzynav study run | export | report``: learn rules with Optuna (or PSO), export, inspect."""
+"""``fuzzynav study run | export | report``: learn rules with Optuna (or PSO), export, inspect.
+
+One driver for every kind of study file (:mod:`fuzzynav.tuning.kinds`): fuzzy controllers,
+classical baselines (``[baselines]``, paper 004's APSO among them) and the alignment
+filter's rules (``kind = "alignment"``).
+"""
 from __future__ import annotations
 
 import os
 from pathlib import Path
 
 from fuzzynav.cli.values import check_count
-from fuzzynav.errors import FuzzynavError
 
 #: more worker processes than this only queue on the machine's cores (and its memory)
 MAX_WORKERS = 4 * (os.cpu_count() or 1)
 
 
 def register(sub) -> None:
-    p = sub.add_parser("study", help="tune fuzzy rules: run, export, report")
+    p = sub.add_parser("study", help="tune rules or filters: run, export, report")
     ss = p.add_subparsers(dest="study_command", metavar="ACTION")
     ss.required = True
     r = ss.add_parser("run", help="run (or resume) a study until it holds --trials trials")
@@ -44,91 +48,52 @@ def _common(p) -> None:
     p.add_argument("--cache", default=str(default_cache_dir()), help="simulation cache")
 
 
-def _load(args):
-    from fuzzynav.tuning.config import load_study_config
+def _plan(args):
+    """The plan of the study file (:mod:`fuzzynav.tuning.kinds`: fuzzy, baselines or
+    alignment -- the same driver, storages, workers and outputs for each)."""
+    from fuzzynav.tuning.kinds import load_plan
 
-    return load_study_config(args.config)
-
-
-def _open(cfg, args):
-    from fuzzynav.tuning.study import open_study
-
-    return open_study(cfg, args.storage)  # a missing study: FuzzynavError, no file created
+    return load_plan(args.config, args.cache)
 
 
-def _baseline_study(args):
-    """The ``run`` / ``report`` module of a baseline study file, or None (a fuzzy study)."""
-    from fuzzynav.tuning.baselines import is_baseline_config
+def _open(plan, args) -> dict:
+    from fuzzynav.tuning.run import open_plan_studies
 
-    if not is_baseline_config(args.config):
-        return None
-    from fuzzynav.tuning import baseline_report
-
-    return baseline_report
+    return open_plan_studies(plan, args.storage)  # a missing study: error, no file created
 
 
 def _cmd_run(args) -> int:
     from fuzzynav.tuning.warmup import compile_by_running, compiling
 
-    if _baseline_study(args) is not None:
-        return _baseline_study(args).cmd_run(args)
     check_count("--trials", args.trials)
     check_count("--workers", args.workers, hi=MAX_WORKERS)
     with compiling() as cold:  # a cold kernel cache: loading the config already compiles
-        cfg = _load(args)
-        if cold:
-            compile_by_running(cfg, args.cache)
-    from fuzzynav.tuning.run import run_study
+        plan = _plan(args)
+        if cold and plan.kind == "fuzzy":
+            compile_by_running(plan.cfg, args.cache)
+    from fuzzynav.tuning.run import run_plan
 
-    study = run_study(cfg, args.trials, args.workers, args.storage, args.cache)
-    print(f"study {cfg.name}: {len(study.trials)} trials in {args.storage or cfg.storage_url}")
+    studies, lines = run_plan(plan, args.trials, args.workers, args.storage)
+    for line in lines:
+        print(line)
     if not args.no_summary:
-        _print_summary(cfg, study, args.cache)
+        plan.summary(studies)
     return 0
 
 
-def _print_summary(cfg, study, cache):
-    from fuzzynav.tuning.evaluate import format_summary, run_table
-    from fuzzynav.tuning.export import choose_trial, systems_of
-    from fuzzynav.tuning.objective import Evaluator
-
-    try:
-        trial = choose_trial(study, cfg)
-    except FuzzynavError as exc:  # e.g. every trial so far failed or was pruned
-        print(f"no summary: {exc}")
-        return
-    print(f"best trial {trial.number}: score "
-          f"{trial.values if cfg.multi_objective else round(trial.value, 4)} "
-          f"(ratios to {cfg.baseline}: "
-          + ", ".join(f"{k} {v:.3f}" for k, v in (trial.user_attrs.get('ratios') or {}).items())
-          + ")")
-    ev = Evaluator(cfg, cache)
-    systems = systems_of(cfg, trial)
-    compare = tuple(f for f in dict.fromkeys(cfg.compare) if f != cfg.baseline)
-    train = run_table(ev, systems, cfg.train, compare)
-    test = run_table(ev, systems, cfg.test, compare)
-    print("mean ratio of RMS error to the EKF (95 % CI over runs; < 1 beats the EKF):")
-    print(format_summary(train, test))
-
-
 def _cmd_export(args) -> int:
-    from fuzzynav.tuning.export import export_rules
-
-    cfg = _load(args)
-    paths = export_rules(cfg, _open(cfg, args), args.out, args.trial, args.pareto, args.cache)
-    for p in paths:
+    plan = _plan(args)
+    for p in plan.export(_open(plan, args), args.out, args.trial, args.pareto):
         print(f"wrote {p}")
     return 0
 
 
 def _cmd_report(args) -> int:
-    from fuzzynav.tuning.report import write_report
-
-    if _baseline_study(args) is not None:
-        return _baseline_study(args).cmd_report(args)
-    cfg = _load(args)
-    out = args.out or (Path(args.config).parent / f"{cfg.name}_report")
-    path = write_report(cfg, _open(cfg, args), out, args.cache, evaluate=not args.no_eval)
+    plan = _plan(args)
+    out = args.out or (Path(args.config).parent / f"{plan.name}_report")
+    path = plan.report(_open(plan, args), out, evaluate=not args.no_eval)
     print(f"wrote {path}")
-    print(f"interactive: optuna-dashboard {(args.storage or cfg.storage_url).replace('journal:', '')}")
+    url = args.storage or (plan.config(plan.parts()[0]).storage_url if plan.parts() else None)
+    if url:
+        print(f"interactive: optuna-dashboard {url.replace('journal:', '')}")
     return 0

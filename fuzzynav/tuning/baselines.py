@@ -9,7 +9,8 @@ tables of a fuzzy study (``docs/studies.md``) and, instead of ``[[controllers]]`
     out = "paper000_baselines.json"     # relative to the study file
 
 Each tuned filter (:data:`fuzzynav.filters.baselines.TUNED`) gets its own Optuna study
-``<name>.<filter>`` in the same storage, with the configured sampler, pruner and number of
+``<name>.<filter>`` in the same storage, run by the one study driver (workers, reaping,
+resume: :mod:`fuzzynav.tuning.kinds.baselines`), with the configured sampler, pruner and number of
 trials, scored exactly as a fuzzy candidate (:class:`~fuzzynav.tuning.objective.Evaluator`:
 weighted mean of RMS ratios to the baseline filter on the training runs).  ``als`` is not
 searched: its Q and R come from autocovariance least squares on the training runs
@@ -33,7 +34,7 @@ from fuzzynav.filters.baselines import Q_FIELDS, TUNED
 from fuzzynav.filters.params_file import PARAMS_FORMAT, check_params
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
 from fuzzynav.tuning.config import study_config_from_dict
-from fuzzynav.tuning.objective import Evaluator
+from fuzzynav.tuning.objective import TrialObjective
 
 #: filters a baseline study can tune: the searched ones, the ALS estimate and paper 004's
 #: APSO (the ``apso`` filter's Q/R multipliers, best with ``sampler = "pso"``)
@@ -128,21 +129,36 @@ def run_params(evaluator, name: str, params: dict, scenario: str, seed: int) -> 
     return run_on_log(log, name, setup=setup, t_start_s=t0).metrics
 
 
-class BaselineObjective:
-    """Optuna objective of one tuned filter (pruned like a fuzzy study's trials)."""
+class BaselineObjective(TrialObjective):
+    """Optuna objective of one tuned filter (pruned like a fuzzy study's trials).
 
-    def __init__(self, evaluator, name: str, space: dict):
+    Parameters
+    ----------
+    cfg : StudyConfig
+        The filter's study (:func:`sub_config`).
+    evaluator : Evaluator
+        Shared by every filter of the baseline study.
+    name : str
+        The tuned filter.
+    space : dict
+        Its searched parameters (:func:`space_of`).
+    worker : int
+    """
+
+    def __init__(self, cfg, evaluator, name: str, space: dict, worker: int = 0):
+        super().__init__(cfg, worker)
         self.evaluator, self.name, self.space = evaluator, name, space
 
-    def __call__(self, trial):
+    def _run(self, trial):
+        self.claim(trial)
         params = suggest(trial, self.space)
-        cfg = self.evaluator.config
-        runs = list(enumerate(cfg.train))
+        runs = list(enumerate(self.cfg.train))
         np.random.default_rng(trial.number).shuffle(runs)
         scores = []
         for step, (scenario, seed) in runs:
             m = run_params(self.evaluator, self.name, params, scenario, seed)
             scores.append(self.evaluator.judge(m, scenario, seed).score)
+            self._beat(trial)
             trial.report(scores[-1], step=step)
             if trial.should_prune():
                 break
@@ -150,31 +166,13 @@ class BaselineObjective:
         return float(np.mean(scores))
 
 
-def _sub_config(cfg, name: str, space=None):
+def sub_config(cfg, name: str, space=None):
     """The study of one tuned filter (its parameters as ``space``, for a PSO swarm)."""
     from dataclasses import replace
 
     kinds = {True: "log", False: "linear", "int": "int"}
     flat = tuple((k, lo, hi, kinds[kind]) for k, (lo, hi, kind) in (space or {}).items())
     return replace(cfg, name=f"{cfg.name}.{name}", multi_objective=False, space=flat)
-
-
-def tune_one(bcfg: BaselineConfig, name: str, trials=None, storage=None, evaluator=None,
-             progress=None):
-    """Run (or resume) the Optuna study of tuned filter ``name``; returns the study."""
-    from fuzzynav.tuning.study import n_finished, open_study
-
-    evaluator = evaluator or Evaluator(bcfg.study)
-    space = space_of(name, training_channels(evaluator, bcfg.study.train))
-    cfg = _sub_config(bcfg.study, name, space)
-    study = open_study(cfg, storage, create=True)
-    objective = BaselineObjective(evaluator, name, space)
-    total = int(trials or cfg.trials)
-    while n_finished(study) < total:
-        study.optimize(objective, n_trials=1, catch=(FloatingPointError, ValueError))
-        if progress is not None:
-            progress(name, n_finished(study), total)
-    return study
 
 
 def best_params(bcfg: BaselineConfig, study) -> tuple:
@@ -204,34 +202,8 @@ def write_params(bcfg: BaselineConfig, found: dict, scores: dict, trials: dict,
                         what="tuned-parameter file")
 
 
-def run_baselines(bcfg: BaselineConfig, trials=None, storage=None, cache_dir=None,
-                  progress=None) -> Path:
-    """Tune every filter of the config (ALS: estimate) and write their parameter file."""
-    from fuzzynav.tuning.pso import history as swarm_history
-
-    ev = Evaluator(bcfg.study, cache_dir)
-    found, scores, counts, hist = {}, {}, {}, {}
-    for name in bcfg.tune:
-        if name == "als":
-            from fuzzynav.tuning.als_fit import als_params
-
-            found[name] = als_params(ev, bcfg.study.train)
-            if not found[name]:  # an empty entry would run as the plain EKF and score 1.0
-                raise FuzzynavError("[baselines] tune = 'als': the training runs have no "
-                                    "GNSS receiver, the only sensor ALS estimates R for; "
-                                    "drop 'als' from tune")
-            scores[name] = _train_score(ev, name, found[name])
-            counts[name] = 0
-            continue
-        study = tune_one(bcfg, name, trials, storage, ev, progress)
-        found[name], scores[name] = best_params(bcfg, study)
-        counts[name] = len(study.get_trials(deepcopy=False))
-        if bcfg.study.sampler == "pso":
-            hist[name] = swarm_history(study, bcfg.study)
-    return write_params(bcfg, found, scores, counts, hist)
-
-
-def _train_score(ev, name: str, params: dict) -> float:
+def train_score(ev, name: str, params: dict) -> float:
+    """The mean training score of filter ``name`` with ``params`` (as a trial's)."""
     runs = ev.config.train
     return float(np.mean([ev.judge(run_params(ev, name, params, sc, sd), sc, sd).score
                           for sc, sd in runs]))

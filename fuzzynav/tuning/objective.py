@@ -192,20 +192,25 @@ class Evaluator:
         return self.judge(self.run_systems(systems, scenario, seed).metrics, scenario, seed)
 
 
-class Objective:
-    """Callable Optuna objective of a study config (one per worker process).
+class TrialObjective:
+    """What every study kind's Optuna objective shares: the trust features of a worker.
 
-    Single objective: the mean score over the training runs, each run's score reported with
-    a stable step id in a per-trial shuffled order so that a pruner may stop the trial; a
-    pruned trial returns the mean of the runs done so far and records ``n_runs``.
-    Multi-objective: the three mean group ratios; ``robust``: the mean score and the worst
-    training scenario's mean score (:func:`fuzzynav.tuning.pareto.accuracy_and_worst`).
+    A subclass implements ``_run(trial)`` (score the trial's candidate, set ``n_runs``);
+    this base names the worker as the trial's owner (:meth:`claim`, read by
+    :func:`fuzzynav.tuning.study.reap_stale`), records heartbeats (:meth:`_beat`) and keeps
+    the number of the trial being run and the exception that failed it (read by the
+    worker loop, :func:`fuzzynav.tuning.study.run_worker`).
+
+    Parameters
+    ----------
+    cfg : StudyConfig
+        The study (its ``stale_after_s`` sets the heartbeat period).
+    worker : int
+        The worker's index (recorded in each trial it claims).
     """
 
-    def __init__(self, cfg, cache_dir=None, worker: int = 0, evaluator=None):
+    def __init__(self, cfg, worker: int = 0):
         self.cfg = cfg
-        self.spaces = [ControllerSpace.from_config(c) for c in cfg.controllers]
-        self.evaluator = evaluator if evaluator is not None else Evaluator(cfg, cache_dir)
         self.worker = worker
         self.current = None       # number of the trial being run (or last run) here
         self.last_error = None    # the exception that failed the last trial here
@@ -239,6 +244,25 @@ class Objective:
         trial.set_user_attr("worker", self.worker)
         self._beat(trial, force=True)
         self._claimed = trial.number
+
+    def _run(self, trial):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+
+class Objective(TrialObjective):
+    """Callable Optuna objective of a fuzzy study config (one per worker process).
+
+    Single objective: the mean score over the training runs, each run's score reported with
+    a stable step id in a per-trial shuffled order so that a pruner may stop the trial; a
+    pruned trial returns the mean of the runs done so far and records ``n_runs``.
+    Multi-objective: the three mean group ratios; ``robust``: the mean score and the worst
+    training scenario's mean score (:func:`fuzzynav.tuning.pareto.accuracy_and_worst`).
+    """
+
+    def __init__(self, cfg, cache_dir=None, worker: int = 0, evaluator=None):
+        super().__init__(cfg, worker)
+        self.spaces = [ControllerSpace.from_config(c) for c in cfg.controllers]
+        self.evaluator = evaluator if evaluator is not None else Evaluator(cfg, cache_dir)
 
     def _run(self, trial):
         self.claim(trial)

@@ -27,7 +27,6 @@ from fuzzynav.errors import FuzzynavError
 from fuzzynav.tuning.prefetch import warm_shared
 from fuzzynav.tuning.samplers import get_optimiser
 from fuzzynav.tuning.study import n_finished, open_study, reap_orphans, run_worker
-from fuzzynav.tuning.warmup import warm_up
 
 #: a worker is started with this program instead of ``python -m``, which would put the
 #: current directory first on its import path (a stray ``inspect.py`` there broke workers)
@@ -47,21 +46,24 @@ USER_ERROR = 2
 POLL_S = 0.5
 
 
-def worker_command(cfg, total, storage, index, cache_dir) -> list:
-    """The command line of study worker ``index`` (see :data:`WORKER_BOOT`)."""
+def worker_command(cfg, total, storage, index, cache_dir, part: str = "") -> list:
+    """The command line of study worker ``index`` (see :data:`WORKER_BOOT`); ``part``: the
+    key of the file's study it runs (:mod:`fuzzynav.tuning.kinds`)."""
     cmd = [sys.executable, "-c", WORKER_BOOT, str(cfg.path), "--total", str(total),
            "--index", str(index), "--storage", storage or cfg.storage_url]
     if cache_dir:
         cmd += ["--cache", str(cache_dir)]
+    if part:
+        cmd += ["--part", part]
     return cmd
 
 
 class ForkedWorker:
     """A worker forked from this process, with the ``poll``/``kill``/``wait`` of a Popen."""
 
-    def __init__(self, cfg, total, storage, index, cache_dir, evaluator):
+    def __init__(self, cfg, total, storage, index, cache_dir, make_objective):
         self._proc = multiprocessing.get_context("fork").Process(
-            target=_forked_main, args=(cfg, total, storage, index, cache_dir, evaluator),
+            target=_forked_main, args=(cfg, total, storage, index, cache_dir, make_objective),
             daemon=True)  # (daemon: never outlives the parent)
         self._proc.start()
         self.pid = self._proc.pid
@@ -79,20 +81,20 @@ class ForkedWorker:
         self._proc.join()
 
 
-def _forked_main(cfg, total, storage, index, cache_dir, evaluator):
-    """A forked worker: :func:`run_worker` with the parent's warm evaluator."""
+def _forked_main(cfg, total, storage, index, cache_dir, make_objective):
+    """A forked worker: :func:`run_worker` with the objective of the parent's warm plan."""
     warnings.simplefilter("ignore")
     try:
-        run_worker(cfg, total, storage, index, cache_dir, evaluator=evaluator)
+        run_worker(cfg, total, storage, index, cache_dir, make_objective=make_objective)
     except FuzzynavError as exc:
         print(f"fuzzynav worker {index}: error: {exc}", file=sys.stderr)
         sys.exit(USER_ERROR)
 
 
-def _spawn(cfg, total, storage, index, cache_dir, evaluator=None):
-    if FORK and evaluator is not None:
-        return ForkedWorker(cfg, total, storage, index, cache_dir, evaluator)
-    return subprocess.Popen(worker_command(cfg, total, storage, index, cache_dir),
+def _spawn(cfg, total, storage, index, cache_dir, make_objective=None, part=""):
+    if FORK and make_objective is not None:
+        return ForkedWorker(cfg, total, storage, index, cache_dir, make_objective)
+    return subprocess.Popen(worker_command(cfg, total, storage, index, cache_dir, part),
                             env=dict(os.environ, PYTHONWARNINGS="ignore"))
 
 
@@ -120,7 +122,7 @@ def _exit_text(code: int) -> str:
 
 
 def supervise(cfg, study, total, workers, storage=None, cache_dir=None, on_poll=None,
-              evaluator=None):
+              make_objective=None, part=""):
     """Run ``workers`` worker processes until they stop; restart the ones that die.
 
     Parameters
@@ -135,8 +137,11 @@ def supervise(cfg, study, total, workers, storage=None, cache_dir=None, on_poll=
         Passed to the workers.
     on_poll : callable, optional
         Called about twice a second (progress display).
-    evaluator : Evaluator, optional
-        The warm evaluator forked workers inherit (None: start new interpreters).
+    make_objective : callable, optional
+        ``make_objective(worker)``: the objective forked workers run, made from the warm
+        plan they inherit (None: start new interpreters, which load the plan themselves).
+    part : str
+        The key of the file's study the workers run (:mod:`fuzzynav.tuning.kinds`).
 
     Raises
     ------
@@ -145,7 +150,8 @@ def supervise(cfg, study, total, workers, storage=None, cache_dir=None, on_poll=
         ``total``.
     """
     url = storage or cfg.storage_url
-    procs = {i: _spawn(cfg, total, storage, i, cache_dir, evaluator) for i in range(workers)}
+    procs = {i: _spawn(cfg, total, storage, i, cache_dir, make_objective, part)
+             for i in range(workers)}
     restarts = dict.fromkeys(procs, 0)
     errors = []
     try:
@@ -166,7 +172,7 @@ def supervise(cfg, study, total, workers, storage=None, cache_dir=None, on_poll=
                     restarts[i] += 1
                     tqdm.write(f"fuzzynav: worker {i} {_exit_text(code)}; its trial will be "
                                "retried, worker restarted", file=sys.stderr)
-                    procs[i] = _spawn(cfg, total, storage, i, cache_dir, evaluator)
+                    procs[i] = _spawn(cfg, total, storage, i, cache_dir, make_objective, part)
                 else:
                     errors.append((i, code))
             if on_poll is not None:
@@ -183,12 +189,13 @@ def supervise(cfg, study, total, workers, storage=None, cache_dir=None, on_poll=
 
 
 def run_study(cfg, trials=None, workers: int = 1, storage=None, cache_dir=None,
-              progress: bool = True):
+              progress: bool = True, plan=None, part: str = ""):
     """Run ``cfg`` until its study holds ``trials`` finished trials (resumes if it exists).
 
     Parameters
     ----------
     cfg : StudyConfig
+        The study (for a plan's part: ``plan.config(part)``).
     trials : int, optional
         Total number of finished trials wanted (default: the config's).
     workers : int
@@ -198,35 +205,69 @@ def run_study(cfg, trials=None, workers: int = 1, storage=None, cache_dir=None,
     cache_dir : path, optional
         Simulation cache shared by the workers (the training runs are simulated into it
         here, before the workers start).
+    plan : optional
+        The study file's plan (:mod:`fuzzynav.tuning.kinds`), which makes the trials'
+        objective; default: ``cfg`` as a fuzzy study.
+    part : str
+        Which of the plan's studies ``cfg`` is.
 
     Returns
     -------
     optuna.Study
     """
+    from fuzzynav.tuning.kinds.fuzzy import FuzzyPlan
+
+    plan = plan if plan is not None else FuzzyPlan(cfg, cache_dir)
     total = get_optimiser(cfg.sampler).budget(cfg, int(trials or cfg.trials))
     if workers < 1:
         raise FuzzynavError(f"--workers must be >= 1, got {workers}")
     if workers > 1 and cfg.path is None:
         raise FuzzynavError("several workers need the study config as a file")
     study = open_study(cfg, storage, create=True)
-    warm_up(cfg, cache_dir, progress)  # a cold cache compiles: say so, once, here
     # what the (forked) workers start with, prepared by as many processes as will run trials
-    evaluator = warm_evaluator(cfg, cache_dir, workers if FORK else 1)
+    plan.warm(workers if FORK else 1, progress)
+
+    def make_objective(worker):
+        return plan.objective(part, worker)
+
     start = n_finished(study)
     bar = tqdm(total=total, initial=min(start, total), disable=not progress, unit="trial",
                desc=cfg.name)
     if workers == 1:
-        run_worker(cfg, total, storage, 0, cache_dir,
-                   progress=lambda n: (bar.update(min(n, total) - bar.n)), evaluator=evaluator)
+        run_worker(cfg, total, storage, 0, cache_dir, make_objective=make_objective,
+                   progress=lambda n: (bar.update(min(n, total) - bar.n)))
     else:
         # without a bar the parent only sleeps and reaps: reading the workers' journal
         # records would take CPU time from them
-        supervise(cfg, study, total, workers, storage, cache_dir, evaluator=evaluator,
+        supervise(cfg, study, total, workers, storage, cache_dir,
+                  make_objective=make_objective, part=part,
                   on_poll=(lambda: bar.update(min(n_finished(study), total) - bar.n))
                   if progress else None)
     bar.update(min(n_finished(study), total) - bar.n)
     bar.close()
     return study
+
+
+def run_plan(plan, trials=None, workers: int = 1, storage=None, progress: bool = True):
+    """Run every study of a study file's plan (:mod:`fuzzynav.tuning.kinds`) in turn, each
+    until it holds ``trials`` finished trials, then let the plan write its product.
+
+    Returns
+    -------
+    (dict, list)
+        ``part -> optuna.Study`` and the lines :meth:`finish` returned (what was written).
+    """
+    studies = {}
+    for part in plan.parts():
+        studies[part] = run_study(plan.config(part), trials, workers, storage,
+                                  plan.cache_dir, progress, plan=plan, part=part)
+    return studies, plan.finish(studies, storage)
+
+
+def open_plan_studies(plan, storage=None) -> dict:
+    """``part -> optuna.Study`` of a plan's studies, loaded (a missing study:
+    :class:`~fuzzynav.errors.FuzzynavError` naming it; no file is created)."""
+    return {part: open_study(plan.config(part), storage) for part in plan.parts()}
 
 
 def warm_evaluator(cfg, cache_dir=None, processes: int = 1):

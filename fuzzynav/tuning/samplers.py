@@ -101,6 +101,9 @@ def _tpe(cfg, seed):
 register_optimiser(Optimiser(
     "tpe", _tpe, "multivariate TPE over each structure of the space (group=True)"))
 register_optimiser(Optimiser(
+    "tpe-univariate", lambda cfg, seed: optuna.samplers.TPESampler(seed=seed),
+    "Optuna's default TPE (each parameter on its own; the alignment study's)"))
+register_optimiser(Optimiser(
     "random", lambda cfg, seed: optuna.samplers.RandomSampler(seed=seed), "uniform sampling"))
 register_optimiser(Optimiser(
     "qmc", lambda cfg, seed: optuna.samplers.QMCSampler(seed=seed,

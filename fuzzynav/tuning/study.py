@@ -274,13 +274,17 @@ def _state(study, number: int) -> TrialState:
 
 
 def run_worker(cfg, n_total: int, storage_url=None, worker: int = 0, cache_dir=None,
-               progress=None, evaluator=None) -> int:
+               progress=None, evaluator=None, make_objective=None) -> int:
     """Run trials until the study has ``n_total`` finished ones; returns trials run here.
 
     Trials running in other workers count towards the total, so parallel workers do not
     overshoot it (:func:`fuzzynav.tuning.run.run_study` rounds the total to what the
     optimiser runs: whole swarms for PSO).  ``evaluator``: a warm
     :class:`~fuzzynav.tuning.objective.Evaluator` to use (logs, baselines loaded).
+    ``make_objective``: ``make_objective(worker) ->``
+    :class:`~fuzzynav.tuning.objective.TrialObjective`, the objective of the study's kind
+    (:mod:`fuzzynav.tuning.kinds`; default: a fuzzy study's
+    :class:`~fuzzynav.tuning.objective.Objective` of ``cfg``).
 
     Raises
     ------
@@ -289,7 +293,8 @@ def run_worker(cfg, n_total: int, storage_url=None, worker: int = 0, cache_dir=N
     """
     url = storage_url or cfg.storage_url
     study = open_study(cfg, url, worker)
-    objective = Objective(cfg, cache_dir, worker, evaluator)
+    objective = (make_objective(worker) if make_objective is not None
+                 else Objective(cfg, cache_dir, worker, evaluator))
     slots = TrialSlots(with_driver(url), cfg.name)
     try:
         return _trials_until(study, cfg, n_total, objective, slots, progress)

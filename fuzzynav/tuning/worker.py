@@ -1,9 +1,11 @@
 """One study worker process: ``python -m fuzzynav.tuning.worker CONFIG --total N ...``.
 
-Started by :func:`fuzzynav.tuning.run.run_study` (one per ``--workers``); it loads the study
-from the shared storage and runs trials until the study holds ``--total`` finished ones.
-Killing it (even with SIGKILL) loses no completed trial: its running trial is failed and
-retried by the next worker that starts a trial (see :func:`study.reap_stale`).
+Started by :func:`fuzzynav.tuning.run.run_study` (one per ``--workers``) where workers are
+not forked; it opens the study file's plan (:mod:`fuzzynav.tuning.kinds`: any kind of
+study), loads study ``--part`` from the shared storage and runs trials until it holds
+``--total`` finished ones.  Killing it (even with SIGKILL) loses no completed trial: its
+running trial is failed and retried by the next worker that starts a trial (see
+:func:`study.reap_stale`).
 """
 from __future__ import annotations
 
@@ -20,13 +22,15 @@ def main(argv=None) -> int:
     ap.add_argument("--storage")
     ap.add_argument("--index", type=int, default=0)
     ap.add_argument("--cache")
+    ap.add_argument("--part", default="", help="which of the file's studies (default: its one)")
     args = ap.parse_args(argv)
-    from fuzzynav.tuning.config import load_study_config
+    from fuzzynav.tuning.kinds import load_plan
     from fuzzynav.tuning.study import run_worker
 
     try:
-        cfg = load_study_config(args.config)
-        run_worker(cfg, args.total, args.storage, args.index, args.cache)
+        plan = load_plan(args.config, args.cache)
+        run_worker(plan.config(args.part), args.total, args.storage, args.index, args.cache,
+                   make_objective=lambda worker: plan.objective(args.part, worker))
     except FuzzynavError as exc:
         print(f"fuzzynav worker {args.index}: error: {exc}", file=sys.stderr)
         return 2

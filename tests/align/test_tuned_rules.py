@@ -1,6 +1,7 @@
 """Regression of tuned alignment rule files: each ``rules/*.json`` whose ``expected`` block
 says ``kind = "alignment"`` is re-run on its scenario and seed and must reproduce its
-metrics; the exporter itself is run on a tiny study so this test never only skips."""
+metrics; the exporter itself (``fuzzynav study run`` of an alignment study) is run on a tiny
+study so this test never only skips."""
 import json
 from pathlib import Path
 
@@ -9,7 +10,8 @@ import pytest
 from fuzzynav.align import run as R
 from fuzzynav.align.experiment import metrics
 from fuzzynav.align.scenario import load_alignment_scenario
-from fuzzynav.align.tune import Runs, tune
+from fuzzynav.align.tune import Runs
+from fuzzynav.cli import main
 from fuzzynav.fuzzy import load_fis
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -52,7 +54,7 @@ rate_hz = 10.0
 """
 
 
-def test_the_tuner_exports_a_rule_file_that_reproduces_itself(tmp_path):
+def test_the_tuner_exports_a_rule_file_that_reproduces_itself(tmp_path, capsys):
     scn = tmp_path / "short.toml"
     scn.write_text(SHORT)
     cfg = tmp_path / "tune.toml"
@@ -65,7 +67,10 @@ test = []
 expected_scenario = "{scn}"
 expected_seed = 3
 ''')
-    summary = tune(cfg)
+    assert main(["study", "run", str(cfg)]) == 0
+    out = capsys.readouterr().out
+    assert out.rstrip().endswith(f"wrote {tmp_path / 'tuned.json'}")
+    summary = json.loads(out[:out.rindex("wrote ")])
     # the exported file scores what the study reported for its best trial
     rescored, _ = Runs([(str(scn), 0)]).score(load_fis(tmp_path / "tuned.json"),
                                               "align-fuzzy", 1.0)

@@ -1,4 +1,5 @@
-"""Paper 004's APSO as a baseline study on the PSO sampler: config, swarm, result file, alias."""
+"""Paper 004's APSO as a baseline study on the PSO sampler (``fuzzynav study run``):
+config, swarm, result file."""
 import json
 from dataclasses import replace
 from pathlib import Path
@@ -12,8 +13,7 @@ from fuzzynav.experiment import run_on_log
 from fuzzynav.realdata.dataspec import DATA_DIR_ENV
 from fuzzynav.sim.log import simulate
 from fuzzynav.sim.scenario import load_scenario
-from fuzzynav.tuning.apso import main as apso_main
-from fuzzynav.tuning.baselines import SPACES, _sub_config, load_baseline_config
+from fuzzynav.tuning.baselines import SPACES, load_baseline_config, sub_config
 from fuzzynav.tuning.pso import PsoSampler, history
 from tests.tuning.studies import TINY
 
@@ -51,7 +51,7 @@ def _bowl_study(iterations=25):
            "test": {"scenarios": [str(TINY)], "seeds": [1], "compare": ["ekf"]}}
     cfg = study_config_from_dict(doc, need_controllers=False)
     cfg = replace(cfg, pso=PsoConfig(particles=8, iterations=iterations, inertia=(0.9, 0.4)))
-    return _sub_config(cfg, "apso", SPACES["apso"])
+    return sub_config(cfg, "apso", SPACES["apso"])
 
 
 def test_swarm_over_the_apso_space_finds_a_known_minimum_on_the_schedule():
@@ -102,11 +102,3 @@ def test_a_parameter_file_without_apso_names_the_field(tmp_path):
     path.write_text(json.dumps({"filters": {"apso": {"r_scale": 1.0}}}))  # not a study's file
     with pytest.raises(InputFileError, match=r"\$\.format: must be 'fuzzynav-baselines'"):
         read_multipliers(path)
-
-
-def test_alias_refuses_a_study_without_apso(tmp_path, capsys):
-    bad = tmp_path / "b.toml"
-    bad.write_text((ROOT / "studies" / "paper000_baselines.toml").read_text())
-    assert apso_main([str(bad)]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "apso" in err[0]

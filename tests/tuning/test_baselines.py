@@ -9,8 +9,8 @@ import pytest
 from fuzzynav.errors import FuzzynavError, InputFileError
 from fuzzynav.filters.baselines import read_params
 from fuzzynav.filters.params_file import PARAMS_FORMAT
-from fuzzynav.tuning.baselines import (is_baseline_config, load_baseline_config,
-                                       run_baselines, space_of)
+from fuzzynav.tuning.baselines import is_baseline_config, load_baseline_config, space_of
+from fuzzynav.tuning.kinds.baselines import run_baselines
 
 STUDY = Path(__file__).resolve().parents[2] / "studies" / "paper000_baselines.toml"
 

@@ -111,3 +111,29 @@ def test_two_workers_share_a_study_through_postgresql(tmp_path, sim_cache, postg
     assert len(again.trials) == 10
     # the study opened by URL is the one the CLI's export/report would use
     assert len(open_study(cfg, postgres_url).trials) == 10
+
+
+@pytest.mark.parametrize("kind", ["baselines", "alignment"])
+def test_baseline_and_alignment_studies_share_postgresql_too(tmp_path, sim_cache, postgres_url,
+                                                             kind):
+    """The other study kinds run on the same driver: two workers through PostgreSQL, then
+    resumed from there; nothing goes to the default journal file."""
+    from fuzzynav.tuning.kinds import load_plan
+    from fuzzynav.tuning.run import run_plan
+    from tests.tuning.test_study_kinds import BASELINE, _alignment_study
+
+    if kind == "baselines":
+        path = tmp_path / "bl.toml"
+        path.write_text(BASELINE.replace('name = "bl"', f'name = "bl_{os.getpid()}"'))
+    else:
+        path = _alignment_study(tmp_path, name=f"al_{os.getpid()}")
+    plan = load_plan(path, sim_cache)
+    studies, _ = run_plan(plan, 2, 2, postgres_url, progress=False)
+    (part, study), = studies.items()
+    first = study.get_trials()
+    assert [t.state for t in first] == [TrialState.COMPLETE] * 2
+    studies, _ = run_plan(load_plan(path, sim_cache), 3, 1, postgres_url, progress=False)
+    trials = studies[part].get_trials()
+    assert [t.params for t in trials[:2]] == [t.params for t in first]
+    assert len(trials) == 3 and not list(tmp_path.glob("*.journal"))
+    assert len(open_study(plan.config(part), postgres_url).trials) == 3
