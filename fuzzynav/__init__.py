@@ -22,7 +22,8 @@ claims
 cli
     The ``fuzzynav`` command.
 
-Top-level modules: ``experiment`` (simulate, run named filters, score), ``metrics``,
+Top-level modules: ``runpath`` (the one run path: a source, a named filter, one run),
+``experiment`` (simulate, run named filters on scenarios, score), ``metrics``,
 ``report``, ``plots``, and ``errors``, ``units``, ``fileio``, ``registry``,
 ``compile_notice`` used by every layer.
 """

@@ -12,24 +12,13 @@ import numpy as np
 import pandas as pd
 
 from fuzzynav.errors import UnknownNameError
-from fuzzynav.filters.named import FilterContext, FilterSetup, get_filter, parse_filter_spec
-from fuzzynav.filters.runner import InitialState, run_filter
-from fuzzynav.filters.sensor_states import with_sensor_states
+from fuzzynav.filters.named import FilterContext, FilterSetup
+from fuzzynav.filters.runner import InitialState
 from fuzzynav.metrics import errors_vs_trajectory, improvement_ci, mean_ci, rms_metrics
 from fuzzynav.nav import attitude, earth
+from fuzzynav.runpath import RunInputs, RunOutcome, make_setup, run
 from fuzzynav.sim.log import SensorLog, component_rng, simulate
 from fuzzynav.sim.scenario import Scenario, load_scenario
-
-
-@dataclass(frozen=True)
-class RunOutcome:
-    """One filter on one (scenario, seed)."""
-
-    filter: str
-    scenario: str
-    seed: int
-    result: object
-    metrics: dict
 
 
 #: initial states drawn so far, keyed by everything a draw depends on (the seed, the nine
@@ -63,40 +52,63 @@ def _draw_initial_state(seed, truth, sig) -> InitialState:
                         truth.vel_n[0] + x0[3:6], attitude.dcm_to_quat(C0))
 
 
+@dataclass(frozen=True)
+class SimulatedSource:
+    """A simulated :class:`SensorLog` as a run source (:mod:`fuzzynav.runpath`): the filter
+    starts from the truth with the error :func:`perturbed_initial_state` draws and is scored
+    against the truth from ``t_start_s`` on (every RMS and maximum must be finite)."""
+
+    log: SensorLog
+    t_start_s: float = 0.0
+    #: False: the free inertial run (no aiding streams fed)
+    aided: bool = True
+
+    @property
+    def name(self) -> str:
+        return self.log.scenario.name
+
+    @property
+    def seed(self) -> int:
+        return self.log.seed
+
+    def context(self, options=None) -> FilterContext:
+        return FilterContext(imu_noise=self.log.scenario.imu.noise_si(),
+                             sensors=dict(self.log.sensors), options=dict(options or {}))
+
+    def inputs(self, setup: FilterSetup) -> RunInputs:
+        return RunInputs(self.log.imu, self.log.sensors if self.aided else {},
+                         perturbed_initial_state(self.log, setup))
+
+    def score(self, result) -> dict:
+        return rms_metrics(errors_vs_trajectory(result, self.log.truth), self.t_start_s)
+
+    def required(self, metrics: dict) -> tuple:
+        return tuple(m for m in metrics if m.startswith(("rms_", "max_")))
+
+
+def as_source(log, t_start_s: float = 0.0):
+    """A run source of a log: a :class:`SensorLog` becomes a :class:`SimulatedSource`; a
+    source (a recording run, :mod:`fuzzynav.realdata.studyruns`) is itself (it scores in
+    its own window: ``t_start_s`` does not apply)."""
+    return SimulatedSource(log, t_start_s) if isinstance(log, SensorLog) else log
+
+
 def filter_context(log, options=None) -> FilterContext:
-    """What named filters configure themselves from on a log: a simulated
-    :class:`SensorLog`, or a recording run (``log.context``, e.g.
-    :class:`fuzzynav.realdata.studyruns.RecordingRun`)."""
-    if not isinstance(log, SensorLog):
-        return log.context(options)
-    return FilterContext(imu_noise=log.scenario.imu.noise_si(), sensors=dict(log.sensors),
-                         options=dict(options or {}))
+    """What named filters configure themselves from on a log or a run source."""
+    return as_source(log).context(options)
 
 
-def setup_for(log: SensorLog, filter_name: str, options=None) -> FilterSetup:
-    """Configuration and adapters of a named filter for a log (:func:`filter_context`)."""
-    ctx = filter_context(log, options)
-    return with_sensor_states(get_filter(filter_name).make(ctx), ctx.sensors,
-                              ctx.options)
+def setup_for(log, filter_name: str, options=None) -> FilterSetup:
+    """Configuration and adapters of a named filter for a log (:func:`~fuzzynav.runpath.
+    make_setup`)."""
+    return make_setup(as_source(log), filter_name, options)
 
 
-def run_on_log(log: SensorLog, filter_name: str, options=None, t_start_s: float = 0.0,
+def run_on_log(log, filter_name: str, options=None, t_start_s: float = 0.0,
                setup: FilterSetup | None = None) -> RunOutcome:
-    """Run one named filter (or an explicit ``setup``) on a log and score it.
-
-    A recording run (not a :class:`SensorLog`) runs and scores itself (``log.run(setup)``:
-    against its reference, in its own time window; ``t_start_s`` does not apply).
-    """
-    setup = setup or setup_for(log, filter_name, options)
-    if not isinstance(log, SensorLog):
-        res, metrics = log.run(setup)
-        return RunOutcome(filter_name, log.name, log.seed, res, metrics)
-    init = perturbed_initial_state(log, setup)
-    res = run_filter(log.imu, setup.sensors_for(log.sensors), init, setup.config, setup.adapters,
-                     setup.sensor_options)
-    metrics = rms_metrics(errors_vs_trajectory(res, log.truth), t_start_s)
-    metrics["completed"] = float(res.ok)
-    return RunOutcome(filter_name, log.scenario.name, log.seed, res, metrics)
+    """Run one named filter (or an explicit ``setup``) on a log and score it
+    (:func:`fuzzynav.runpath.run` on :func:`as_source`)."""
+    return run(as_source(log, t_start_s), filter_name, options, setup)
 
 
 def monte_carlo(scenario, filters, seeds, options=None, cache_dir=None, t_start_s=0.0,
@@ -125,11 +137,9 @@ def monte_carlo(scenario, filters, seeds, options=None, cache_dir=None, t_start_
     for seed in seeds:
         log = simulate(scn, int(seed), cache_dir)
         for name in filters:
-            base, own = parse_filter_spec(name)
             opts = {k: v for k, v in options.items() if not isinstance(v, dict)}
             opts.update(options.get(name, {}) if isinstance(options.get(name), dict) else {})
-            opts.update(own)
-            out = run_on_log(log, base, opts, t_start_s)
+            out = run_on_log(log, name, opts, t_start_s)  # NAME@FILE: resolved by the run
             rows.append({"scenario": scn.name, "filter": name, "seed": int(seed), **out.metrics})
             bar.update(1)
     bar.close()

@@ -22,10 +22,11 @@ from fuzzynav.align.fuzzy_r import policy_for
 from fuzzynav.align.mechanize import mechanize
 from fuzzynav.align.model import AlignNoise
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.experiment import RunOutcome, setup_for
-from fuzzynav.filters.runner import InitialState, run_filter
+from fuzzynav.experiment import SimulatedSource
+from fuzzynav.filters.runner import InitialState
 from fuzzynav.metrics import errors_vs_trajectory, rms_metrics
 from fuzzynav.nav import attitude
+from fuzzynav.runpath import RunInputs, run
 from fuzzynav.sim.imu import ImuData
 
 #: sigma of the zero-velocity reference of a vehicle at rest [m/s]
@@ -87,32 +88,56 @@ def align_on_rest(log, align_filter="align-kf", rules=None):
     return k1, attitude.rotvec_to_dcm(phi) @ C[-1], res.sigma("att")[-1]
 
 
-def _slice_sensor(data, t0):
-    keep = data.time_s >= t0
-    meta = {k: (v[keep] if isinstance(v, np.ndarray) and v.shape[:1] == keep.shape else v)
-            for k, v in data.meta.items()}
-    return dataclasses.replace(data, time_s=data.time_s[keep], z=data.z[keep],
-                               sigma=data.sigma[keep], meta=meta)
+@dataclasses.dataclass(frozen=True)
+class AlignedSource:
+    """A simulated log started behind an alignment, as a run source (:mod:`fuzzynav.
+    runpath`): the IMU and the streams from IMU sample ``k`` on, the aligned attitude
+    ``C_bn`` with its 1-sigma ``sigma_rad`` (ENU) as the initial attitude uncertainty, zero
+    velocity and the known position; scored against the truth, with the aligned attitude's
+    errors (``align_heading_err_deg``, ``align_level_err_deg``) and ``align_end_s``."""
+
+    log: object
+    k: int
+    C_bn: np.ndarray
+    sigma_rad: np.ndarray
+
+    @property
+    def name(self) -> str:
+        return self.log.scenario.name
+
+    @property
+    def seed(self) -> int:
+        return self.log.seed
+
+    def context(self, options=None):
+        return SimulatedSource(self.log).context(options)
+
+    def inputs(self, setup) -> RunInputs:
+        log, k = self.log, self.k
+        sig_deg = tuple(float(s) for s in np.maximum(self.sigma_rad / units.DEG, 1e-4))
+        t0 = float(log.imu.time_s[k])
+        init = InitialState(t0, log.truth.lla[k], np.zeros(3), attitude.dcm_to_quat(self.C_bn))
+        imu = ImuData(time_s=log.imu.time_s[k:], dtheta_b=log.imu.dtheta_b[k:],
+                      dv_b=log.imu.dv_b[k:])
+        return RunInputs(imu, log.sensors, init,
+                         config=dataclasses.replace(setup.config, init_att_sigma_deg=sig_deg),
+                         from_s=t0)
+
+    def score(self, result) -> dict:
+        log, k = self.log, self.k
+        metrics = rms_metrics(errors_vs_trajectory(result, log.truth))
+        err = attitude.attitude_error(self.C_bn, attitude.quat_to_dcm(log.truth.q_bn[k]))
+        metrics.update(align_end_s=float(log.imu.time_s[k]),
+                       align_heading_err_deg=abs(err[2]) / units.DEG,
+                       align_level_err_deg=float(np.hypot(err[0], err[1])) / units.DEG)
+        return metrics
+
+    def required(self, metrics: dict) -> tuple:
+        return SimulatedSource(self.log).required(metrics)
 
 
 def run_aligned(log, nav_filter, options=None, align_filter="align-kf", rules=None):
-    """Align on the rest, then run ``nav_filter`` from there; metrics vs the truth.
-
-    The metrics gain ``align_heading_err_deg``, ``align_level_err_deg`` (the aligned
-    attitude's errors) and ``align_end_s``.
-    """
+    """Align on the rest, then run ``nav_filter`` (``NAME`` or ``NAME@FILE``) from there;
+    metrics vs the truth (:class:`AlignedSource`)."""
     k, C_bn, sigma = align_on_rest(log, align_filter, rules)
-    setup = setup_for(log, nav_filter, options)
-    sig_deg = tuple(float(s) for s in np.maximum(sigma / units.DEG, 1e-4))
-    config = dataclasses.replace(setup.config, init_att_sigma_deg=sig_deg)
-    t0 = float(log.imu.time_s[k])
-    init = InitialState(t0, log.truth.lla[k], np.zeros(3), attitude.dcm_to_quat(C_bn))
-    sensors = {nm: _slice_sensor(d, t0) for nm, d in setup.sensors_for(log.sensors).items()}
-    imu = ImuData(time_s=log.imu.time_s[k:], dtheta_b=log.imu.dtheta_b[k:], dv_b=log.imu.dv_b[k:])
-    res = run_filter(imu, sensors, init, config, setup.adapters, setup.sensor_options)
-    metrics = rms_metrics(errors_vs_trajectory(res, log.truth))
-    err = attitude.attitude_error(C_bn, attitude.quat_to_dcm(log.truth.q_bn[k]))
-    metrics.update(completed=float(res.ok), align_end_s=t0,
-                   align_heading_err_deg=abs(err[2]) / units.DEG,
-                   align_level_err_deg=float(np.hypot(err[0], err[1])) / units.DEG)
-    return RunOutcome(nav_filter, log.scenario.name, log.seed, res, metrics)
+    return run(AlignedSource(log, k, C_bn, sigma), nav_filter, options)

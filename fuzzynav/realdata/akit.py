@@ -9,16 +9,17 @@ error at the end and that end error as a percentage of the distance travelled.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
-from fuzzynav.filters.named import FilterContext, get_filter
-from fuzzynav.filters.runner import InitialState, run_filter
-from fuzzynav.filters.sensor_states import with_sensor_states
+from fuzzynav.filters.named import FilterContext
+from fuzzynav.filters.runner import InitialState
 from fuzzynav.metrics import errors_vs_reference, rms_metrics
 from fuzzynav.nav import attitude, earth
 from fuzzynav.realdata.score import antenna_track
+from fuzzynav.runpath import RunInputs, run
 from fuzzynav.sim.imu import ImuSpec
 
 #: initial uncertainty of the start taken from the reference: Delph post-processing gives
@@ -60,24 +61,42 @@ def initial_state(rec) -> InitialState:
     return InitialState(float(rec.imu.time_s[0]), lla0, ref.vel_n[0], ref.q_bn[0])
 
 
-def run_setup(rec, setup, reference=None):
-    """Run a filter configuration on a trajectory; ``(FilterResult, metrics)`` scored on
-    ``reference`` (default: the whole reference of ``rec``)."""
-    sensors = {"dvl": rec.dvl}
-    res = run_filter(rec.imu, setup.sensors_for(sensors), initial_state(rec), setup.config,
-                     setup.adapters, setup.sensor_options)
-    ref = rec.reference if reference is None else reference
-    return res, score(antenna_track(res, rec.reference_offset_b), ref)
+@dataclass(frozen=True)
+class AkitSource:
+    """An A-KIT trajectory as a run source (:mod:`fuzzynav.runpath`): started from the
+    reference, DVL-aided, scored on ``reference`` (default: the whole of ``rec``'s) at the
+    reference point; position and velocity metrics must be finite (attitude is not scored).
+    """
+
+    rec: object
+    reference: object = None
+    label: str | None = None
+
+    @property
+    def name(self) -> str:
+        return self.label or f"akit trajectory {self.rec.trajectory}"
+
+    seed = 0
+
+    def context(self, options=None) -> FilterContext:
+        return context(self.rec, options)
+
+    def inputs(self, setup) -> RunInputs:
+        return RunInputs(self.rec.imu, {"dvl": self.rec.dvl}, initial_state(self.rec))
+
+    def score(self, result) -> dict:
+        ref = self.rec.reference if self.reference is None else self.reference
+        return score(antenna_track(result, self.rec.reference_offset_b), ref)
+
+    def required(self, metrics: dict) -> tuple:
+        return tuple(m for m in metrics if m.startswith(("rms_pos", "max_pos", "rms_vel")))
 
 
 def run_trajectory(rec, filter_name: str, options=None):
-    """Run one named filter on one :class:`~fuzzynav.sim.loaders.akit.AkitRecording`.
-
-    Returns ``(FilterResult, metrics dict)``.
-    """
-    ctx = context(rec, options)
-    setup = with_sensor_states(get_filter(filter_name).make(ctx), ctx.sensors, ctx.options)
-    return run_setup(rec, setup)
+    """Run one named filter (``NAME`` or ``NAME@FILE``) on one
+    :class:`~fuzzynav.sim.loaders.akit.AkitRecording`; ``(FilterResult, metrics dict)``."""
+    out = run(AkitSource(rec), filter_name, options)
+    return out.result, out.metrics
 
 
 def _moved(lla, q_bn, offset_b):

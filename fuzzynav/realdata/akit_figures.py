@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 
 from fuzzynav import plots  # selects a headless backend when needed
 from fuzzynav.metrics import errors_vs_reference

@@ -11,14 +11,16 @@ estimates what is left.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
 from fuzzynav.errors import InputFileError
-from fuzzynav.filters.named import FilterContext, get_filter
-from fuzzynav.filters.runner import InitialState, run_filter
+from fuzzynav.filters.named import FilterContext
+from fuzzynav.filters.runner import InitialState
 from fuzzynav.nav import attitude, earth
 from fuzzynav.realdata.mems import CONSUMER_MEMS, MemsModel
+from fuzzynav.runpath import RunInputs
 from fuzzynav.sim import coarse_align
 from fuzzynav.sim.imu import ImuData
 
@@ -36,7 +38,7 @@ class Start:
         The increments from the start on, the rest gyro bias removed.
     init : InitialState
         The navigation state at ``imu.time_s[0]`` (IMU position).
-    coarse : coarse_align.InitialState
+    coarse : coarse_align.StartEstimate
         What the initialisation found (rest period, level, heading method, gyro bias).
     """
 
@@ -81,51 +83,59 @@ def constraints_for(start: Start, sigma_mps: float, rate_hz: float):
     return SensorData("nhc", t, np.zeros((t.size, 2)), np.full((t.size, 2), float(sigma_mps)))
 
 
-def run_named(start: Start, fixes, filter_name: str, use_velocity: bool = True,
-              options=None, mems: MemsModel = CONSUMER_MEMS, init_pos_sigma_m: float = 2.0,
-              constraints=None):
-    """Run a named filter (``ekf``, ``sage-husa``, ``vb``, ``fakf``, ...) from ``start``.
+@dataclass(frozen=True)
+class GnssSource:
+    """A recording fed GNSS fixes (and constraints) from a :class:`Start`, as a run source
+    (:mod:`fuzzynav.runpath`).
 
-    Parameters
+    Attributes
     ----------
+    name : str
+    seed : int
+        The seed of the fed noise.
     start : Start
-    fixes : SensorData
-        The fed GNSS stream (kind ``gnss``), registered as sensor :data:`GNSS_SENSOR`.
-    filter_name : str
+    make_context : callable
+        ``make_context(options) -> FilterContext`` (:func:`context_for`); its ``sensors``
+        are the fed streams.
+    scorer : callable
+        ``scorer(result) -> metrics`` against the reference.
+    needed : callable
+        ``needed(metrics) -> names`` of the metrics that must be finite.
     use_velocity : bool
-        Whether the GNSS velocities are used (else positions only).
-    options : dict, optional
-        Filter options (``rules``, ...); they override the MEMS model's initial sigmas.
-    mems : MemsModel
-    init_pos_sigma_m : float
-        Initial position uncertainty [m] (the fed fixes' noise).
-    constraints : SensorData, optional
-        Non-holonomic constraint epochs (:func:`constraints_for`), sensor ``nhc``.
-
-    Returns
-    -------
-    FilterResult
+        Whether the GNSS velocities are used.
     """
-    ctx = context_for(fixes, options, mems, init_pos_sigma_m, constraints)
-    return run_setup(start, ctx.sensors, get_filter(filter_name).make(ctx), use_velocity)
+
+    name: str
+    seed: int
+    start: Start
+    make_context: Callable
+    scorer: Callable
+    needed: Callable
+    use_velocity: bool = True
+
+    def context(self, options=None) -> FilterContext:
+        return self.make_context(options)
+
+    def inputs(self, setup) -> RunInputs:
+        return RunInputs(self.start.imu, self.make_context(None).sensors, self.start.init,
+                         {GNSS_SENSOR: {"use_velocity": bool(self.use_velocity)}})
+
+    def score(self, result) -> dict:
+        return self.scorer(result)
+
+    def required(self, metrics: dict) -> tuple:
+        return self.needed(metrics)
 
 
 def context_for(fixes, options=None, mems: MemsModel = CONSUMER_MEMS,
                 init_pos_sigma_m: float = 2.0, constraints=None) -> FilterContext:
-    """What a named filter configures itself from on a recording (:func:`run_named`'s
-    parameters): the MEMS model, its initial sigmas under ``options``, the fed sensors."""
+    """What a named filter configures itself from on a recording: the MEMS model, its
+    initial sigmas under ``options`` (which override them), the fed fixes (sensor
+    :data:`GNSS_SENSOR`) and the non-holonomic ``constraints`` (:func:`constraints_for`,
+    sensor ``nhc``) if any; ``init_pos_sigma_m`` is the fed fixes' noise [m]."""
     sensors = {GNSS_SENSOR: fixes}
     if constraints is not None:
         sensors["nhc"] = constraints
     opts = dict(mems.filter_options(init_pos_sigma_m))
     opts.update(options or {})
     return FilterContext(imu_noise=mems.imu_noise(), sensors=sensors, options=opts)
-
-
-def run_setup(start: Start, sensors: dict, setup, use_velocity: bool = True):
-    """Run a filter configuration from ``start`` on ``sensors`` (GNSS velocities used or
-    not); the :class:`~fuzzynav.filters.runner.FilterResult`."""
-    sensor_opts = {k: dict(v) for k, v in setup.sensor_options.items()}
-    sensor_opts.setdefault(GNSS_SENSOR, {})["use_velocity"] = bool(use_velocity)
-    return run_filter(start.imu, setup.sensors_for(sensors), start.init, setup.config,
-                      setup.adapters, sensor_opts)

@@ -1,10 +1,9 @@
-"""Recordings as study runs: what :func:`fuzzynav.experiment.run_on_log` needs of a run.
+"""Recordings as study runs: run sources (:mod:`fuzzynav.runpath`) for a study's runs.
 
 A study's ``(scenario, seed)`` run may name a recording (``akit:akit:3``,
 ``rtklib:rtklib-drive@0-50%``; :mod:`.dataspec`).  :func:`recording_run` turns it into a
 :class:`RecordingRun`: the filter context named filters configure themselves from
-(:meth:`RecordingRun.context`) and a method that runs a filter configuration on the
-recording and scores it against its reference (:meth:`RecordingRun.run`).  The kind of run
+(:meth:`RecordingRun.context`), its inputs and its score against its reference.  The kind of run
 follows what the loaded recording holds, so any loader of :data:`~.sources.SOURCES` fits:
 
 * a DVL stream and a full reference (A-KIT): the filter starts from the reference and is
@@ -20,16 +19,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from functools import lru_cache
-from typing import Callable
+
+import numpy as np
 
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.realdata import akit
 from fuzzynav.realdata.dataspec import parse_recording_spec, resolve, until, within
 from fuzzynav.realdata.protocol import ProtocolSettings
 from fuzzynav.realdata.score import errors_against, score
-from fuzzynav.realdata.session import context_for, run_setup
+from fuzzynav.realdata.session import GnssSource, context_for
 from fuzzynav.realdata.sources import SOURCES, data_options
-from fuzzynav.realdata.validate import fed_sigma, prepare_feeds
+from fuzzynav.realdata.validate import fed_sigma, prepare_feeds, required_names
 
 #: which protocol feed a GNSS study run gets: the fixes throughout.  With the simulated
 #: outages the free-inertial drift of a consumer MEMS IMU (hundreds of metres in 60 s,
@@ -41,7 +41,9 @@ UNSCORED = ("rms_pitch_deg", "rms_roll_deg", "rms_heading_deg", "rms_att_deg")
 
 @dataclass(frozen=True)
 class RecordingRun:
-    """One recording (one session, one seed, one window) as a study run.
+    """One recording (one session, one seed, one window) as a study run: a run source
+    (:mod:`fuzzynav.runpath`) around the recording's own (:class:`~.akit.AkitSource`,
+    :class:`~.session.GnssSource`), without the metrics a recording cannot give.
 
     Attributes
     ----------
@@ -51,30 +53,29 @@ class RecordingRun:
     sensors : dict
         The aiding streams a filter is given (sensor name -> SensorData).
     duration_s : float
-        Length of the run [s].
-    make_context : callable
-        ``make_context(options) -> FilterContext``.
-    run_setup : callable
-        ``run_setup(setup) -> (FilterResult, metrics)``.
+        Length of the scored run [s].
+    inner : Source
+        The recording's run source.
     """
 
     name: str
     seed: int
     sensors: dict
     duration_s: float
-    make_context: Callable
-    run_setup: Callable
+    inner: object
 
     def context(self, options=None):
         """The :class:`~fuzzynav.filters.named.FilterContext` of this run."""
-        return self.make_context(options)
+        return self.inner.context(options)
 
-    def run(self, setup):
-        """Run a filter configuration; ``(FilterResult, metrics)`` (module docstring)."""
-        res, metrics = self.run_setup(setup)
-        metrics = {k: v for k, v in metrics.items() if k not in UNSCORED}
-        metrics["completed"] = float(res.ok)
-        return res, metrics
+    def inputs(self, setup):
+        return self.inner.inputs(setup)
+
+    def score(self, result) -> dict:
+        return {k: v for k, v in self.inner.score(result).items() if k not in UNSCORED}
+
+    def required(self, metrics: dict) -> tuple:
+        return self.inner.required(metrics)
 
 
 @lru_cache(maxsize=16)
@@ -121,8 +122,7 @@ def _dvl_run(name, seed, rec, lo, hi) -> RecordingRun:
     cut = replace(rec, imu=until(rec.imu, hi), dvl=until(rec.dvl, hi))
     ref = within(rec.reference, lo, hi)
     return RecordingRun(name, int(seed), {"dvl": cut.dvl}, hi - lo,
-                        lambda options: akit.context(cut, options),
-                        lambda setup: akit.run_setup(cut, setup, ref))
+                        akit.AkitSource(cut, ref, name))
 
 
 def _gnss_run(name, seed, rec, lo, hi,
@@ -139,12 +139,12 @@ def _gnss_run(name, seed, rec, lo, hi,
                             f"at {t0 - float(rec.imu.time_s[0]):.0f} s (at least "
                             f"{MIN_SCORED_S:g}: MIN_SCORED_S); widen the window")
 
-    def run(setup):
-        res = run_setup(start, {"gnss": feeds[STUDY_FEED]}, setup, settings.use_velocity)
-        err = errors_against(res, cut.reference, lever, settings.velocity_lag_s)
-        return res, score(err, res.time_s, windows, t0)
-
-    return RecordingRun(name, int(seed), {"gnss": feeds[STUDY_FEED]}, hi - t0,
-                        lambda options: context_for(feeds[STUDY_FEED], options,
-                                                    init_pos_sigma_m=sigma0),
-                        run)
+    fixes = feeds[STUDY_FEED]
+    vel_scored = bool(np.isfinite(cut.reference.z[:, 3:6]).all())
+    source = GnssSource(
+        name, int(seed), start,
+        lambda options: context_for(fixes, options, init_pos_sigma_m=sigma0),
+        lambda res: score(errors_against(res, cut.reference, lever, settings.velocity_lag_s),
+                          res.time_s, windows, t0),
+        lambda m: required_names(m, vel_scored), settings.use_velocity)
+    return RecordingRun(name, int(seed), {"gnss": fixes}, hi - t0, source)

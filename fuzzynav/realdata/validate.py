@@ -15,7 +15,9 @@ from fuzzynav.realdata import protocol
 from fuzzynav.realdata.mems import CONSUMER_MEMS, MemsModel
 from fuzzynav.realdata.protocol import ProtocolSettings
 from fuzzynav.realdata.score import errors_against, outage_drifts, score
-from fuzzynav.realdata.session import Start, constraints_for, run_named, start_from
+from fuzzynav.realdata.session import (GnssSource, Start, constraints_for, context_for,
+                                       start_from)
+from fuzzynav.runpath import run
 from fuzzynav.sim.log import check_seed
 
 #: feed name -> label in tables and figures
@@ -109,14 +111,21 @@ def validate(rec, filter_name: str, settings: ProtocolSettings = ProtocolSetting
     t0 = max(settings.t_start_s, start.init.time_s)
     runs = {}
     nhc = constraints_for(start, settings.nhc_sigma_mps, settings.nhc_rate_hz)
+    vel_scored = bool(np.isfinite(rec.reference.z[:, 3:6]).all())
+
+    def errors(res):
+        return errors_against(res, rec.reference, lever, settings.velocity_lag_s)
+
     for name, fixes in feeds.items():
-        res = run_named(start, fixes, filter_name, settings.use_velocity, options, mems,
-                        sigma0, nhc)
-        err = errors_against(res, rec.reference, lever, settings.velocity_lag_s)
-        metrics = score(err, res.time_s, windows, t0)
-        metrics["completed"] = float(res.ok)
-        runs[name] = FeedRun(fixes, res, err, metrics,
-                             outage_drifts(err, res.time_s, windows))
+        source = GnssSource(
+            f"{getattr(rec, 'directory', 'recording')} ({FEEDS[name]})", int(seed), start,
+            lambda opts, fixes=fixes: context_for(fixes, opts, mems, sigma0, nhc),
+            lambda res: score(errors(res), res.time_s, windows, t0),
+            lambda m: required_names(m, vel_scored), settings.use_velocity)
+        out = run(source, filter_name, options)
+        err = errors(out.result)
+        runs[name] = FeedRun(fixes, out.result, err, out.metrics,
+                             outage_drifts(err, out.result.time_s, windows))
     return Validation(filter_name, int(seed), settings, start, windows, runs)
 
 
@@ -168,6 +177,16 @@ POSITION_METRICS = ("rms_pos_e_m", "rms_pos_n_m", "rms_pos_u_m", "rms_pos_h_m", 
 VELOCITY_METRICS = ("rms_vel_e_mps", "rms_vel_n_mps", "rms_vel_u_mps", "rms_vel_mps")
 #: defined when the run has at least one complete outage
 DRIFT_METRICS = ("drift_h_rms_m", "drift_h_max_m", "outage_max_h_m")
+
+
+def required_names(metrics: dict, vel_scored: bool) -> tuple:
+    """The metrics of one run that must be finite (:func:`required_metrics`'s rule)."""
+    n_done = metrics.get("n_outages", 0.0)
+    names = list(POSITION_METRICS) + (list(VELOCITY_METRICS) if vel_scored else [])
+    names += list(DRIFT_METRICS) * (n_done >= 1)
+    names += [c for c in metrics if c.startswith("drift_h_m_")
+              and n_done >= int(c.rsplit("_", 1)[1])]
+    return tuple(names)
 
 
 def required_metrics(df: pd.DataFrame, rec) -> pd.DataFrame:

@@ -18,9 +18,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from fuzzynav.experiment import perturbed_initial_state, setup_for
+from fuzzynav.experiment import SimulatedSource, setup_for
 from fuzzynav.filters.als import als_estimate, innovations, steady_gain
-from fuzzynav.filters.runner import run_filter
+from fuzzynav.filters.named import FilterSetup
+from fuzzynav.runpath import run
 from fuzzynav.nav import earth
 
 #: autocovariance lags and the filter transient dropped [epochs]
@@ -31,9 +32,8 @@ INS_RATE_HZ = 50.0
 
 def ins_minus_gnss(log, data) -> tuple:
     """``(y (K, 6), claimed variance (K, 6), T)``: free INS minus a receiver, ENU m and m/s."""
-    setup = setup_for(log, "ekf")
-    cfg = setup.config.with_(out_rate_hz=INS_RATE_HZ)
-    res = run_filter(log.imu, {}, perturbed_initial_state(log, setup), cfg)
+    free = FilterSetup(config=setup_for(log, "ekf").config.with_(out_rate_hz=INS_RATE_HZ))
+    res = run(SimulatedSource(log, aided=False), "ekf (free inertial)", setup=free).result
     t = np.asarray(data.time_s, float)
     ins = np.column_stack([np.interp(t, res.time_s, res.lla[:, i]) for i in range(3)] +
                           [np.interp(t, res.time_s, res.vel_n[:, i]) for i in range(3)])

@@ -17,6 +17,7 @@ import pandas as pd
 import pytest
 
 import fuzzynav.experiment
+import fuzzynav.runpath
 import fuzzynav.sim.log
 from fuzzynav.cli import main
 from fuzzynav.metrics import check_finite_metrics
@@ -168,8 +169,8 @@ def _diverging(run_filter):
 
 @pytest.mark.parametrize("json_flag", [[], ["--json"]])
 def test_a_diverged_run_exits_3_without_a_table(capsys, monkeypatch, sim_cache, json_flag):
-    monkeypatch.setattr(fuzzynav.experiment, "run_filter",
-                        _diverging(fuzzynav.experiment.run_filter))
+    monkeypatch.setattr(fuzzynav.runpath, "run_filter",
+                        _diverging(fuzzynav.runpath.run_filter))
     code, out, err = _run(capsys, "run", TINY, "--filter", "ekf", "--seed", "4",
                           "--cache", sim_cache, *json_flag)
     assert code == 3 and _one_line(err) and out == ""

@@ -7,15 +7,15 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from fuzzynav.realdata import validate as validate_mod
+from fuzzynav import runpath
 from fuzzynav.realdata.validate import required_metrics
 from tests.realdata.test_damaged_recordings import drive, run_cli  # noqa: F401 (fixture)
 
 
 def _nan_from_halfway(monkeypatch):
     """Every filter run returns NaN positions from its middle on, as a diverged filter
-    would, while still reporting that it ran to the end."""
-    real = validate_mod.run_named
+    would, while still reporting that it ran to the end (patched in the one run path)."""
+    real = runpath.run_filter
 
     def run(*args, **kwargs):
         res = real(*args, **kwargs)
@@ -23,7 +23,7 @@ def _nan_from_halfway(monkeypatch):
         lla[len(lla) // 2:] = np.nan
         return dataclasses.replace(res, lla=lla)
 
-    monkeypatch.setattr(validate_mod, "run_named", run)
+    monkeypatch.setattr(runpath, "run_filter", run)
 
 
 @pytest.mark.parametrize("extra", [(), ("--json",)], ids=["table", "json"])

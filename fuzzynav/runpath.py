@@ -1,0 +1,196 @@
+"""The one run path: a source of data, a named filter, one compiled run, its metrics.
+
+Every way of running a filter on data goes through :func:`run` — a simulated log
+(:class:`fuzzynav.experiment.SimulatedSource`), the car recording under the validation
+protocol (:class:`fuzzynav.realdata.session.GnssSource`), an A-KIT trajectory
+(:class:`fuzzynav.realdata.akit.AkitSource`), a window of either as a study run
+(:mod:`fuzzynav.realdata.studyruns`), a start behind an alignment
+(:class:`fuzzynav.align.chain.AlignedSource`) and the free inertial run ALS fits its noise
+on.  :func:`run` is the only caller of :func:`fuzzynav.filters.runner.run_filter` outside
+``filters/``, so what holds for one source holds for all:
+
+* ``NAME@FILE[+FILE]`` filter specs are resolved (the rule or parameter files become the
+  filter's options);
+* the sensors' extra states (DVL scale, log bias, ...) are added by
+  :func:`~fuzzynav.filters.sensor_states.with_sensor_states`;
+* the filter sees the streams as its setup selects them (subsets, sigma overrides), cut
+  to the source's start;
+* every outcome says whether the run completed (``metrics["completed"]``) and which of the
+  metrics its source requires finite are not (:attr:`RunOutcome.diverged`), and
+  :func:`check_outcomes` refuses a table with any (exit 3 on the command line).
+
+A source is any object with the :class:`Source` attributes and methods; adding a dataset
+is one such class.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from fuzzynav.errors import RunDivergedError
+from fuzzynav.filters.named import FilterContext, FilterSetup, get_filter, parse_filter_spec
+from fuzzynav.filters.runner import InitialState, run_filter
+from fuzzynav.filters.sensor_states import with_sensor_states
+
+__all__ = ["RunInputs", "RunOutcome", "Source", "check_outcomes", "make_setup", "run"]
+
+
+@dataclass(frozen=True)
+class RunInputs:
+    """What a source feeds one run of a filter configuration.
+
+    Attributes
+    ----------
+    imu : ImuData
+        The increments from the start on.
+    sensors : dict
+        Aiding streams by name, before the filter's selection (:meth:`FilterSetup.
+        sensors_for`).
+    init : InitialState
+        The navigation state at ``imu.time_s[0]``.
+    sensor_options : dict
+        Per-sensor options merged over the setup's (e.g. ``{"gnss": {"use_velocity": False}}``).
+    config : FilterConfig or None
+        Replaces the setup's configuration (e.g. an aligned start's attitude sigma).
+    from_s : float or None
+        Epochs of the streams before this time are dropped, after the selection (a start
+        behind an alignment).
+    """
+
+    imu: object
+    sensors: dict
+    init: InitialState
+    sensor_options: dict = dataclasses.field(default_factory=dict)
+    config: object = None
+    from_s: float | None = None
+
+
+class Source(Protocol):
+    """A source of data to run named filters on.
+
+    Attributes
+    ----------
+    name : str
+        What tables call it (scenario name, recording spec).
+    seed : int
+        The seed of what was drawn for it (0 for a recording run without noise).
+    """
+
+    name: str
+    seed: int
+
+    def context(self, options=None) -> FilterContext:
+        """What named filters configure themselves from (IMU model, sensors, options)."""
+
+    def inputs(self, setup: FilterSetup) -> RunInputs:
+        """The IMU, streams and start of one run of ``setup``."""
+
+    def score(self, result) -> dict:
+        """Metrics of a :class:`~fuzzynav.filters.runner.FilterResult` (SI, units in names)."""
+
+    def required(self, metrics: dict) -> tuple:
+        """The names of ``metrics`` that must be finite unless the filter diverged."""
+
+
+@dataclass(frozen=True)
+class RunOutcome:
+    """One filter on one source.
+
+    Attributes
+    ----------
+    filter : str
+        The filter spec as given.
+    scenario : str
+        The source's name.
+    seed : int
+    result : FilterResult
+    metrics : dict
+        The source's score and ``completed`` (1.0, or 0.0 when the filter stopped early).
+    diverged : tuple
+        Names of required metrics that are not finite (empty for a healthy run).
+    """
+
+    filter: str
+    scenario: str
+    seed: int
+    result: object
+    metrics: dict
+    diverged: tuple = ()
+
+
+def make_setup(source: Source, filter_spec: str, options=None) -> FilterSetup:
+    """The configuration of a named filter (``NAME`` or ``NAME@FILE[+FILE]``) on a source."""
+    name, own = parse_filter_spec(filter_spec)
+    ctx = source.context({**dict(options or {}), **own})
+    return with_sensor_states(get_filter(name).make(ctx), ctx.sensors, ctx.options)
+
+
+def _merged(base: dict, extra: dict) -> dict:
+    if not extra:
+        return base
+    out = {k: dict(v) for k, v in base.items()}
+    for nm, opts in extra.items():
+        out.setdefault(nm, {}).update(opts)
+    return out
+
+
+def _from(data, t0: float):
+    """A stream without its epochs before ``t0`` (per-epoch ``meta`` arrays cut alike)."""
+    keep = data.time_s >= t0
+    meta = {k: (v[keep] if isinstance(v, np.ndarray) and v.shape[:1] == keep.shape else v)
+            for k, v in data.meta.items()}
+    return dataclasses.replace(data, time_s=data.time_s[keep], z=data.z[keep],
+                               sigma=data.sigma[keep], meta=meta)
+
+
+def run(source: Source, filter_spec: str, options=None,
+        setup: FilterSetup | None = None) -> RunOutcome:
+    """Run one named filter (or an explicit ``setup``) on a source and score it.
+
+    Parameters
+    ----------
+    source : Source
+    filter_spec : str
+        ``NAME`` or ``NAME@FILE[+FILE]``; with ``setup`` only its label.
+    options : dict, optional
+        Filter options (``rules``, initial sigmas, ...).
+    setup : FilterSetup, optional
+        A configuration made elsewhere (a study's candidate); its sensor states are the
+        caller's.
+    """
+    setup = setup or make_setup(source, filter_spec, options)
+    inp = source.inputs(setup)
+    sensors = setup.sensors_for(inp.sensors)
+    if inp.from_s is not None:
+        sensors = {nm: _from(d, inp.from_s) for nm, d in sensors.items()}
+    res = run_filter(inp.imu, sensors, inp.init, inp.config or setup.config, setup.adapters,
+                     _merged(setup.sensor_options, inp.sensor_options))
+    metrics = source.score(res)
+    metrics["completed"] = float(res.ok)
+    bad = tuple(m for m in source.required(metrics)
+                if not math.isfinite(float(metrics.get(m, math.nan))))
+    return RunOutcome(filter_spec, source.name, int(source.seed), res, metrics, bad)
+
+
+def check_outcomes(outcomes, what: str = "scenario") -> None:
+    """Refuse a table of runs of which any diverged (:attr:`RunOutcome.diverged`).
+
+    Raises
+    ------
+    RunDivergedError
+        Naming the first such run's filter, source and seed, and how many there are.
+    """
+    outcomes = list(outcomes)
+    bad = [o for o in outcomes if o.diverged]
+    if not bad:
+        return
+    o = bad[0]
+    stopped = " (it stopped early: covariance lost)" if o.metrics["completed"] < 1 else ""
+    raise RunDivergedError(f"filter {o.filter} diverged on {what} {o.scenario} seed {o.seed}"
+                           f"{stopped}: {o.diverged[0]} = {o.metrics.get(o.diverged[0])}; "
+                           f"{len(bad)} of {len(outcomes)} run(s) have non-finite metrics, "
+                           "no table printed")

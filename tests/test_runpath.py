@@ -1,0 +1,114 @@
+"""The one run path (fuzzynav.runpath): a worked new data source, and the guarantees every
+source gets from it (NAME@FILE, sensor states, divergence flagged, one caller)."""
+import ast
+import dataclasses
+import math
+from pathlib import Path
+
+import pytest
+
+from fuzzynav import runpath
+from fuzzynav.errors import RunDivergedError
+from fuzzynav.experiment import SimulatedSource
+from fuzzynav.filters.named import FilterContext, get_filter
+from fuzzynav.filters.runner import InitialState
+from fuzzynav.metrics import errors_vs_trajectory, rms_metrics
+from fuzzynav.sim.log import simulate
+from fuzzynav.sim.scenario import load_scenario
+
+ROOT = Path(__file__).resolve().parents[1]
+RULES = str(ROOT / "rules" / "paper000_gps_sins.json")
+
+
+@pytest.fixture(scope="module")
+def log(sim_cache):
+    scn = load_scenario("paper000-outliers")
+    return simulate(dataclasses.replace(scn, segments=scn.segments[:4]), 0, sim_cache)
+
+
+@dataclasses.dataclass(frozen=True)
+class TruthStart:
+    """A new data source in one class: a log whose filter starts on the truth (no drawn
+    initial error), scored by its horizontal RMS only -- the worked example of
+    docs/architecture.md "Add a data source"."""
+
+    log: object
+    name: str = "truth-start"
+    seed: int = 0
+
+    def context(self, options=None):
+        return FilterContext(imu_noise=self.log.scenario.imu.noise_si(),
+                             sensors=dict(self.log.sensors), options=dict(options or {}))
+
+    def inputs(self, setup):
+        t = self.log.truth
+        init = InitialState(float(t.time_s[0]), t.lla[0].copy(), t.vel_n[0].copy(),
+                            t.q_bn[0].copy())
+        return runpath.RunInputs(self.log.imu, self.log.sensors, init)
+
+    def score(self, result):
+        m = rms_metrics(errors_vs_trajectory(result, self.log.truth))
+        return {"rms_pos_h_m": m["rms_pos_h_m"]}
+
+    def required(self, metrics):
+        return ("rms_pos_h_m",)
+
+
+def test_a_new_source_is_one_class(log):
+    out = runpath.run(TruthStart(log), "ekf")
+    assert out.scenario == "truth-start" and out.metrics["completed"] == 1.0
+    assert set(out.metrics) == {"rms_pos_h_m", "completed"} and out.diverged == ()
+    # started on the truth, GNSS-aided: metres, not the kilometres of a free INS
+    assert 0.0 < out.metrics["rms_pos_h_m"] < 20.0
+    # the simulated source draws an initial error from the seed instead: another run
+    drawn = runpath.run(SimulatedSource(log), "ekf")
+    assert drawn.metrics["rms_pos_h_m"] != out.metrics["rms_pos_h_m"]
+
+
+def test_name_at_file_is_resolved_on_every_source(log):
+    """``fakf@FILE`` on a source that knows nothing of rule files = ``fakf`` given the
+    file as its option (same path, same data: bit-identical)."""
+    src = TruthStart(log)
+    at = runpath.run(src, f"fakf@{RULES}")
+    opt = runpath.run(src, "fakf", {"rules": [RULES]})
+    assert at.metrics == opt.metrics
+    assert at.filter == f"fakf@{RULES}"
+
+
+def test_sensor_states_are_added_on_every_source(sim_cache):
+    """A DVL-aided AUV: the run path's setup carries the DVL's scale and misalignment states
+    that the bare named filter does not, and tells the DVL model where they are."""
+    scn = load_scenario("paper004")
+    src = SimulatedSource(simulate(dataclasses.replace(scn, segments=scn.segments[:2]), 0,
+                                   sim_cache))
+    bare = get_filter("ekf").make(src.context())
+    made = runpath.make_setup(src, "ekf")
+    assert made.config.model.layout.n == bare.config.model.layout.n + 4
+    dvl = [nm for nm, d in src.log.sensors.items() if d.kind == "dvl"]
+    assert dvl and set(made.sensor_options[dvl[0]]["state_start"]) == {"dvl_scale",
+                                                                        "dvl_misalignment"}
+
+
+def test_a_run_with_a_nonfinite_required_metric_is_flagged_and_refused(log):
+    class Broken(TruthStart):
+        def score(self, result):
+            return {"rms_pos_h_m": math.nan}
+
+    out = runpath.run(Broken(log), "ekf")
+    assert out.diverged == ("rms_pos_h_m",)
+    ok = runpath.run(TruthStart(log), "ekf")
+    runpath.check_outcomes([ok])  # nothing to refuse
+    with pytest.raises(RunDivergedError, match=r"filter ekf diverged on scenario truth-start "
+                                               r"seed 0: rms_pos_h_m = nan; 1 of 2 run"):
+        runpath.check_outcomes([ok, out])
+
+
+def test_run_filter_has_one_caller_outside_filters():
+    callers = []
+    for path in (ROOT / "fuzzynav").rglob("*.py"):
+        if "filters" in path.relative_to(ROOT / "fuzzynav").parts[:1]:
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "run_filter":
+                callers.append(path.relative_to(ROOT).as_posix())
+    assert callers == ["fuzzynav/runpath.py"]
