@@ -11,7 +11,6 @@ from fuzzynav.cli import main
 from fuzzynav.errors import InputFileError
 from fuzzynav.filters.baselines import read_params
 from fuzzynav.filters.params_file import PARAMETERS, read_params_file
-from fuzzynav.filters.tuned_qr import read_multipliers
 
 ROOT = Path(__file__).resolve().parents[2]
 SHIPPED = ROOT / "studies" / "paper000_baselines.json"
@@ -74,7 +73,7 @@ def test_a_bad_parameter_file_is_one_line_naming_the_key(tmp_path, label, edit, 
 
 def test_the_shipped_files_read_back_unchanged():
     assert read_params(SHIPPED)["filters"] == _doc()["filters"]
-    assert read_multipliers(APSO) == json.loads(APSO.read_text())["filters"]["apso"]
+    assert read_params(APSO)["filters"] == json.loads(APSO.read_text())["filters"]
 
 
 def test_every_tuned_filter_registered_is_declared():
@@ -84,11 +83,11 @@ def test_every_tuned_filter_registered_is_declared():
     assert takers <= set(PARAMETERS), takers - set(PARAMETERS)
 
 
-def test_an_older_apso_file_with_empty_multipliers_is_refused(tmp_path):
+def test_an_older_apso_file_with_multipliers_is_refused(tmp_path):
     path = tmp_path / "apso.json"
     path.write_text(json.dumps({"multipliers": {}}))
-    with pytest.raises(InputFileError, match=r"\$\.multipliers: is empty"):
-        read_multipliers(path)
+    with pytest.raises(InputFileError, match=r"\$\.multipliers: an old APSO result file"):
+        read_params_file(path)
 
 
 @pytest.mark.parametrize("spec, phrase", [
