@@ -102,3 +102,36 @@ def test_the_cli_refuses_in_one_line(tmp_path, capsys, spec, phrase):
                  str(tmp_path / "cache")])
     out, err = capsys.readouterr()
     assert code == 2 and out == "" and phrase in err and err.count("\n") == 1, err
+
+
+def test_the_one_finder_finds_a_bare_name_in_studies_and_refuses_a_directory(tmp_path,
+                                                                              monkeypatch):
+    from fuzzynav.errors import DataMissingError
+    from fuzzynav.filters.catalog import find_params_file, find_rule_file
+
+    monkeypatch.chdir(tmp_path)  # not the checkout: the bare name comes from its studies/
+    assert find_params_file(SHIPPED.name).resolve() == SHIPPED.resolve()
+    (tmp_path / "studies").mkdir()
+    mine = tmp_path / "studies" / SHIPPED.name
+    mine.write_text(SHIPPED.read_text())
+    assert find_params_file(SHIPPED.name) == mine  # ./studies first
+    for find in (find_params_file, find_rule_file):
+        with pytest.raises(InputFileError, match="is a directory"):
+            find(str(tmp_path))
+        with pytest.raises(DataMissingError, match="not found"):
+            find("no_such_file.json")
+
+
+@pytest.mark.parametrize("options, phrase", [
+    ({"r_scale_pos": 2.0}, "options.r_scale_pos: an old name: the multiplier is now 'r_pos'"),
+    ({"r_scale": 2.0}, "options.r_scale: an old name: the multiplier is now 'r_all'"),
+    ({"r_pos": 0.0}, "options.r_pos: must be a number in [1e-06"),
+    ({"q_att": 2.0}, "ekf-scaled: options q_att scale Q"),
+])
+def test_ekf_scaled_options_use_the_one_vocabulary(options, phrase):
+    from fuzzynav.errors import FuzzynavError
+    from fuzzynav.filters.named import FilterContext, get_filter
+
+    with pytest.raises(FuzzynavError) as exc:
+        get_filter("ekf-scaled").make(FilterContext(options=options))
+    assert phrase in str(exc.value)
