@@ -20,8 +20,8 @@ from fuzzynav.filters.bank import BankSpec
 from fuzzynav.filters.bank_beta import DEFAULT_FLOOR
 from fuzzynav.filters.beta_controller import ShareController, is_share_controller
 from fuzzynav.filters.catalog import bind_systems, find_rule_file
-from fuzzynav.filters.named import FilterContext, FilterSetup, config_from_imu, \
-    config_overrides, register_filter
+from fuzzynav.filters.named import FilterContext, FilterSetup, base_config, \
+    register_filter
 
 
 def sensor_groups(ctx: FilterContext, groups) -> tuple:
@@ -67,7 +67,7 @@ def bank_setup(ctx: FilterContext, groups, mode: str = "no-reset", beta=None,
     period = ctx.options.get("fusion_period_s", 0.0) if fusion_period_s is None \
         else fusion_period_s
     spec = BankSpec(sensor_groups(ctx, groups), beta, mode, float(period), controller)
-    config = config_from_imu(ctx.imu_noise, **config_overrides(ctx.options)).with_(bank=spec)
+    config = base_config(ctx).with_(bank=spec)
     return FilterSetup(config, dict(adapters or {}))
 
 

@@ -10,11 +10,12 @@ training runs as a fuzzy study and writes the best parameters to a JSON file::
 
 The filters here read it: ``ekf-tuned@FILE`` (or the option ``params``); without one, the
 file :data:`DEFAULT_PARAMS` is looked up in ``./studies`` and then the checkout's
-``studies/`` (see :func:`find_params_file`).
+``studies/`` (see :func:`fuzzynav.filters.catalog.find_params_file`).
 
 * ``ekf-tuned`` -- constant multipliers of the process-noise densities (``q_att`` on the
   ARW, ``q_vel`` on the VRW, ``q_gyro_bias`` / ``q_accel_bias`` on the bias random walks;
-  variance factors) and of R per measurement channel (``r_<channel>``);
+  variance factors) and of R (``r_all``, ``r_<channel>``; the one vocabulary of
+  :mod:`fuzzynav.filters.multipliers`);
 * ``sage-husa-tuned`` (``b``, ``floor``, ``cap``), ``vb-tuned`` (``rho``, ``iterations``),
   ``huber-tuned`` (``gamma``), ``strong-tracking-tuned`` (``rho``, ``beta``, ``lam_max``);
 * ``strong-tracking`` -- Zhou's filter with its textbook constants (rho 0.95, beta 1, no
@@ -30,53 +31,32 @@ from pathlib import Path
 import numpy as np
 
 from fuzzynav import units
-from fuzzynav.errors import DataMissingError, InputFileError
+from fuzzynav.errors import InputFileError
 from fuzzynav.filters import measurements
 from fuzzynav.filters.adaptation.classical import (ConstantScale, Huber, SageHusa,
                                                    VariationalBayes)
 from fuzzynav.filters.adaptation.strong_tracking import StrongTracking
+from fuzzynav.filters.catalog import find_params_file
+from fuzzynav.filters.multipliers import Q_FIELDS, r_scales, scaled_config
 from fuzzynav.filters.params_file import read_params_file
-from fuzzynav.filters.named import FilterSetup, config_from_imu, config_overrides, \
-    register_filter
+from fuzzynav.filters.named import FilterSetup, base_config, every_sensor, register_filter
 
 #: the tuned-parameter file used when a filter is named without ``@FILE``
 DEFAULT_PARAMS = "paper000_baselines.json"
-#: process-noise multipliers of ``ekf-tuned`` / ``als``: key -> FilterConfig field
-Q_FIELDS = {"q_att": "arw_dpsh", "q_vel": "vrw_ug_psqrthz",
-            "q_gyro_bias": "gyro_rw_dph_psh", "q_accel_bias": "accel_rw_ug_psqrts"}
-
-
-def _base(ctx):
-    return config_from_imu(ctx.imu_noise, **config_overrides(ctx.options))
-
-
-def find_params_file(name) -> Path:
-    """A tuned-parameter file by path, or by file name in ``./studies`` or the checkout's
-    ``studies/`` (where the baseline studies write them)."""
-    if not str(name).strip():
-        raise InputFileError(None, "params", "names no file (NAME@ with nothing after the @)")
-    p = Path(name)
-    if p.is_file():
-        return p
-    if p.parent == Path("."):
-        for d in (Path.cwd() / "studies", Path(__file__).resolve().parents[2] / "studies"):
-            if (d / p.name).is_file():
-                return d / p.name
-    raise DataMissingError(f"{name}: tuned-parameter file not found (run the baseline study "
-                           "that writes it, e.g. fuzzynav study run "
-                           "studies/paper000_baselines.toml)")
+__all__ = ["DEFAULT_PARAMS", "Q_FIELDS", "TUNED", "find_params_file", "params_of", "read_params",
+           "scaled_noise_setup"]
 
 
 def read_params(path) -> dict:
-    """The ``filters`` table of a tuned-parameter file, every key and range checked
-    (:func:`fuzzynav.filters.params_file.read_params_file`)."""
+    """The ``filters`` table of a tuned-parameter file found by :func:`find_params_file`,
+    every key and range checked (:func:`fuzzynav.filters.params_file.read_params_file`)."""
     path = find_params_file(path)
     return {"path": Path(path), "filters": read_params_file(path)}
 
 
-def params_of(ctx, name: str) -> dict:
-    """The tuned parameters of filter ``name`` (from ``params`` or the default file)."""
-    doc = read_params(ctx.options.get("params") or DEFAULT_PARAMS)
+def params_of(ctx, name: str, default=DEFAULT_PARAMS) -> dict:
+    """The tuned parameters of filter ``name`` (from ``params`` or the file ``default``)."""
+    doc = read_params(ctx.options.get("params") or default)
     if name not in doc["filters"]:
         raise InputFileError(doc["path"], f"$.filters.{name}",
                              f"missing (this file tunes: {', '.join(doc['filters']) or 'none'}"
@@ -85,18 +65,10 @@ def params_of(ctx, name: str) -> dict:
 
 
 def scaled_noise_setup(ctx, params: dict) -> FilterSetup:
-    """The EKF with constant Q multipliers (:data:`Q_FIELDS`) and R multipliers per channel."""
-    cfg = _base(ctx)
-    # the config holds noise densities (sigmas): a variance factor q scales them by sqrt(q)
-    changes = {}
-    for key, fld in Q_FIELDS.items():
-        if key in params:
-            val = getattr(cfg, fld)
-            s = math.sqrt(float(params[key]))
-            changes[fld] = tuple(v * s for v in val) if isinstance(val, tuple) else val * s
-    scales = {k[2:]: float(v) for k, v in params.items() if k.startswith("r_")}
-    cfg = cfg.with_(**changes) if changes else cfg
-    return FilterSetup(cfg, {nm: ConstantScale(scales) for nm in ctx.sensors})
+    """The EKF with constant Q and R multipliers (:mod:`fuzzynav.filters.multipliers`)."""
+    scales, default = r_scales(params)
+    return every_sensor(ctx, lambda: ConstantScale(scales, default),
+                        scaled_config(base_config(ctx), params))
 
 
 def hqh_per_channel(cfg, data) -> dict:
@@ -116,13 +88,9 @@ def hqh_per_channel(cfg, data) -> dict:
 
 
 def _strong_tracking(ctx, rho: float, beta: float, lam_max: float = math.inf) -> FilterSetup:
-    cfg = _base(ctx)
+    cfg = base_config(ctx)
     return FilterSetup(cfg, {nm: StrongTracking(rho, beta, lam_max, hqh=hqh_per_channel(cfg, d))
                              for nm, d in ctx.sensors.items()})
-
-
-def _each(ctx, make) -> FilterSetup:
-    return FilterSetup(_base(ctx), {nm: make() for nm in ctx.sensors})
 
 
 #: tuned filter -> (description, setup from (context, parameters))
@@ -130,13 +98,13 @@ TUNED = {
     "ekf-tuned": ("EKF with constant Q and R multipliers tuned by a baseline study",
                   scaled_noise_setup),
     "sage-husa-tuned": ("Sage-Husa with b and its R bounds tuned by a baseline study",
-                        lambda ctx, p: _each(ctx, lambda: SageHusa(
+                        lambda ctx, p: every_sensor(ctx, lambda: SageHusa(
                             p.get("b", 0.98), p.get("floor", 0.1), p.get("cap", math.inf)))),
     "vb-tuned": ("variational Bayes with rho and iterations tuned by a baseline study",
-                 lambda ctx, p: _each(ctx, lambda: VariationalBayes(
+                 lambda ctx, p: every_sensor(ctx, lambda: VariationalBayes(
                      p.get("rho", 0.98), int(round(p.get("iterations", 3)))))),
     "huber-tuned": ("Huber with gamma tuned by a baseline study",
-                    lambda ctx, p: _each(ctx, lambda: Huber(p.get("gamma", 1.345)))),
+                    lambda ctx, p: every_sensor(ctx, lambda: Huber(p.get("gamma", 1.345)))),
     "strong-tracking-tuned": ("Zhou's strong tracking with rho and beta tuned by a "
                               "baseline study",
                               lambda ctx, p: _strong_tracking(ctx, p.get("rho", 0.95),

@@ -17,8 +17,9 @@ from fuzzynav.filters import adaptation, measurements
 from fuzzynav.filters.adaptation.classical import (ConstantScale, FadingMemory, Huber, SageHusa,
                                                    VariationalBayes)
 from fuzzynav.filters.adaptation.binding import BANK_CONTROLLERS, Binding
-from fuzzynav.filters.named import FilterContext, FilterSetup, config_from_imu, \
-    config_overrides, register_alias, register_filter
+from fuzzynav.filters.multipliers import is_multiplier, r_scales
+from fuzzynav.filters.named import FilterContext, FilterSetup, base_config, every_sensor, \
+    register_alias, register_filter
 
 #: the paper's two controllers, used by ``fuzzy`` (alias ``fakf``) without ``--rules``
 PAPER000_RULES = ("paper000_gps_sins.json", "paper000_attitude.json")
@@ -36,21 +37,46 @@ def rules_dirs() -> list[Path]:
     return dirs
 
 
-def find_rule_file(name) -> Path:
-    """A rule file by path, or by file name in :func:`rules_dirs`."""
+def params_dirs() -> list[Path]:
+    """Where tuned-parameter files named without a directory are looked up, in order:
+    ``./studies``, then the checkout's ``studies/`` (where the baseline studies write them)."""
+    return [Path.cwd() / "studies", Path(__file__).resolve().parents[2] / "studies"]
+
+
+def find_file(name, dirs, what: str, not_found: str) -> Path:
+    """The one file finder: ``name`` as a path, or a bare file name looked up in ``dirs``.
+
+    A directory or a special file (``/dev/null``, a FIFO: reading it would give nothing or
+    hang) is refused; ``not_found`` ends the error of a file found nowhere.
+    """
     p = Path(name)
     if p.is_file():
         return p
     if p.is_dir():
-        raise InputFileError(p, "", "is a directory, not a rule file")
-    if p.exists():  # /dev/null, a FIFO: reading it would give nothing or hang
-        raise InputFileError(p, "", "not a regular file (a rule file is a .json or .fis file)")
+        raise InputFileError(p, "", f"is a directory, not a {what}")
+    if p.exists():
+        raise InputFileError(p, "", f"not a regular file (a {what} is a .json or .fis file)")
     if p.parent == Path("."):
-        for d in rules_dirs():
+        for d in dirs:
             if (d / p.name).is_file():
                 return d / p.name
-    raise DataMissingError(f"{name}: rule file not found (looked in: "
-                           f"{', '.join(str(d) for d in rules_dirs())})")
+    raise DataMissingError(f"{name}: {what} not found ({not_found})")
+
+
+def find_rule_file(name) -> Path:
+    """A rule file by path, or by file name in :func:`rules_dirs`."""
+    dirs = rules_dirs()
+    return find_file(name, dirs, "rule file",
+                     f"looked in: {', '.join(str(d) for d in dirs)}")
+
+
+def find_params_file(name) -> Path:
+    """A tuned-parameter file by path, or by file name in :func:`params_dirs`."""
+    if not str(name).strip():
+        raise InputFileError(None, "params", "names no file (NAME@ with nothing after the @)")
+    return find_file(name, params_dirs(), "tuned-parameter file",
+                     "run the baseline study that writes it, e.g. fuzzynav study run "
+                     "studies/paper000_baselines.toml")
 
 
 def bind_rule_files(paths, sensors: dict, required: bool = True) -> dict:
@@ -101,10 +127,6 @@ def bind_systems(items, sensors: dict, required: bool = True) -> dict:
     return out
 
 
-def _base(ctx: FilterContext):
-    return config_from_imu(ctx.imu_noise, **config_overrides(ctx.options))
-
-
 @register_filter("fuzzy", "fuzzy adaptive KF: each rule file (--rules FILE, repeatable) "
                           "binds the adapter it names; default: paper 000's two controllers",
                  takes_rules=True)
@@ -118,25 +140,21 @@ def _fuzzy(ctx: FilterContext) -> FilterSetup:
         if not adapters:
             raise FuzzynavError("fuzzy: none of the paper-000 rule files fits this run's "
                                 "sensors")
-    return FilterSetup(_base(ctx), adapters)
+    return FilterSetup(base_config(ctx), adapters)
 
 
 # paper 000's name for it (FAKF: fuzzy adaptive Kalman filter), kept for scripts and studies
 register_alias("fakf", "fuzzy")
 
 
-def _every_sensor(ctx, make):
-    return FilterSetup(_base(ctx), {nm: make() for nm in ctx.sensors})
-
-
 @register_filter("sage-husa", "Sage-Husa adaptive R (b = 0.98)")
 def _sage_husa(ctx):
-    return _every_sensor(ctx, lambda: SageHusa(ctx.options.get("b", 0.98)))
+    return every_sensor(ctx, lambda: SageHusa(ctx.options.get("b", 0.98)))
 
 
 @register_filter("huber", "Huber M-estimation update (gamma = 1.345)")
 def _huber(ctx):
-    return _every_sensor(ctx, lambda: Huber(ctx.options.get("gamma", 1.345)))
+    return every_sensor(ctx, lambda: Huber(ctx.options.get("gamma", 1.345)))
 
 
 @register_filter("fading-memory", "strong-tracking fading memory (rho = 0.95, beta = 4, "
@@ -144,23 +162,29 @@ def _huber(ctx):
 def _fading(ctx):
     # beta and the cap: with beta = 2 or lambda up to 10 it diverged on paper000 with a
     # compass (heading HPH << R makes the ratio noisy); these defaults were stable there
-    return _every_sensor(ctx, lambda: FadingMemory(ctx.options.get("rho", 0.95),
+    return every_sensor(ctx, lambda: FadingMemory(ctx.options.get("rho", 0.95),
                                                    ctx.options.get("beta", 4.0),
                                                    ctx.options.get("lam_max", 3.0)))
 
 
 @register_filter("vb", "variational-Bayes adaptive R (Sarkka & Nummenmaa, rho = 0.98)")
 def _vb(ctx):
-    return _every_sensor(ctx, lambda: VariationalBayes(ctx.options.get("rho", 0.98)))
+    return every_sensor(ctx, lambda: VariationalBayes(ctx.options.get("rho", 0.98)))
 
 
 @register_filter("ekf-scaled", "EKF with constant R multipliers per channel "
-                               "(options r_scale / r_scale_<channel>; a tuned baseline)")
+                               "(options r_all / r_<channel>; a tuned baseline)")
 def _ekf_scaled(ctx):
-    scales = {k[len("r_scale_"):]: float(v) for k, v in ctx.options.items()
-              if k.startswith("r_scale_")}
-    default = float(ctx.options.get("r_scale", 1.0))
-    return _every_sensor(ctx, lambda: ConstantScale(scales, default))
+    from fuzzynav.filters.params_file import check_params
+
+    mult = {k: v for k, v in ctx.options.items() if is_multiplier(k)}
+    mult = check_params("ekf-tuned", mult, None, "options.") if mult else {}
+    q = sorted(k for k in mult if not k.startswith("r_"))
+    if q:
+        raise FuzzynavError(f"ekf-scaled: options {', '.join(q)} scale Q; ekf-scaled scales "
+                            "R only (ekf-tuned takes both)")
+    scales, default = r_scales(mult)
+    return every_sensor(ctx, lambda: ConstantScale(scales, default))
 
 
 @register_filter("ekf-true", "EKF told the true (simulated) noise of every measurement epoch")
@@ -172,4 +196,4 @@ def _ekf_true(ctx):
             raise FuzzynavError(f"ekf-true: sensor {nm!r} carries no true noise "
                                 "(only simulated sensors with meta['true_sigma'] do)")
         sensors[nm] = np.asarray(true, float)
-    return FilterSetup(_base(ctx), sigma_override=sensors)
+    return FilterSetup(base_config(ctx), sigma_override=sensors)

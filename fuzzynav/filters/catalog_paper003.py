@@ -2,8 +2,8 @@
 from __future__ import annotations
 
 from fuzzynav.filters.catalog import bind_rule_files
-from fuzzynav.filters.named import FilterContext, FilterSetup, config_from_imu, \
-    config_overrides, register_filter
+from fuzzynav.filters.named import FilterContext, FilterSetup, base_config, \
+    register_filter
 
 #: fuzzy R-scaling (paper 002's ROR -> t scheme) of the neutral-point heading and of the log
 PAPER003_RULES = ("paper003_pol_rscale.json", "paper003_log_rscale.json")
@@ -15,5 +15,5 @@ PAPER003_RULES = ("paper003_pol_rscale.json", "paper003_log_rscale.json")
 def _fuzzy_ship(ctx: FilterContext) -> FilterSetup:
     given = ctx.options.get("rules")
     files = ([given] if isinstance(given, str) else list(given)) if given else PAPER003_RULES
-    config = config_from_imu(ctx.imu_noise, **config_overrides(ctx.options))
+    config = base_config(ctx)
     return FilterSetup(config, bind_rule_files(files, ctx.sensors, required=not given))

@@ -211,9 +211,20 @@ def config_overrides(options) -> dict:
     return {k: options[k] for k in keys if k in options}
 
 
+def base_config(ctx: FilterContext) -> FilterConfig:
+    """The configuration matched to the context's IMU noise, with the user's overrides."""
+    return config_from_imu(ctx.imu_noise, **config_overrides(ctx.options))
+
+
+def every_sensor(ctx: FilterContext, make, config: FilterConfig | None = None) -> FilterSetup:
+    """A setup whose every sensor gets its own policy ``make()`` (default: base config)."""
+    return FilterSetup(base_config(ctx) if config is None else config,
+                       {nm: make() for nm in ctx.sensors})
+
+
 @register_filter("ekf", "EKF with the nominal noise the sensors and the IMU datasheet claim")
 def _ekf(ctx: FilterContext) -> FilterSetup:
-    return FilterSetup(config_from_imu(ctx.imu_noise, **config_overrides(ctx.options)))
+    return FilterSetup(base_config(ctx))
 
 
 @register_filter("ekf-st", "EKF with the state-transformation error model (ST-EKF, Wang et al. 2018)")

@@ -21,6 +21,7 @@ from pathlib import Path
 
 from fuzzynav.errors import InputFileError, brief
 from fuzzynav.filters import measurements
+from fuzzynav.filters.multipliers import Q_FIELDS, R_ALL, R_PREFIX, new_name
 
 PARAMS_FORMAT = "fuzzynav-baselines"
 #: largest tuned-parameter file read (bytes); a study writes a few kilobytes
@@ -60,17 +61,13 @@ class Param:
 
 
 _MULT = Param(*MULTIPLIER)
-#: Q multipliers of ``ekf-tuned`` / ``als`` (variance factors on the IMU noise densities)
-Q_KEYS = ("q_att", "q_vel", "q_gyro_bias", "q_accel_bias")
-#: Q multipliers of ``apso`` (paper 004's names)
-APSO_Q_KEYS = ("q_scale_att", "q_scale_vel", "q_scale_gyro", "q_scale_accel")
+#: the constant-multiplier filters (one vocabulary, :mod:`fuzzynav.filters.multipliers`)
+MULTIPLIER_FILTERS = ("ekf-tuned", "als", "apso")
 
-#: tuned filter -> {key: Param}; the per-channel R factors (``r_<channel>``,
-#: ``r_scale_<channel>``) are added by :func:`known_keys`
+#: tuned filter -> {key: Param}; the per-channel R factors ``r_<channel>`` of the
+#: multiplier filters are added by :func:`known_keys`
 PARAMETERS = {
-    "ekf-tuned": {k: _MULT for k in Q_KEYS},
-    "als": {k: _MULT for k in Q_KEYS},
-    "apso": {**{k: _MULT for k in APSO_Q_KEYS}, "r_scale": _MULT},
+    **{name: {**{k: _MULT for k in Q_FIELDS}, R_ALL: _MULT} for name in MULTIPLIER_FILTERS},
     "sage-husa-tuned": {"b": Param(0.0, 1.0, lo_open=True, hi_open=True),
                         "floor": Param(0.0, MULTIPLIER[1], lo_open=True),
                         "cap": Param(0.0, MULTIPLIER[1], lo_open=True)},
@@ -83,8 +80,6 @@ PARAMETERS = {
 }
 #: filters whose every declared key must be given (the others need at least one key)
 ALL_REQUIRED = ("sage-husa-tuned", "vb-tuned", "huber-tuned", "strong-tracking-tuned")
-#: the per-channel R-factor prefix of each multiplier filter
-R_PREFIX = {"ekf-tuned": "r_", "als": "r_", "apso": "r_scale_"}
 
 
 def _channels() -> tuple:
@@ -95,9 +90,20 @@ def _channels() -> tuple:
 def known_keys(name: str) -> dict:
     """Every key filter ``name`` reads, with its :class:`Param`."""
     keys = dict(PARAMETERS[name])
-    if name in R_PREFIX:
-        keys.update({f"{R_PREFIX[name]}{c}": _MULT for c in _channels()})
+    if name in MULTIPLIER_FILTERS:
+        keys.update({f"{R_PREFIX}{c}": _MULT for c in _channels()})
     return keys
+
+
+def _unknown(name: str, key, keys: dict) -> str:
+    """Why ``key`` is not a parameter of ``name``: an old name (with its new one) or unknown."""
+    multi = name in MULTIPLIER_FILTERS
+    renamed = new_name(key) if multi else None
+    if renamed is not None:
+        return f"an old name: the multiplier is now {renamed!r} (rename the key)"
+    shown = [k for k in keys if not (multi and k.startswith(R_PREFIX) and k != R_ALL)]
+    extra = f", {R_PREFIX}<channel>" if multi else ""
+    return f"unknown parameter of {name} (known: {', '.join(shown)}{extra})"
 
 
 def check_params(name: str, params, path=None, prefix: str = "") -> dict:
@@ -113,10 +119,7 @@ def check_params(name: str, params, path=None, prefix: str = "") -> dict:
     out = {}
     for key, value in params.items():
         if key not in keys:
-            shown = [k for k in keys if not k.startswith(R_PREFIX.get(name, "\0"))]
-            extra = f", {R_PREFIX[name]}<channel>" if name in R_PREFIX else ""
-            raise InputFileError(path, f"{prefix}{brief(key)[1:-1]}",
-                                 f"unknown parameter of {name} (known: {', '.join(shown)}{extra})")
+            raise InputFileError(path, f"{prefix}{brief(key)[1:-1]}", _unknown(name, key, keys))
         out[key] = keys[key].check(value, path, f"{prefix}{key}")
     if name in ALL_REQUIRED:
         missing = [k for k in keys if k not in out]
@@ -141,6 +144,10 @@ def read_params_file(path) -> dict:
         raise InputFileError(path, "", f"cannot be read ({exc.__class__.__name__})") from None
     except json.JSONDecodeError as exc:
         raise InputFileError(path, "", f"is not JSON ({exc.msg} at line {exc.lineno})") from None
+    if isinstance(doc, dict) and "multipliers" in doc and "format" not in doc:
+        raise InputFileError(path, "$.multipliers", "an old APSO result file: rerun the study "
+                             "(fuzzynav study run studies/paper004_apso.toml), which writes "
+                             f"a {PARAMS_FORMAT!r} file with the multipliers in filters.apso")
     if not isinstance(doc, dict) or doc.get("format") != PARAMS_FORMAT:
         raise InputFileError(path, "$.format", f"must be {PARAMS_FORMAT!r} (a file written "
                                                "by a baseline study)")

@@ -49,8 +49,8 @@ SPACES = {
     "huber-tuned": {"gamma": (0.5, 10.0, True)},
     # paper 004 says "Q and R" without listing the entries: the attitude and velocity rows
     # of Q (ARW/VRW densities) and every measurement's R (factors on the variances)
-    "apso": {"q_scale_att": (0.01, 100.0, True), "q_scale_vel": (0.01, 100.0, True),
-             "r_scale": (0.1, 100.0, True)},
+    "apso": {"q_att": (0.01, 100.0, True), "q_vel": (0.01, 100.0, True),
+             "r_all": (0.1, 100.0, True)},
     # the cap is searched too: uncapped (Zhou's form) it diverges on paper000, where the
     # compass's H P- H^T is far below its R and the innovation average alone gives huge factors
     "strong-tracking-tuned": {"rho": (0.5, 0.99, False), "beta": (1.0, 20.0, True),

@@ -11,7 +11,6 @@ from fuzzynav.cli import main
 from fuzzynav.errors import InputFileError
 from fuzzynav.filters.baselines import read_params
 from fuzzynav.filters.params_file import PARAMETERS, read_params_file
-from fuzzynav.filters.tuned_qr import read_multipliers
 
 ROOT = Path(__file__).resolve().parents[2]
 SHIPPED = ROOT / "studies" / "paper000_baselines.json"
@@ -74,7 +73,7 @@ def test_a_bad_parameter_file_is_one_line_naming_the_key(tmp_path, label, edit, 
 
 def test_the_shipped_files_read_back_unchanged():
     assert read_params(SHIPPED)["filters"] == _doc()["filters"]
-    assert read_multipliers(APSO) == json.loads(APSO.read_text())["filters"]["apso"]
+    assert read_params(APSO)["filters"] == json.loads(APSO.read_text())["filters"]
 
 
 def test_every_tuned_filter_registered_is_declared():
@@ -84,11 +83,11 @@ def test_every_tuned_filter_registered_is_declared():
     assert takers <= set(PARAMETERS), takers - set(PARAMETERS)
 
 
-def test_an_older_apso_file_with_empty_multipliers_is_refused(tmp_path):
+def test_an_older_apso_file_with_multipliers_is_refused(tmp_path):
     path = tmp_path / "apso.json"
     path.write_text(json.dumps({"multipliers": {}}))
-    with pytest.raises(InputFileError, match=r"\$\.multipliers: is empty"):
-        read_multipliers(path)
+    with pytest.raises(InputFileError, match=r"\$\.multipliers: an old APSO result file"):
+        read_params_file(path)
 
 
 @pytest.mark.parametrize("spec, phrase", [
@@ -103,3 +102,36 @@ def test_the_cli_refuses_in_one_line(tmp_path, capsys, spec, phrase):
                  str(tmp_path / "cache")])
     out, err = capsys.readouterr()
     assert code == 2 and out == "" and phrase in err and err.count("\n") == 1, err
+
+
+def test_the_one_finder_finds_a_bare_name_in_studies_and_refuses_a_directory(tmp_path,
+                                                                              monkeypatch):
+    from fuzzynav.errors import DataMissingError
+    from fuzzynav.filters.catalog import find_params_file, find_rule_file
+
+    monkeypatch.chdir(tmp_path)  # not the checkout: the bare name comes from its studies/
+    assert find_params_file(SHIPPED.name).resolve() == SHIPPED.resolve()
+    (tmp_path / "studies").mkdir()
+    mine = tmp_path / "studies" / SHIPPED.name
+    mine.write_text(SHIPPED.read_text())
+    assert find_params_file(SHIPPED.name) == mine  # ./studies first
+    for find in (find_params_file, find_rule_file):
+        with pytest.raises(InputFileError, match="is a directory"):
+            find(str(tmp_path))
+        with pytest.raises(DataMissingError, match="not found"):
+            find("no_such_file.json")
+
+
+@pytest.mark.parametrize("options, phrase", [
+    ({"r_scale_pos": 2.0}, "options.r_scale_pos: an old name: the multiplier is now 'r_pos'"),
+    ({"r_scale": 2.0}, "options.r_scale: an old name: the multiplier is now 'r_all'"),
+    ({"r_pos": 0.0}, "options.r_pos: must be a number in [1e-06"),
+    ({"q_att": 2.0}, "ekf-scaled: options q_att scale Q"),
+])
+def test_ekf_scaled_options_use_the_one_vocabulary(options, phrase):
+    from fuzzynav.errors import FuzzynavError
+    from fuzzynav.filters.named import FilterContext, get_filter
+
+    with pytest.raises(FuzzynavError) as exc:
+        get_filter("ekf-scaled").make(FilterContext(options=options))
+    assert phrase in str(exc.value)

@@ -56,7 +56,7 @@ def _bowl_study(iterations=25):
 
 def test_swarm_over_the_apso_space_finds_a_known_minimum_on_the_schedule():
     cfg = _bowl_study()
-    target = {"q_scale_att": 10.0, "q_scale_vel": 0.1, "r_scale": 3.0}
+    target = {"q_att": 10.0, "q_vel": 0.1, "r_all": 3.0}
     space = SPACES["apso"]
 
     def bowl(trial):  # squared log10 distance to the target multipliers
@@ -78,7 +78,7 @@ def test_swarm_over_the_apso_space_finds_a_known_minimum_on_the_schedule():
 
 
 def test_apso_reads_its_parameter_file_like_the_options(tmp_path, sim_cache):
-    mult = {"q_scale_att": 4.0, "q_scale_vel": 0.5, "r_scale": 2.5}
+    mult = {"q_att": 4.0, "q_vel": 0.5, "r_all": 2.5}
     path = tmp_path / "apso.json"
     path.write_text(json.dumps({"format": "fuzzynav-baselines", "filters": {"apso": mult}}))
     log = simulate(load_scenario(str(TINY)), 0, sim_cache)
@@ -91,14 +91,18 @@ def test_apso_reads_its_parameter_file_like_the_options(tmp_path, sim_cache):
 
 
 def test_a_parameter_file_without_apso_names_the_field(tmp_path):
-    from fuzzynav.filters.tuned_qr import read_multipliers
+    from fuzzynav.filters.baselines import params_of
+    from fuzzynav.filters.named import FilterContext
+
+    def read_apso(p):
+        return params_of(FilterContext(options={"params": str(p)}), "apso")
 
     path = tmp_path / "other.json"
     path.write_text(json.dumps({"format": "fuzzynav-baselines",
                                 "filters": {"ekf-tuned": {"q_att": 1.0}}}))
     with pytest.raises(InputFileError, match=r"\$\.filters\.apso: missing \(this file tunes: "
                                              r"ekf-tuned\)"):
-        read_multipliers(path)
-    path.write_text(json.dumps({"filters": {"apso": {"r_scale": 1.0}}}))  # not a study's file
+        read_apso(path)
+    path.write_text(json.dumps({"filters": {"apso": {"r_all": 1.0}}}))  # not a study's file
     with pytest.raises(InputFileError, match=r"\$\.format: must be 'fuzzynav-baselines'"):
-        read_multipliers(path)
+        read_apso(path)
