@@ -36,3 +36,22 @@ def test_text_table_and_bad_options(two_trajectories):
     assert code == 2 and "do not apply" in err
     code, _, err = _run("run", "--data", f"akit:{two_trajectories}:5")
     assert code == 2 and "IMU_trajectory5.csv" in err and len(err.strip().splitlines()) == 1
+
+
+def test_name_at_file_works_on_recordings(two_trajectories, tmp_path):
+    """``--filter apso@FILE`` on an A-KIT recording uses the file (it used to work on
+    scenarios only): same numbers as the file given as the filter's option, other numbers
+    than apso's defaults (the file multiplies the DVL's R by 25)."""
+    from fuzzynav.realdata.akit import run_trajectory
+    from fuzzynav.sim.loaders.akit import load_trajectory
+
+    params = tmp_path / "p.json"
+    params.write_text(json.dumps({"format": "fuzzynav-baselines", "version": 1,
+                                  "filters": {"apso": {"r_all": 25.0}}}))
+    code, out, err = _run("run", "--data", f"akit:{two_trajectories}:2", "--json",
+                          "--filter", f"apso@{params}")
+    assert code == 0, err
+    at_file = json.loads(out)["feeds"]["traj 2"]["rms_pos_h_m"]["values"][0]
+    rec = load_trajectory(two_trajectories, 2)
+    assert at_file == run_trajectory(rec, "apso", {"params": str(params)})[1]["rms_pos_h_m"]
+    assert at_file != run_trajectory(rec, "apso")[1]["rms_pos_h_m"]
