@@ -152,7 +152,7 @@ def test_errors_against_the_remembered_truth_equal_the_direct_ones(run):
     tr, res = run
     _check(res, tr)
     _check(res, tr)  # the second time from the memo
-    assert id(tr) in metrics._TRUTH_AT
+    assert tr in metrics._TRUTH_AT
     moved = replace(res, lla=res.lla + 1e-7, vel_n=res.vel_n * 1.5)  # another run, same epochs
     _check(moved, tr)
     half = replace(res, time_s=res.time_s[::2], lla=res.lla[::2], vel_n=res.vel_n[::2],
@@ -166,10 +166,10 @@ def test_the_memo_lets_its_trajectory_go():
     key = id(tr)
     res = _fake_result(tr)
     metrics.errors_vs_trajectory(res, tr)
-    assert key in metrics._TRUTH_AT
+    assert tr in metrics._TRUTH_AT
     del tr, res
     gc.collect()
-    assert key not in metrics._TRUTH_AT
+    assert key not in metrics._TRUTH_AT._entries
 
 
 def _fake_result(tr):
