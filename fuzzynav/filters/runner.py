@@ -14,7 +14,7 @@ from fuzzynav.filters.config import FilterConfig
 from fuzzynav.filters.error_st import EM_ST, error_model_code, st_covariance
 from fuzzynav.filters.layout import N_CORE
 from fuzzynav.filters import loop
-from fuzzynav.filters.dispatch import memoise_kernel_addresses
+from fuzzynav.filters.numba_patch_dispatch import memoise_kernel_addresses
 from fuzzynav.live_cache import LiveCache
 from fuzzynav.filters.result import EventLog, FilterResult, LocalStates
 from fuzzynav.nav import strapdown

@@ -33,7 +33,7 @@ from optuna.trial import TrialState
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.tuning.config import GROUP_METRICS
 from fuzzynav.tuning.objective import Objective
-from fuzzynav.tuning.pruners import WilcoxonPruner
+from fuzzynav.tuning.optuna_patch_pruners import WilcoxonPruner
 from fuzzynav.tuning.samplers import get_optimiser
 from fuzzynav.tuning.slots import TrialSlots
 

@@ -1,7 +1,7 @@
 """The per-run shortcuts of the study path give what the plain computations give.
 
 Kernel tables typed once per tuple and their addresses looked up once per kernel and
-signature (:mod:`fuzzynav.filters.dispatch`), output rows kept as
+signature (:mod:`fuzzynav.filters.numba_patch_dispatch`), output rows kept as
 views of what the loop wrote (a bank of one's local outputs formed from its master's), and the truth at a result's epochs remembered per trajectory
 (:func:`fuzzynav.metrics.errors_vs_trajectory`).
 """
@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from fuzzynav import metrics
-from fuzzynav.filters import dispatch
-from fuzzynav.filters.dispatch import memoise_table_types
+from fuzzynav.filters import numba_patch_dispatch as dispatch
+from fuzzynav.filters.numba_patch_dispatch import memoise_table_types
 from fuzzynav.filters.result import FilterResult
 from fuzzynav.filters.runner import run_filter
 from fuzzynav.nav import attitude, earth

@@ -1,10 +1,12 @@
 """fuzzynav's Wilcoxon pruner decides as Optuna's does, without copying the best trial."""
 import numpy as np
 import optuna
+import pytest
 from optuna.distributions import FloatDistribution
 from optuna.trial import TrialState, create_trial
 
-from fuzzynav.tuning.pruners import WilcoxonPruner
+from fuzzynav.tuning import optuna_patch_pruners
+from fuzzynav.tuning.optuna_patch_pruners import WilcoxonPruner
 
 
 def _study(rng):
@@ -17,7 +19,20 @@ def _study(rng):
     return study
 
 
-def test_same_decisions_as_optunas_pruner():
+def _without_private_best(monkeypatch):
+    """As on the Optuna of pyproject's lower bound (4.2): no private uncopied best trial."""
+    monkeypatch.setattr(optuna_patch_pruners, "PRIVATE_BEST_TRIAL", "_no_such_method")
+
+
+@pytest.mark.parametrize("optuna_kind", [None, _without_private_best],
+                         ids=["installed", "no-private-method"])
+def test_same_decisions_as_optunas_pruner(optuna_kind, monkeypatch):
+    copies = []
+    if optuna_kind is not None:
+        optuna_kind(monkeypatch)
+        public = optuna.study.Study.best_trial
+        monkeypatch.setattr(optuna.study.Study, "best_trial", property(
+            lambda self: (copies.append("copied"), public.fget(self))[1]))
     rng = np.random.default_rng(3)
     study = _study(rng)
     ours = WilcoxonPruner(p_threshold=0.1, n_startup_steps=2)
@@ -29,12 +44,17 @@ def test_same_decisions_as_optunas_pruner():
             trial = create_trial(state=TrialState.RUNNING, params={"a": 0.5},
                                  distributions={"a": FloatDistribution(0, 1)},
                                  intermediate_values=dict(enumerate(vals)))
+            before = len(copies)
             d = ours.prune(study, trial)
+            if optuna_kind is not None and n > 2:  # the fallback read the public property
+                assert len(copies) == before + 1
             assert d == theirs.prune(study, trial)
             decisions.append(d)
     assert any(decisions) and not all(decisions)  # both kinds of decision were compared
 
 
+@pytest.mark.skipif(not hasattr(optuna.study.Study, "_get_best_trial"),
+                    reason="this Optuna has no private uncopied best trial (fallback tested above)")
 def test_the_best_trial_is_not_copied(monkeypatch):
     study = _study(np.random.default_rng(0))
     monkeypatch.setattr(optuna.study.Study, "best_trial",
