@@ -11,9 +11,9 @@ from tests.filters.simple_data import CONFIG, run_inputs, trajectory
 
 
 @pytest.mark.parametrize("version, checked", [
-    ("0.58.1", False), ("0.59.0", True), ("0.59.1", True), ("0.68.1", True),
+    ("0.58.1", False), ("0.59.0", False), ("0.67.1", False), ("0.68.0", True), ("0.68.1", True),
     ("0.69.0rc1", False), ("1.0.0", False)])
-def test_the_checked_releases_run_from_the_lower_bound_to_the_last_tested(version, checked):
+def test_the_patches_apply_only_on_the_checked_releases(version, checked):
     assert patch.numba_checked(version) is checked
 
 
