@@ -27,6 +27,8 @@ import tempfile
 import time
 from pathlib import Path
 
+import optuna
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _report import machine, write_section  # noqa: E402
 
@@ -120,7 +122,8 @@ def report(args, rounds: list, load: tuple, secs: float) -> str:
              f"`{args.base}` in the same run: {args.rounds} rounds of the four studies "
              "interleaved (order reversed every other round), each in a fresh process, data "
              "simulated and kernels compiled beforehand. Machine: "
-             f"{machine()}; load average {load[0]:.2f} at the start, {load[1]:.2f} at the end; "
+             f"{machine()}; Optuna {optuna.__version__} (what `pip install` resolves on "
+             f"this date; both trees on it); load average {load[0]:.2f} at the start, {load[1]:.2f} at the end; "
              f"{secs / 60:.1f} min in all.", "",
              "| tree | workers | trials/min (median) | filter runs/s (median) | per round |",
              "|---|---|---|---|---|"]

@@ -6,13 +6,13 @@ comparisons between two filters on the same seeds are paired (bootstrap over see
 """
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import stats
 
 from fuzzynav.errors import RunDivergedError
+from fuzzynav.live_cache import LiveCache
 from fuzzynav.nav import attitude, earth
 
 AXES = ("e", "n", "u")
@@ -57,17 +57,16 @@ class _TruthAt:
 
 
 #: truth sampled at a result's epochs, per live trajectory: every run of a study on a log
-#: asks for the same epochs (``{id(truth): (weakref to truth, [_TruthAt, ...])}``; an entry
-#: goes with its trajectory, so the memo never keeps a log alive)
-_TRUTH_AT = {}
+#: asks for the same epochs (a few :class:`_TruthAt` per trajectory; an entry goes with its
+#: trajectory, so the memo never keeps a log alive)
+_TRUTH_AT = LiveCache()
 
 
 def _truth_at(truth, time_s) -> _TruthAt:
-    entry = _TRUTH_AT.get(id(truth))
-    if entry is not None and entry[0]() is truth:
-        for got in entry[1]:
-            if got.time_s.shape == time_s.shape and np.array_equal(got.time_s, time_s):
-                return got
+    kept = _TRUTH_AT.get(truth, ())
+    for got in kept:
+        if got.time_s.shape == time_s.shape and np.array_equal(got.time_s, time_s):
+            return got
     k = np.clip(np.searchsorted(truth.time_s, time_s - 1e-9), 0, truth.time_s.size - 1)
     if np.abs(truth.time_s[k] - time_s).max() > 1e-6:
         raise ValueError("result epochs are not on the truth's sample grid")
@@ -75,13 +74,7 @@ def _truth_at(truth, time_s) -> _TruthAt:
     r_m, r_n = earth.radii(lla[:, 0])
     got = _TruthAt(time_s.copy(), lla, truth.vel_n[k], truth.att[k], r_m + lla[:, 2],
                    r_n + lla[:, 2], np.cos(lla[:, 0]))
-    if entry is None or entry[0]() is not truth:
-        try:
-            ref = weakref.ref(truth, lambda _, key=id(truth): _TRUTH_AT.pop(key, None))
-        except TypeError:  # a truth without weak references: not remembered
-            return got
-        entry = _TRUTH_AT[id(truth)] = (ref, [])
-    entry[1][:] = entry[1][-3:] + [got]  # a few grids per log (output rates, early stops)
+    _TRUTH_AT.put(truth, kept[-3:] + (got,))  # a few grids per log (output rates, early stops)
     return got
 
 

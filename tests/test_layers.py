@@ -16,7 +16,7 @@ import pytest
 PKG = Path(__file__).resolve().parents[1] / "fuzzynav"
 
 #: the foundation every layer may use
-BASE = {"errors", "units", "fileio", "registry", "compile_notice", "fuzzynav"}
+BASE = {"errors", "units", "fileio", "registry", "live_cache", "compile_notice", "fuzzynav"}
 #: layer -> the layers it may import (besides itself and BASE), as docs/architecture.md draws
 ALLOWED = {
     "fuzzy": set(),

@@ -23,7 +23,7 @@ from fuzzynav.filters.adaptation import context
 from fuzzynav.filters.bank_beta import push_innovation, update_shares
 from fuzzynav.filters.bank_fusion import FUSED_NOW, SHARED, STALE, after_propagation, fuse, \
     fusion_work, local_residual, master_covariance, propagate_locals, share
-from fuzzynav.filters.dispatch import memoise_table_types
+from fuzzynav.filters.numba_patch_dispatch import memoise_table_types
 from fuzzynav.filters.error_st import EM_PHI, EM_ST, st_fused, st_measurement, st_regauge, \
     st_reset, st_to_phi
 from fuzzynav.filters.feedback import bias_totals, feedback

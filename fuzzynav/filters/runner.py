@@ -1,7 +1,6 @@
 """Run a filter: pack Python objects into arrays, call the compiled loop, bundle the result."""
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -15,7 +14,7 @@ from fuzzynav.filters.config import FilterConfig
 from fuzzynav.filters.error_st import EM_ST, error_model_code, st_covariance
 from fuzzynav.filters.layout import N_CORE
 from fuzzynav.filters import loop
-from fuzzynav.filters.dispatch import memoise_kernel_addresses
+from fuzzynav.filters.numba_patch_dispatch import memoise_kernel_addresses
 from fuzzynav.filters.result import EventLog, FilterResult, LocalStates
 from fuzzynav.nav import strapdown
 from fuzzynav.nav.layout import LLA_SLICE, NAV_SIZE, Q_SLICE, VEL_SLICE
@@ -44,12 +43,6 @@ class InitialState:
     q_bn: np.ndarray
 
 
-#: nominal sample interval of IMU clocks already checked, ``{id(time_s): (weakref, ends,
-#: dt)}``: every run on a log reads the same clock array (an entry goes with its array; its
-#: ends and length are compared too, against a clock changed in place)
-_CLOCKS = {}
-
-
 def _imu_arrays(imu):
     """The IMU arrays as the loop takes them, checked, and the nominal sample interval."""
     time_s = np.ascontiguousarray(imu.time_s, dtype=float)
@@ -58,16 +51,10 @@ def _imu_arrays(imu):
     if time_s.shape != (dth.shape[0] + 1,) or dv.shape != dth.shape:
         raise FuzzynavError(f"IMU arrays disagree: time {time_s.shape}, dtheta {dth.shape}, "
                             f"dv {dv.shape} (time needs one entry more than the increments)")
-    ends = (time_s.size, float(time_s[0]), float(time_s[-1]))
-    known = _CLOCKS.get(id(time_s))
-    if known is not None and known[0]() is time_s and known[1] == ends:
-        return time_s, dth, dv, known[2]
     step = np.diff(time_s)
     if np.any(step <= 0):
         raise FuzzynavError("IMU sample times must increase strictly")
     dt_nom = float(np.median(step))
-    _CLOCKS[id(time_s)] = (weakref.ref(time_s, lambda _, k=id(time_s): _CLOCKS.pop(k, None)),
-                           ends, dt_nom)
     return time_s, dth, dv, dt_nom
 
 

@@ -33,7 +33,6 @@ from optuna.trial import TrialState
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.tuning.config import GROUP_METRICS
 from fuzzynav.tuning.objective import Objective
-from fuzzynav.tuning.pruners import WilcoxonPruner
 from fuzzynav.tuning.samplers import get_optimiser
 from fuzzynav.tuning.slots import TrialSlots
 
@@ -124,7 +123,7 @@ def make_pruner(cfg):
         return optuna.pruners.NopPruner()
     if cfg.pruner == "median":
         return optuna.pruners.MedianPruner(n_startup_trials=5, n_warmup_steps=2)
-    return WilcoxonPruner(p_threshold=0.1, n_startup_steps=2)
+    return optuna.pruners.WilcoxonPruner(p_threshold=0.1, n_startup_steps=2)
 
 
 def open_study(cfg, storage_url=None, worker: int = 0, create: bool = False):

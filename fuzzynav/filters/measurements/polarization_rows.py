@@ -17,7 +17,6 @@ array changed in place is computed afresh, never read stale.
 from __future__ import annotations
 
 import math
-import weakref
 
 import numba as nb
 import numpy as np
@@ -25,6 +24,7 @@ from numba import types
 
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.filters.numba_lazy import njit_signature
+from fuzzynav.live_cache import LiveCache
 from fuzzynav.nav.polarization_imaging import aop_trig, sun_from_aops, view_frames
 
 
@@ -63,25 +63,23 @@ def _imaging_columns(z, frames, k):
     return out
 
 
-# id(z) -> (weak reference to z, copy of z's bits, views, columns); an entry leaves with z
-_KEPT: dict = {}
+#: z -> (copy of z's bits, views, columns); an entry leaves with z
+_KEPT = LiveCache()
 
 
 def imaging_columns(z: np.ndarray, views_b: np.ndarray) -> np.ndarray:
     """The extra columns of the rows of measurements ``z`` (M, k + 3) seen through views
     ``views_b`` (k, 3): computed once while ``z`` lives with the same bits."""
-    key = id(z)
-    kept = _KEPT.get(key)
-    if kept is not None and kept[0]() is z and np.array_equal(kept[2], views_b) \
-            and np.array_equal(kept[1], z.view(np.int64)):
-        return kept[3]
+    kept = _KEPT.get(z)
+    if kept is not None and np.array_equal(kept[1], views_b) \
+            and np.array_equal(kept[0], z.view(np.int64)):
+        return kept[2]
     k = views_b.shape[0]
     cols = _imaging_columns(np.ascontiguousarray(z, dtype=float),
                             view_frames(np.ascontiguousarray(views_b, dtype=float)), k)
     cols.setflags(write=False)
     if z.dtype == np.float64 and z.flags.c_contiguous:
-        _KEPT[key] = (weakref.ref(z, lambda _, k=key: _KEPT.pop(k, None)),
-                      z.view(np.int64).copy(), views_b.copy(), cols)
+        _KEPT.put(z, (z.view(np.int64).copy(), views_b.copy(), cols))
     return cols
 
 

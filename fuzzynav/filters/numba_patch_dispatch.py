@@ -1,4 +1,14 @@
-"""Calling the compiled filter loop without re-typing its kernel tables on every run.
+"""Patches numba: the compiled filter loop called without re-typing its kernel tables.
+
+This module patches numba internals: an instance ``typeof_pyval`` on the loop's dispatcher
+(numba's C dispatcher looks it up per argument) and the module-level lookups
+``numba.experimental.function_type._get_wrapper_address`` / ``_get_jit_address``.  Both are
+applied only on the numba releases in :data:`CHECKED_NUMBA`, those the tests ran on
+(``tests/filters/test_run_overhead.py``, ``tests/filters/test_numba_patch_dispatch.py``);
+on any other release -- pyproject's lower bound 0.59 included, which cannot be installed
+beside numpy 2.4 to be checked -- numba is left as it is and every run takes numba's own
+path, with the same results (the fallback is tested by forcing it).  The measured
+gain: ``benchmarks/bench_patches.py`` (``docs/benchmarks.md``, "Library patches").
 
 The loop receives the measurement models and adaptation policies as tuples of compiled
 functions.  numba types every argument on every call, and a tuple of compiled functions is
@@ -13,8 +23,20 @@ keeps those per function and signature.
 """
 from __future__ import annotations
 
+import numba
 import numba.experimental.function_type as _function_type
 from numba.core.dispatcher import Dispatcher
+
+#: numba releases ``(major, minor)`` the patches were checked against, both ends included
+#: (widen it after running the tests above on another release)
+CHECKED_NUMBA = ((0, 68), (0, 68))
+
+
+def numba_checked(version: str | None = None) -> bool:
+    """Whether numba ``version`` (default: the installed one) is in :data:`CHECKED_NUMBA`."""
+    major, minor = (int(p) for p in (version or numba.__version__).split(".")[:2])
+    return CHECKED_NUMBA[0] <= (major, minor) <= CHECKED_NUMBA[1]
+
 
 #: tuples of kernels whose numba type is kept (a process builds a handful: one per registry
 #: state); past this many the memo is cleared rather than grown
@@ -29,8 +51,11 @@ def memoise_table_types(dispatcher: Dispatcher) -> Dispatcher:
     """Make ``dispatcher`` type a tuple of compiled functions once per distinct tuple.
 
     The key is the tuple's functions (by identity) and how many overloads each has, so a
-    kernel compiled for a new signature later is typed afresh.  Returns ``dispatcher``.
+    kernel compiled for a new signature later is typed afresh.  Returns ``dispatcher``
+    (unchanged on a numba release outside :data:`CHECKED_NUMBA`).
     """
+    if not numba_checked():
+        return dispatcher
     plain = dispatcher.typeof_pyval
     memo = {}
 
@@ -76,6 +101,7 @@ def _memoised_address(lookup):
         return addr
 
     address.memoised = True
+    address.wrapped = lookup
     return address
 
 
@@ -86,9 +112,20 @@ def memoise_kernel_addresses() -> None:
     name on every call (``numba.experimental.function_type._get_wrapper_address`` and
     ``_get_jit_address``) with memoised ones answering the same.  An address stays valid
     while its function lives: numba never frees an overload's code (``Dispatcher.recompile``
-    would, and fuzzynav never calls it).
+    would, and fuzzynav never calls it).  Nothing is replaced on a numba release outside
+    :data:`CHECKED_NUMBA`.
     """
+    if not numba_checked():
+        return
     for name in ("_get_wrapper_address", "_get_jit_address"):
         lookup = getattr(_function_type, name, None)  # None: another numba, left as it is
         if lookup is not None and not getattr(lookup, "memoised", False):
             setattr(_function_type, name, _memoised_address(lookup))
+
+
+def restore_kernel_addresses() -> None:
+    """Undo :func:`memoise_kernel_addresses` (numba's own lookups again; for measuring)."""
+    for name in ("_get_wrapper_address", "_get_jit_address"):
+        lookup = getattr(_function_type, name, None)
+        if getattr(lookup, "memoised", False):
+            setattr(_function_type, name, lookup.wrapped)
