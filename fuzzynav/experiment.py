@@ -52,16 +52,9 @@ def _draw_initial_state(seed, truth, sig) -> InitialState:
                         truth.vel_n[0] + x0[3:6], attitude.dcm_to_quat(C0))
 
 
-@dataclass(frozen=True)
-class SimulatedSource:
-    """A simulated :class:`SensorLog` as a run source (:mod:`fuzzynav.runpath`): the filter
-    starts from the truth with the error :func:`perturbed_initial_state` draws and is scored
-    against the truth from ``t_start_s`` on (every RMS and maximum must be finite)."""
-
-    log: SensorLog
-    t_start_s: float = 0.0
-    #: False: the free inertial run (no aiding streams fed)
-    aided: bool = True
+class OnSimulatedLog:
+    """What every run source on a simulated log (attribute ``log``) shares: its name and
+    seed, the filter context of the log, and that every RMS and maximum must be finite."""
 
     @property
     def name(self) -> str:
@@ -75,6 +68,21 @@ class SimulatedSource:
         return FilterContext(imu_noise=self.log.scenario.imu.noise_si(),
                              sensors=dict(self.log.sensors), options=dict(options or {}))
 
+    def required(self, metrics: dict) -> tuple:
+        return tuple(m for m in metrics if m.startswith(("rms_", "max_")))
+
+
+@dataclass(frozen=True)
+class SimulatedSource(OnSimulatedLog):
+    """A simulated :class:`SensorLog` as a run source (:mod:`fuzzynav.runpath`): the filter
+    starts from the truth with the error :func:`perturbed_initial_state` draws and is scored
+    against the truth from ``t_start_s`` on (every RMS and maximum must be finite)."""
+
+    log: SensorLog
+    t_start_s: float = 0.0
+    #: False: the free inertial run (no aiding streams fed)
+    aided: bool = True
+
     def inputs(self, setup: FilterSetup) -> RunInputs:
         return RunInputs(self.log.imu, self.log.sensors if self.aided else {},
                          perturbed_initial_state(self.log, setup))
@@ -82,8 +90,6 @@ class SimulatedSource:
     def score(self, result) -> dict:
         return rms_metrics(errors_vs_trajectory(result, self.log.truth), self.t_start_s)
 
-    def required(self, metrics: dict) -> tuple:
-        return tuple(m for m in metrics if m.startswith(("rms_", "max_")))
 
 
 def as_source(log, t_start_s: float = 0.0):

@@ -22,7 +22,7 @@ from fuzzynav.align.fuzzy_r import policy_for
 from fuzzynav.align.mechanize import mechanize
 from fuzzynav.align.model import AlignNoise
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.experiment import SimulatedSource
+from fuzzynav.experiment import OnSimulatedLog
 from fuzzynav.filters.runner import InitialState
 from fuzzynav.metrics import errors_vs_trajectory, rms_metrics
 from fuzzynav.nav import attitude
@@ -89,7 +89,7 @@ def align_on_rest(log, align_filter="align-kf", rules=None):
 
 
 @dataclasses.dataclass(frozen=True)
-class AlignedSource:
+class AlignedSource(OnSimulatedLog):
     """A simulated log started behind an alignment, as a run source (:mod:`fuzzynav.
     runpath`): the IMU and the streams from IMU sample ``k`` on, the aligned attitude
     ``C_bn`` with its 1-sigma ``sigma_rad`` (ENU) as the initial attitude uncertainty, zero
@@ -100,17 +100,6 @@ class AlignedSource:
     k: int
     C_bn: np.ndarray
     sigma_rad: np.ndarray
-
-    @property
-    def name(self) -> str:
-        return self.log.scenario.name
-
-    @property
-    def seed(self) -> int:
-        return self.log.seed
-
-    def context(self, options=None):
-        return SimulatedSource(self.log).context(options)
 
     def inputs(self, setup) -> RunInputs:
         log, k = self.log, self.k
@@ -132,8 +121,6 @@ class AlignedSource:
                        align_level_err_deg=float(np.hypot(err[0], err[1])) / units.DEG)
         return metrics
 
-    def required(self, metrics: dict) -> tuple:
-        return SimulatedSource(self.log).required(metrics)
 
 
 def run_aligned(log, nav_filter, options=None, align_filter="align-kf", rules=None):

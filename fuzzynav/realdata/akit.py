@@ -88,7 +88,9 @@ class AkitSource:
         ref = self.rec.reference if self.reference is None else self.reference
         return score(antenna_track(result, self.rec.reference_offset_b), ref)
 
-    def required(self, metrics: dict) -> tuple:
+    @staticmethod
+    def required(metrics) -> tuple:
+        """Position and velocity metrics (of ``metrics``' names): attitude is not scored."""
         return tuple(m for m in metrics if m.startswith(("rms_pos", "max_pos", "rms_vel")))
 
 

@@ -92,12 +92,12 @@ def _json_ready(x):
 
 def run_akit(spec, recs, filter_name, options, args) -> int:
     """Run, print the table or JSON; ``--plot DIR`` writes a trajectory and error figure."""
-    from fuzzynav.realdata.akit import run_all
+    from fuzzynav.realdata.akit import AkitSource, run_all
 
     df, results = run_all(recs, filter_name, options)
     # the guarantee every source keeps: non-finite metrics print nothing and exit 3 (the
     # attitude is not scored against the reference here: its RMS columns are NaN by design)
-    scored = [c for c in df.columns if c.startswith(("rms_pos", "max_pos", "rms_vel"))]
+    scored = list(AkitSource.required(df.columns))
     check_finite_metrics(df.assign(scenario=[f"{spec} ({f})" for f in df["filter"]],
                                    filter=filter_name), pd.DataFrame(True, df.index, scored),
                          source="recording")

@@ -181,9 +181,10 @@ DRIFT_METRICS = ("drift_h_rms_m", "drift_h_max_m", "outage_max_h_m")
 
 def required_names(metrics: dict, vel_scored: bool) -> tuple:
     """The metrics of one run that must be finite (:func:`required_metrics`'s rule)."""
-    n_done = metrics.get("n_outages", 0.0)
+    n_done = float(metrics.get("n_outages", 0.0))
     names = list(POSITION_METRICS) + (list(VELOCITY_METRICS) if vel_scored else [])
-    names += list(DRIFT_METRICS) * (n_done >= 1)
+    if n_done >= 1:
+        names += DRIFT_METRICS
     names += [c for c in metrics if c.startswith("drift_h_m_")
               and n_done >= int(c.rsplit("_", 1)[1])]
     return tuple(names)
@@ -198,13 +199,11 @@ def required_metrics(df: pd.DataFrame, rec) -> pd.DataFrame:
     run without complete outages; ``rms_pos_h_aided_m``, whose epochs are a subset of
     ``rms_pos_h_m``'s -- it is NaN only when every scored epoch is inside an outage.
     """
-    n_done = df["n_outages"].to_numpy()
     vel = bool(np.isfinite(rec.reference.z[:, 3:6]).all())
-    req = {m: np.ones(len(df), bool) for m in POSITION_METRICS}
-    req.update({m: np.full(len(df), vel) for m in VELOCITY_METRICS})
-    req.update({m: n_done >= 1 for m in DRIFT_METRICS})
-    drifts = [c for c in df.columns if c.startswith("drift_h_m_")]
-    req.update({c: n_done >= int(c.rsplit("_", 1)[1]) for c in drifts})
+    names = [set(required_names(m, vel)) for m in df.to_dict("records")]
+    cols = [*POSITION_METRICS, *VELOCITY_METRICS, *DRIFT_METRICS,
+            *(c for c in df.columns if c.startswith("drift_h_m_"))]
+    req = {c: np.array([c in n for n in names], bool) for c in cols}
     return pd.DataFrame(req, index=df.index)
 
 
