@@ -1,0 +1,1 @@
+"""Paper 001: its claims, named filters, scenarios and results page."""

@@ -1,0 +1,1 @@
+"""Paper 004: its claims, named filters, scenarios and results page."""
