@@ -32,8 +32,9 @@ import math
 import numba as nb
 import numpy as np
 
+from fuzzynav.nav.attitude import wrap_pi
 from fuzzynav.nav.polarization_geometry import (TWO_PI, aop_and_gradient, dot3, fold_half_pi,
-                                                rot_x, rot_y, sun_body_partials, wrap_pi)
+                                                rot_x, rot_y, sun_body_partials)
 from fuzzynav.nav.polarization_imaging import imaging_pitch_heading
 
 __all__ = ["aop_attitude_jacobian", "aop_euler_partials", "heading_from_zenith_aop",

@@ -12,6 +12,8 @@ import math
 import numba as nb
 import numpy as np
 
+from fuzzynav.nav.attitude import mod_pos
+
 HALF_PI = 0.5 * math.pi
 TWO_PI = 2.0 * math.pi
 
@@ -36,27 +38,9 @@ def atan_small(t):
 
 
 @nb.njit(cache=True, error_model="numpy")
-def mod_pos(a, m):
-    """``a % m`` (``m > 0``) without the ``fmod`` when ``a`` already lies in ``(0, m)``.
-
-    There the remainder is ``a`` itself, bit for bit, and that is the usual case of the
-    angles folded here: the same numbers, a library call less.
-    """
-    if 0.0 < a < m:
-        return a
-    return a % m
-
-
-@nb.njit(cache=True, error_model="numpy")
 def fold_half_pi(a):
     """Axial angle folded into [-pi/2, pi/2)."""
     return mod_pos(a + HALF_PI, math.pi) - HALF_PI
-
-
-@nb.njit(cache=True, error_model="numpy")
-def wrap_pi(a):
-    """Angle wrapped into [-pi, pi)."""
-    return mod_pos(a + math.pi, TWO_PI) - math.pi
 
 
 @nb.njit(cache=True, error_model="numpy")

@@ -20,9 +20,9 @@ import math
 import numba as nb
 import numpy as np
 
+from fuzzynav.nav.attitude import mod_pos, wrap_pi
 from fuzzynav.nav.polarization_geometry import (HALF_PI, TWO_PI, aop_residual_and_gradient3,
-                                                dot3, mod_pos, rot_x, rot_y_cs,
-                                                sun_body_partials_cs, wrap_pi)
+                                                dot3, rot_x, rot_y_cs, sun_body_partials_cs)
 
 #: entries per view in a frames array (:func:`view_frames`): view, x reference, y reference
 FRAME = 9

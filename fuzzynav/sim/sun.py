@@ -43,6 +43,8 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
+from fuzzynav.nav.attitude import wrap_pi
+
 #: Julian day of the J2000.0 epoch (2000-01-01 12:00 TT)
 J2000_JD = 2451545.0
 #: Julian day of the Unix epoch 1970-01-01 00:00 UTC
@@ -129,10 +131,10 @@ def sun_position_nb(jd_ut, lat_rad, lon_rad, delta_t_s):
     tu = du / 36525.0
     gmst = (280.46061837 + 360.98564736629 * du + tu * tu * (0.000387933 - tu / 38710000.0))
     gast = gmst * d2r + dpsi * math.cos(eps)
-    hour = _wrap_pi(gast + lon_rad - ra)
+    hour = wrap_pi(gast + lon_rad - ra)
     # mean solar time is UT + longitude; the equation of time is what the sun is ahead of it
     ut_angle = 2.0 * math.pi * ((jd_ut - 0.5) % 1.0)
-    eot_s = _wrap_pi(hour + math.pi - ut_angle - lon_rad) * 86400.0 / (2.0 * math.pi)
+    eot_s = wrap_pi(hour + math.pi - ut_angle - lon_rad) * 86400.0 / (2.0 * math.pi)
     sl, cl = math.sin(lat_rad), math.cos(lat_rad)
     sd, cd = math.sin(decl), math.cos(decl)
     east = -cd * math.sin(hour)
@@ -164,11 +166,6 @@ def _perturbations(t1900):
     dr = (5.43e-6 * math.sin(a) + 1.575e-5 * math.sin(b) + 1.627e-5 * math.sin(c)
           + 3.076e-5 * math.cos(d) + 9.27e-6 * math.sin(h))
     return dl, dr
-
-
-@nb.njit(cache=True)
-def _wrap_pi(a):
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
 @nb.njit(cache=True)

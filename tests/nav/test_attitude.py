@@ -60,3 +60,23 @@ def test_attitude_error_definition():
 def test_wrap(a, w):
     assert att.wrap_pi(a) == pytest.approx(w)
     assert 0 <= att.wrap_2pi(-0.1) < 2 * np.pi
+
+
+def test_wrap_pi_one_function_for_python_and_numba():
+    """The one ``wrap_pi`` equals numpy's floored remainder bit for bit, on arrays of any
+    shape from Python and on scalars inside a numba kernel."""
+    import numba as nb
+
+    a = np.concatenate([RNG.normal(0, 20, 2000), [0.0, np.pi, -np.pi, 2 * np.pi, -7.5, 1e6]])
+    ref = (a + np.pi) % (2 * np.pi) - np.pi
+    assert np.array_equal(att.wrap_pi(a), ref)
+    assert np.array_equal(att.wrap_pi(a.reshape(2, -1)), ref.reshape(2, -1))
+
+    @nb.njit
+    def wrap_each(x):
+        out = np.empty_like(x)
+        for i in range(x.size):
+            out[i] = att.wrap_pi(x[i])
+        return out
+
+    assert np.array_equal(wrap_each(a), ref)

@@ -40,7 +40,8 @@ from fuzzynav.filters.layout import X_ATT
 from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.nav import polarization as ps
-from fuzzynav.nav.polarization_geometry import TWO_PI, fold_half_pi, mod_pos, wrap_pi
+from fuzzynav.nav.attitude import mod_pos, wrap_pi
+from fuzzynav.nav.polarization_geometry import TWO_PI, fold_half_pi
 from fuzzynav.filters.measurements.polarization_rows import fill_extra, rows
 from fuzzynav.nav.polarization_imaging import FRAME, imaging_fit_sun, view_frames
 
