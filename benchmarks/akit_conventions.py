@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from fuzzynav.report import render
-from fuzzynav.sim.loaders import akit
+from fuzzynav.realdata.loaders import akit_recording as akit
 
 ROOT = Path(__file__).resolve().parents[1]
 

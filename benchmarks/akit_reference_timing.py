@@ -8,7 +8,7 @@ in 30 s); the RMS heading difference over 30 s is printed as placed and for the 
 few hundredths of a degree; a timing error shows as heading error where the turn rate
 changes.  *Before*: the reference placed by the earlier loader (the yaw rate of the reference
 against the z gyro x cos roll in 1-s bins, whole-trajectory lag of 0-3 samples, reproduced
-below); *after*: the loader's clock map (``fuzzynav.sim.loaders.akit_timing``).  Usage:
+below); *after*: the loader's clock map (``fuzzynav.realdata.loaders.akit_timing``).  Usage:
 ``python benchmarks/akit_reference_timing.py`` (reads ``$FUZZYNAV_DATA/akit``).
 """
 from __future__ import annotations
@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from fuzzynav.nav import attitude
-from fuzzynav.sim.loaders import akit
-from fuzzynav.sim.loaders.akit_timing import parabola_min
+from fuzzynav.realdata.loaders import akit_recording as akit
+from fuzzynav.realdata.loaders.akit_timing import parabola_min
 
 ROOT = Path(__file__).resolve().parents[1]
 SECONDS = 30

@@ -45,7 +45,7 @@ def load(spec: str):
     """The recording of ``akit:DIR:N`` (one trajectory), or None with a message."""
     from fuzzynav.errors import FuzzynavError
     from fuzzynav.realdata.sources import parse_data_spec
-    from fuzzynav.sim.loaders.akit import load_akit
+    from fuzzynav.realdata.loaders.akit_recording import load_akit
 
     try:
         source, directory, session = parse_data_spec(spec)

@@ -112,7 +112,7 @@ def real_data(data_dir):
     """Per-trajectory metrics of every filter on A-KIT 1-8 and the EKF run's results."""
     from fuzzynav.filters.named import parse_filter_spec
     from fuzzynav.realdata.akit import run_all
-    from fuzzynav.sim.loaders.akit import load_akit
+    from fuzzynav.realdata.loaders.akit_recording import load_akit
 
     recs = load_akit(data_dir, "1-8")
     frames, ekf_results = [], None

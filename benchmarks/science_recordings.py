@@ -168,7 +168,7 @@ def auv_section(directory: Path, auv_rules) -> tuple:
                 f"recordings (`{rules.name}` absent; paper 004's leave-trajectories-out study "
                 "writes it). The classical filters on them: docs/paper004.md.*", ""], None
     from fuzzynav.realdata.akit import run_all
-    from fuzzynav.sim.loaders.akit import load_akit
+    from fuzzynav.realdata.loaders.akit_recording import load_akit
 
     held = _held_out_trajectories(rules)
     if not held:

@@ -29,7 +29,7 @@ from fuzzynav.realdata.protocol import ProtocolSettings
 from fuzzynav.realdata.score import errors_against, horizontal
 from fuzzynav.realdata.sources import SOURCES, resolve_mounting
 from fuzzynav.realdata.validate import validate
-from fuzzynav.sim import coarse_align
+from fuzzynav.realdata import coarse_align
 from fuzzynav.sim.imu import ImuData
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -144,6 +144,8 @@ def test_modules_import_no_private_names_of_each_other():
     ("fuzzynav.nav.earth", "fuzzynav.filters.kalman", False),
     ("fuzzynav.fuzzy.io", "fuzzynav.nav.earth", False),
     ("fuzzynav.tuning.space", "fuzzynav.filters.named", True),
+    ("fuzzynav.sim.scenario", "fuzzynav.realdata.loaders.rtklib", False),
+    ("fuzzynav.realdata.loaders.rtklib", "fuzzynav.sim.imu", True),
 ])
 def test_the_layer_rule_itself(source, target, ok):
     # the check above must be able to fail: known-bad edges are refused, good ones pass

@@ -1,6 +1,9 @@
 """Filters on real recordings: data sources, the validation protocol, the ``--data`` CLI path.
 
 * :mod:`.sources` — :data:`SOURCES` (recording kinds: ``rtklib``) and ``--data KIND:DIR``;
+* :mod:`.loaders` — the recordings' readers (RTKLIB car drive, A-KIT AUV) and their checks;
+* :mod:`.start_options` / :mod:`.coarse_align` — how the initial state is found from the data;
+* :mod:`.degrade` — the degraded copies of a recording the protocol feeds;
 * :mod:`.mems` — the filter's consumer-MEMS noise model;
 * :mod:`.protocol` — the degraded feed (noise, velocity lag, outages) and its settings;
 * :mod:`.session` — initial state from the data and one named-filter run;

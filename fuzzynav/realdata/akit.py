@@ -96,7 +96,7 @@ class AkitSource:
 
 def run_trajectory(rec, filter_name: str, options=None):
     """Run one named filter (``NAME`` or ``NAME@FILE``) on one
-    :class:`~fuzzynav.sim.loaders.akit.AkitRecording`; ``(FilterResult, metrics dict)``."""
+    :class:`~fuzzynav.realdata.loaders.akit_recording.AkitRecording`; ``(FilterResult, metrics dict)``."""
     out = run(AkitSource(rec), filter_name, options)
     return out.result, out.metrics
 

@@ -6,7 +6,7 @@ The white-noise figures are the ones the rtklib-drive's source configures for it
 (``docs/validation.md`` §2):
 
 * **Gyro bias.**  The large turn-on bias (≈ 0.17 °/s here) is removed before the filter
-  starts by the mean rate at rest (:mod:`fuzzynav.sim.coarse_align`); what is left is the
+  starts by the mean rate at rest (:mod:`fuzzynav.realdata.coarse_align`); what is left is the
   in-run change.  On the drive the mean rate at the four stops moves by up to 100 °/h
   within minutes (the IMU had been powered for four minutes: warm-up), so the residual
   prior is 50 °/h and the random walk 100 °/h/√h (13 °/h per minute).

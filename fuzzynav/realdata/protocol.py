@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.sim import degrade
+from fuzzynav.realdata import degrade
 from fuzzynav.sim.sensors import SensorData
 from fuzzynav.sim.sensors.gnss import outage_windows
 

@@ -1,6 +1,6 @@
 """Start a filter on a recording: initial state from the data, then one named-filter run.
 
-The filter starts at the end of the opening rest (:func:`fuzzynav.sim.coarse_align.
+The filter starts at the end of the opening rest (:func:`fuzzynav.realdata.coarse_align.
 initial_state`): level from the accelerometers, heading from the GNSS course once moving
 (or by specific-force matching without a mounting), position and velocity from the fed
 fixes.  The mean gyro rate at rest (turn-on bias; earth rate removed) is subtracted from
@@ -21,7 +21,7 @@ from fuzzynav.filters.runner import InitialState
 from fuzzynav.nav import attitude, earth
 from fuzzynav.realdata.mems import CONSUMER_MEMS, MemsModel
 from fuzzynav.runpath import RunInputs
-from fuzzynav.sim import coarse_align
+from fuzzynav.realdata import coarse_align
 from fuzzynav.sim.imu import ImuData
 
 #: the name of the GNSS stream; rule-file bindings may name it or its kind ``gnss``
@@ -50,7 +50,7 @@ class Start:
 def start_from(imu, fixes, mounting_known: bool, lever_arm_b=(0.0, 0.0, 0.0),
                options=None) -> Start:
     """Initial state from the data (``fixes``: the stream the filter will be fed; ``options``:
-    :class:`~fuzzynav.sim.start_options.StartOptions`, default the car drive's).
+    :class:`~fuzzynav.realdata.start_options.StartOptions`, default the car drive's).
 
     Raises
     ------

@@ -7,7 +7,7 @@ A kind is one :class:`DataSource` in :data:`SOURCES`: a description and a loader
 recording directory (any copy of a recording of that kind) and returning an object with
 ``imu`` (:class:`~fuzzynav.sim.imu.ImuData`), ``gnss`` (all fixes, kind ``gnss``),
 ``reference`` (the untouched fixes used as truth), ``mounting`` (or ``None``) and
-``directory`` — the :class:`~fuzzynav.sim.loaders.rtklib.Recording` of the RTKLIB loader.
+``directory`` — the :class:`~fuzzynav.realdata.loaders.rtklib.Recording` of the RTKLIB loader.
 Add a kind with :func:`register_source`.
 """
 from __future__ import annotations
@@ -33,7 +33,7 @@ class DataSource:
         ``load(directory, mounting="auto", imu_delay_s=None, span_s=None, session=None,
         options=None) -> Recording``; ``None`` leaves a loader's own default (``session``:
         which recording of a directory that holds several; ``options``: the
-        :class:`~fuzzynav.sim.start_options.StartOptions` of a ``?key=value`` suffix).
+        :class:`~fuzzynav.realdata.start_options.StartOptions` of a ``?key=value`` suffix).
     split : callable or None
         ``split(session) -> [session, ...]`` for a kind whose ``SESSION`` may name several
         recordings (A-KIT ``1-4``); a study runs each separately.
@@ -67,7 +67,7 @@ def register_source(kind: str, description: str, split: Callable | None = None,
                            "(e.g. --data rtklib-drive, after fuzzynav data fetch rtklib-drive)")
 def _load_rtklib(directory, mounting="auto", imu_delay_s=None, span_s=None, session=None,
                  options=None):
-    from fuzzynav.sim.loaders.rtklib import load_rtklib
+    from fuzzynav.realdata.loaders.rtklib import load_rtklib
 
     kw = {} if imu_delay_s is None else {"imu_delay_s": float(imu_delay_s)}
     # velocities are loaded as recorded; the protocol decides what to do with their lag
@@ -76,7 +76,7 @@ def _load_rtklib(directory, mounting="auto", imu_delay_s=None, span_s=None, sess
 
 
 def _akit_split(session):
-    from fuzzynav.sim.loaders.akit import parse_trajectories
+    from fuzzynav.realdata.loaders.akit_recording import parse_trajectories
 
     return parse_trajectories(session)
 
@@ -87,7 +87,7 @@ def _akit_split(session):
                  split=_akit_split, protocol=False)
 def _load_akit(directory, mounting="auto", imu_delay_s=None, span_s=None, session=None,
                options=None):
-    from fuzzynav.sim.loaders.akit import load_akit
+    from fuzzynav.realdata.loaders.akit_recording import load_akit
 
     if mounting not in ("auto", None) or imu_delay_s is not None or span_s is not None:
         raise FuzzynavError("--data akit: --mounting, --imu-delay and --span do not apply "
@@ -147,9 +147,9 @@ def split_options(spec: str) -> tuple[str, str | None]:
 
 
 def data_options(spec: str):
-    """The :class:`~fuzzynav.sim.start_options.StartOptions` of a data spec's ``?key=value``
+    """The :class:`~fuzzynav.realdata.start_options.StartOptions` of a data spec's ``?key=value``
     suffix, or ``None`` without one (the loader's defaults)."""
-    from fuzzynav.sim.start_options import parse_start_options
+    from fuzzynav.realdata.start_options import parse_start_options
 
     bare, query = split_options(spec)
     return None if query is None else parse_start_options(query, bare)

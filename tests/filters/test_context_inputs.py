@@ -140,7 +140,7 @@ def test_motion_statistics_take_no_channel():
 
 def test_a_recording_carries_fix_type_and_satellite_count_to_the_gnss_rows(rtklib_drive):
     from fuzzynav.filters import measurements
-    from fuzzynav.sim.loaders.rtklib import load_rtklib
+    from fuzzynav.realdata.loaders.rtklib import load_rtklib
 
     rec = load_rtklib(rtklib_drive, span_s=(0.0, 60.0))
     rows = measurements.get("gnss").rows(rec.gnss)
@@ -155,7 +155,7 @@ def test_the_recording_template_binds_to_a_recording_and_not_to_simulated_fixes(
     from fuzzynav.filters import measurements
     from fuzzynav.filters.adaptation.rq_scaling import FuzzyRQScaling
     from fuzzynav.fuzzy import load_fis
-    from fuzzynav.sim.loaders.rtklib import load_rtklib
+    from fuzzynav.realdata.loaders.rtklib import load_rtklib
 
     path = "rules/recording_rq_quality_gnss.json"
     pol, model = FuzzyRQScaling(load_fis(path), path), measurements.get("gnss")

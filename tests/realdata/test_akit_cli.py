@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from tests.realdata.test_cli_errors import _run
-from tests.sim.akit_files import auv_trajectory, write_akit
+from tests.realdata.akit_files import auv_trajectory, write_akit
 
 
 @pytest.fixture(scope="module")
@@ -43,7 +43,7 @@ def test_name_at_file_works_on_recordings(two_trajectories, tmp_path):
     scenarios only): same numbers as the file given as the filter's option, other numbers
     than apso's defaults (the file multiplies the DVL's R by 25)."""
     from fuzzynav.realdata.akit import run_trajectory
-    from fuzzynav.sim.loaders.akit import load_trajectory
+    from fuzzynav.realdata.loaders.akit_recording import load_trajectory
 
     params = tmp_path / "p.json"
     params.write_text(json.dumps({"format": "fuzzynav-baselines", "version": 1,

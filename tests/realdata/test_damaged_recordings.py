@@ -1,6 +1,6 @@
 """A corpus of damaged recordings through ``fuzzynav run --data``: one clear line, exit 2.
 
-Each case copies the synthetic drive (:func:`tests.sim.rtklib_files.write_drive`, which the
+Each case copies the synthetic drive (:func:`tests.realdata.rtklib_files.write_drive`, which the
 whole protocol accepts: first test), applies ONE damage to one file and runs the CLI in
 process.  It must exit with code 2, print one line on stderr naming the file and the field
 (column, line, record) at fault and nothing on stdout (no results table), and no traceback.
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from fuzzynav.cli import main
-from tests.sim.rtklib_files import START, tag_bytes, write_drive
+from tests.realdata.rtklib_files import START, tag_bytes, write_drive
 
 CSV, TAG, POS = "imu_1.csv", "imu_1.csv.tag", "gnss_1_sf.pos"
 #: a short protocol: one 10-s outage 20 s after the filter starts
@@ -77,8 +77,8 @@ def _cut(d, name, fraction=None, size=None):
 
 
 def _shift_pos(d, seconds):
-    from fuzzynav.sim.loaders.rtkpos import read_pos
-    from tests.sim.rtklib_files import write_pos
+    from fuzzynav.realdata.loaders.rtkpos import read_pos
+    from tests.realdata.rtklib_files import write_pos
 
     p = read_pos(d / POS)
     c = p.columns
@@ -212,7 +212,7 @@ def test_damaged_recording_is_refused_in_one_line(drive, tmp_path, damage, name,
 
 # -- what is repaired, not refused ------------------------------------------------------------
 def _load(d, **kw):
-    from fuzzynav.sim.loaders.rtklib import load_rtklib
+    from fuzzynav.realdata.loaders.rtklib import load_rtklib
 
     return load_rtklib(d, mounting=None, **kw)
 
@@ -237,7 +237,7 @@ def test_blank_and_comment_lines_are_skipped(drive, tmp_path):
 def test_logging_stopped_inside_a_line_and_a_tag_record(drive, tmp_path):
     """The tag's last record cut (as an interrupted write leaves it), the CSV cut 20 bytes
     after the last line that record counted: both cut pieces are dropped, the rest kept."""
-    from fuzzynav.sim.loaders.timetag import read_timetag
+    from fuzzynav.realdata.loaders.timetag import read_timetag
 
     d = tmp_path / "rec"
     shutil.copytree(drive, d)
@@ -254,7 +254,7 @@ def test_logging_stopped_inside_a_line_and_a_tag_record(drive, tmp_path):
 
 def test_limits_can_be_widened_for_an_unusual_sensor(drive, tmp_path):
     from fuzzynav.errors import InputFileError
-    from fuzzynav.sim.loaders.checks import Limits
+    from fuzzynav.realdata.loaders.checks import Limits
 
     d = tmp_path / "rec"
     shutil.copytree(drive, d)

@@ -11,7 +11,7 @@ import pytest
 from fuzzynav.cli import main
 from fuzzynav.errors import DataMissingError, FuzzynavError
 from fuzzynav.realdata.sources import parse_data_spec
-from tests.sim.rtklib_files import write_drive
+from tests.realdata.rtklib_files import write_drive
 
 ARGS = ("--filter", "ekf", "--outage-period", "30", "--outage-duration", "10",
         "--first-outage", "20")
@@ -85,7 +85,7 @@ def test_the_spec_is_split_at_the_last_colon_unless_the_directory_exists(tmp_pat
 def test_a_session_takes_only_its_own_gnss_solution(tmp_path, names, session, expect):
     """``gnss_<id>*.pos`` must not reach into another session whose id starts with this
     one's (session 1 and session 12 in one directory)."""
-    from fuzzynav.sim.loaders.recording_files import find_files
+    from fuzzynav.realdata.loaders.recording_files import find_files
 
     for sid in {session, "12"}:
         (tmp_path / f"imu_{sid}.csv").write_text("x\n")

@@ -1,7 +1,7 @@
 """``--data rtklib:DIR?options``: a walking-speed recording, refused by the car defaults,
 starts and navigates with a lower speed threshold or the heading from the GNSS track.
 
-The walk (``tests.sim.rtklib_files.WALK_SEGMENTS``: 20 s rest, 1.4 m/s, two 90-degree turns
+The walk (``tests.realdata.rtklib_files.WALK_SEGMENTS``: 20 s rest, 1.4 m/s, two 90-degree turns
 and a stop) is written by the simulator in the RTKLIB formats with an identity mounting, so
 the body's forward axis is known and its true heading at the start is 30 degrees.  Bounds:
 
@@ -20,7 +20,7 @@ import json
 import pytest
 
 from fuzzynav.cli import main
-from tests.sim.rtklib_files import DRIVE_HEADING_DEG, WALK_SEGMENTS, write_drive
+from tests.realdata.rtklib_files import DRIVE_HEADING_DEG, WALK_SEGMENTS, write_drive
 
 RAW_FIXES_H_RMS_M = 2.0 * 2.0**0.5
 PROTOCOL = ("--first-outage", "40", "--outage-duration", "20", "--json")

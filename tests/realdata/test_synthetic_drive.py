@@ -14,7 +14,7 @@ import pytest
 from fuzzynav.realdata.protocol import ProtocolSettings
 from fuzzynav.realdata.validate import validate
 from fuzzynav.sim.imu import ImuData
-from fuzzynav.sim.loaders.mounting import Mounting
+from fuzzynav.realdata.loaders.mounting import Mounting
 from fuzzynav.sim.segments import Segment
 from fuzzynav.sim.sensors import SensorData
 from fuzzynav.sim.trajectory import generate

@@ -13,12 +13,12 @@ import pytest
 from fuzzynav.errors import FuzzynavError, InputFileError, UnknownNameError
 from fuzzynav.experiment import summary_table
 from fuzzynav.realdata.validate import validate
-from fuzzynav.sim.loaders import sync
-from fuzzynav.sim.loaders.rtklib import load_rtklib
+from fuzzynav.realdata.loaders import sync
+from fuzzynav.realdata.loaders.rtklib import load_rtklib
 from fuzzynav.sim.log import check_seed, simulate
 from fuzzynav.sim.scenario import load_scenario
 from fuzzynav.sim.segments import Segment
-from tests.sim.rtklib_files import write_drive
+from tests.realdata.rtklib_files import write_drive
 
 TINY = Path(__file__).resolve().parents[1] / "tuning" / "data" / "tiny.toml"
 

@@ -1,6 +1,6 @@
 """Studies trained on recordings and judged on other recordings (or other time windows).
 
-The recordings are synthetic A-KIT files (``tests/sim/akit_files.py``) in a data directory
+The recordings are synthetic A-KIT files (``tests/realdata/akit_files.py``) in a data directory
 given by ``$FUZZYNAV_DATA``, so these run without the real data.
 """
 from __future__ import annotations
@@ -13,7 +13,7 @@ from fuzzynav.realdata.dataspec import DATA_DIR_ENV
 from fuzzynav.tuning.config import load_study_config
 from fuzzynav.tuning.evaluate import run_table
 from fuzzynav.tuning.objective import Evaluator, score_metrics
-from tests.sim.akit_files import auv_trajectory, write_akit
+from tests.realdata.akit_files import auv_trajectory, write_akit
 from tests.tuning.studies import RULES, study_doc, write_study
 
 DVL_CTRL = {"name": "dvl", "template": str(RULES / "paper004_ror_dvl.json"),

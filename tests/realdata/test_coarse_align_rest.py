@@ -3,7 +3,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from fuzzynav.sim.coarse_align import opening_rest
+from fuzzynav.realdata.coarse_align import opening_rest
 
 
 def test_rest_blocks_with_uneven_sample_counts():

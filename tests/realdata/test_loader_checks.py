@@ -1,4 +1,4 @@
-"""The recording checks at their thresholds (:mod:`fuzzynav.sim.loaders.checks`)."""
+"""The recording checks at their thresholds (:mod:`fuzzynav.realdata.loaders.checks`)."""
 from types import SimpleNamespace
 
 import numpy as np
@@ -6,9 +6,9 @@ import pytest
 
 from fuzzynav.errors import InputFileError
 from fuzzynav.sim.imu import ImuData
-from fuzzynav.sim.loaders import checks, sync
+from fuzzynav.realdata.loaders import checks, sync
 from fuzzynav.sim.sensors import SensorData
-from tests.sim.rtklib_files import drive_samples
+from tests.realdata.rtklib_files import drive_samples
 
 P = "rec/imu_1.csv"
 

@@ -4,5 +4,7 @@ Each loader takes the recording's directory (any copy of a recording of that kin
 and returns IMU increments in the body RFU frame (:class:`fuzzynav.sim.imu.ImuData`) and
 aiding-sensor data (:class:`fuzzynav.sim.sensors.SensorData`) on one time axis.
 
-* :mod:`.rtklib` — RTKLIB-logged IMU CSV + time tags + RTKLIB ``.pos`` (the rtklib-drive).
+* :mod:`.rtklib` — RTKLIB-logged IMU CSV + time tags + RTKLIB ``.pos`` (the rtklib-drive);
+* :mod:`.akit_recording` — the A-KIT AUV trajectories (clock map in :mod:`.akit_timing`,
+  checks in :mod:`.akit_checks`).
 """

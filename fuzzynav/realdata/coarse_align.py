@@ -4,7 +4,7 @@
   (or, without GNSS velocity, the IMU's rate and specific force stay steady).
 * **Level.**  Pitch and roll from the mean specific force ``f`` at rest, which points up:
   ``f_b = |f| (-cos p sin r, sin p, cos p cos r)`` (RFU body, :mod:`fuzzynav.nav.attitude`).
-* **Heading**, four ways (:mod:`fuzzynav.sim.start_options` chooses, with every speed,
+* **Heading**, four ways (:mod:`fuzzynav.realdata.start_options` chooses, with every speed,
   window and threshold below):
 
   - given by the caller;
@@ -39,7 +39,7 @@ import numpy as np
 from fuzzynav.errors import InputFileError
 from fuzzynav.nav import attitude, earth
 from fuzzynav.nav.strapdown import quat_mul, rv2q
-from fuzzynav.sim.start_options import StartOptions
+from fuzzynav.realdata.start_options import StartOptions
 
 
 @dataclass(frozen=True)
@@ -275,7 +275,7 @@ def initial_state(imu, gnss, heading_rad=None, forward_known=False, options=None
         heading comes from the GNSS course, else from specific-force matching.
     options : StartOptions, optional
         Rest detection, heading method, speeds and windows
-        (:mod:`fuzzynav.sim.start_options`; default: the car drive's).
+        (:mod:`fuzzynav.realdata.start_options`; default: the car drive's).
     **kw
         ``window_s``, ``min_speed_mps`` for the heading estimators (override ``options``).
     """

@@ -2,7 +2,7 @@
 blames the right file, with the column and what was wrong.
 
 Every case starts from a synthetic trajectory in the real files' layout
-(:mod:`tests.sim.akit_files`), breaks one thing -- the kinds of damage a user's copy or a
+(:mod:`tests.realdata.akit_files`), breaks one thing -- the kinds of damage a user's copy or a
 user's own recording shows (a unit, an origin, a cut, a spike, a swap, a file of another
 trajectory) -- and checks the loader's refusal names the file at fault, not another.
 """
@@ -16,10 +16,10 @@ import pytest
 
 from fuzzynav.cli import main
 from fuzzynav.errors import InputFileError
-from fuzzynav.sim.loaders.akit import load_trajectory
-from fuzzynav.sim.loaders.akit_checks import MAX_FILE_BYTES
+from fuzzynav.realdata.loaders.akit_recording import load_trajectory
+from fuzzynav.realdata.loaders.akit_checks import MAX_FILE_BYTES
 from tests.conftest import datasets_dir
-from tests.sim.akit_files import HEAD, auv_trajectory, varied_auv_trajectory, write_akit
+from tests.realdata.akit_files import HEAD, auv_trajectory, varied_auv_trajectory, write_akit
 
 IMU, DVL, GT = "IMU_trajectory1.csv", "corrected/DVL_trajectory1.csv", \
     "corrected/GT_trajectory1.csv"

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from fuzzynav.errors import DataMissingError, InputFileError
-from fuzzynav.sim.loaders import rtklib, timetag
-from tests.sim.rtklib_files import csv_lines, write_imu, write_pos
+from fuzzynav.realdata.loaders import rtklib, timetag
+from tests.realdata.rtklib_files import csv_lines, write_imu, write_pos
 
 START_INT, START_FRAC = 1_700_000_000, 0.25     # GPST of the tag file (seconds since 1970)
 TICK0, N = 5000, 3001                          # IMU tick of the first line, lines

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from fuzzynav.nav import attitude, earth
-from fuzzynav.sim import coarse_align
-from fuzzynav.sim.loaders import rtklib, sync
-from fuzzynav.sim.loaders.mounting import Mounting
-from fuzzynav.sim.loaders.rtkpos import read_pos
+from fuzzynav.realdata import coarse_align
+from fuzzynav.realdata.loaders import rtklib, sync
+from fuzzynav.realdata.loaders.mounting import Mounting
+from fuzzynav.realdata.loaders.rtkpos import read_pos
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = Path(os.environ.get("FUZZYNAV_DATA", ROOT.parent / "shared" / "datasets"))

@@ -1,9 +1,9 @@
 """Plausibility checks of an A-KIT trajectory before any filter sees it.
 
-The parser (:func:`fuzzynav.sim.loaders.akit.read_table`) refuses what it cannot read; these
+The parser (:func:`fuzzynav.realdata.loaders.akit_recording.read_table`) refuses what it cannot read; these
 checks refuse what reads but is not one trajectory of an AUV: a file too large to be one, a
 time column in another unit, origin or clock, an IMU with a gap or ending early, physics no
-vehicle has (the IMU checks are :mod:`~fuzzynav.sim.loaders.checks`', shared with the car's
+vehicle has (the IMU checks are :mod:`~fuzzynav.realdata.loaders.checks`', shared with the car's
 loader), and -- once the clock map is measured -- files that do not belong together: the
 gyros must turn as the reference's attitude does, and the DVL's forward speed must be the
 reference's.  Each check blames the file at fault by name, with the column and the named
@@ -17,8 +17,8 @@ import numpy as np
 from fuzzynav import units
 from fuzzynav.errors import InputFileError
 from fuzzynav.nav import earth
-from fuzzynav.sim.loaders import akit_timing as timing
-from fuzzynav.sim.loaders.checks import DEFAULT_LIMITS, MAX_IMU_GAP_S, ImuColumns, imu_physics
+from fuzzynav.realdata.loaders import akit_timing as timing
+from fuzzynav.realdata.loaders.checks import DEFAULT_LIMITS, MAX_IMU_GAP_S, ImuColumns, imu_physics
 
 #: largest A-KIT file read [bytes]: the IMU files are 3.5 MB (400 s at 100 Hz); a file of
 #: hundreds of MB would take gigabytes before a row is checked

@@ -4,7 +4,7 @@ import pytest
 
 from fuzzynav.errors import InputFileError
 from fuzzynav.realdata.sources import data_options, split_options
-from fuzzynav.sim.start_options import StartOptions, parse_start_options
+from fuzzynav.realdata.start_options import StartOptions, parse_start_options
 
 
 def test_no_options_are_the_car_defaults():
@@ -51,8 +51,8 @@ def test_the_query_is_split_off_the_spec(tmp_path):
 
 
 def test_lever_arm_option_replaces_the_mountings(tmp_path):
-    from fuzzynav.sim.loaders.rtklib import load_rtklib
-    from tests.sim.rtklib_files import write_drive
+    from fuzzynav.realdata.loaders.rtklib import load_rtklib
+    from tests.realdata.rtklib_files import write_drive
 
     write_drive(tmp_path)
     rec = load_rtklib(tmp_path, start=StartOptions(lever_arm_b_m=(0.0, 0.5, 1.0)))
@@ -65,7 +65,7 @@ def test_track_heading_needs_no_receiver_velocity():
     track still gives the heading of a platform walking north-east at 1.4 m/s."""
     from types import SimpleNamespace
 
-    from fuzzynav.sim.coarse_align import heading_from_track
+    from fuzzynav.realdata.coarse_align import heading_from_track
 
     t = np.arange(0.0, 40.0, 0.01)
     imu = SimpleNamespace(time_s=t, dtheta_b=np.zeros((t.size - 1, 3)),

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from fuzzynav.nav import attitude
-from fuzzynav.sim.loaders.akit import (body_velocity, load_trajectory, read_table,
+from fuzzynav.realdata.loaders.akit_recording import (body_velocity, load_trajectory, read_table,
                                        reference_on_imu_clock)
-from fuzzynav.sim.loaders.akit_timing import dvl_offset, parabola_min
+from fuzzynav.realdata.loaders.akit_timing import dvl_offset, parabola_min
 from tests.conftest import datasets_dir
 
 AKIT = datasets_dir() / "akit"

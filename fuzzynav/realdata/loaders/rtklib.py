@@ -21,7 +21,7 @@ Time alignment (IMU tick -> GPST):
 4. ``imu_delay_s`` is what remains between a sample and the fitted arrival (buffering,
    the PC clock's offset from GPST).  Its default, :data:`DEFAULT_IMU_DELAY_S`, was
    measured on the rtklib-drive by matching the gyro yaw rate to the GNSS course rate
-   (:func:`fuzzynav.sim.loaders.sync.course_rate_lag`; ``docs/data.md``).
+   (:func:`fuzzynav.realdata.loaders.sync.course_rate_lag`; ``docs/data.md``).
 
 If the tag's byte counts do not fit the CSV (another copy of the file), the source's
 method is used instead: the sample clock is stretched onto ``[start, start + last tick]``.
@@ -40,12 +40,12 @@ import numpy as np
 from fuzzynav import units
 from fuzzynav.errors import DataMissingError, InputFileError
 from fuzzynav.sim.imu import ImuData
-from fuzzynav.sim.loaders import checks, increments, timetag
-from fuzzynav.sim.loaders.mounting import Mounting
-from fuzzynav.sim.loaders.recording_files import find_files
-from fuzzynav.sim.loaders.rtkpos import read_pos
+from fuzzynav.realdata.loaders import checks, increments, timetag
+from fuzzynav.realdata.loaders.mounting import Mounting
+from fuzzynav.realdata.loaders.recording_files import find_files
+from fuzzynav.realdata.loaders.rtkpos import read_pos
 from fuzzynav.sim.sensors import SensorData
-from fuzzynav.sim.start_options import StartOptions
+from fuzzynav.realdata.start_options import StartOptions
 
 #: sample-to-fitted-arrival delay of the rtklib-drive IMU [s] (see the module docstring)
 DEFAULT_IMU_DELAY_S = 0.21
@@ -121,12 +121,12 @@ class Recording:
     start_options: StartOptions = StartOptions()
 
     def initial_state(self, heading_rad=None, **kw):
-        """Initial state from the data (:func:`fuzzynav.sim.coarse_align.initial_state`).
+        """Initial state from the data (:func:`fuzzynav.realdata.coarse_align.initial_state`).
 
         The heading comes from the GNSS course when a mounting says where forward is, else
         from matching the specific force to the GNSS velocity changes.
         """
-        from fuzzynav.sim.coarse_align import initial_state
+        from fuzzynav.realdata.coarse_align import initial_state
 
         return initial_state(self.imu, self.gnss, heading_rad=heading_rad,
                              forward_known=self.mounting is not None,
@@ -303,11 +303,11 @@ def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
         How late the receiver reports its velocities [s]; when non-zero the velocities of
         ``gnss`` (not of ``reference``) are moved back by this much (by interpolation).
         RTKLIB's on the rtklib-drive lag the positions by about 0.14 s
-        (:func:`fuzzynav.sim.loaders.sync.velocity_lag`).
+        (:func:`fuzzynav.realdata.loaders.sync.velocity_lag`).
     limits : checks.Limits, optional
         Thresholds of the plausibility checks (:mod:`.checks`; default: its constants).
     start : StartOptions, optional
-        How the initial state is found (:mod:`fuzzynav.sim.start_options`; default: the
+        How the initial state is found (:mod:`fuzzynav.realdata.start_options`; default: the
         car drive's); its ``lever_arm_b_m``, if set, replaces the mounting's.
 
     Returns

@@ -6,10 +6,10 @@ import pytest
 
 from fuzzynav.errors import DataMissingError, InputFileError
 from fuzzynav.nav import attitude
-from fuzzynav.sim.loaders.akit import (MAX_TRAJECTORY, body_velocity, load_trajectory,
+from fuzzynav.realdata.loaders.akit_recording import (MAX_TRAJECTORY, body_velocity, load_trajectory,
                                        parse_trajectories, read_table, reference_on_imu_clock)
 from tests.conftest import datasets_dir
-from tests.sim.akit_files import auv_trajectory, varied_auv_trajectory, write_akit
+from tests.realdata.akit_files import auv_trajectory, varied_auv_trajectory, write_akit
 
 AKIT = datasets_dir() / "akit"
 
@@ -60,7 +60,7 @@ def test_clock_map_is_recovered(tmp_path, lag, rate):
 def test_clock_map_round_trip_and_closed_form():
     """``label = rate * t_imu + offset_s``: a stamp maps back to the IMU time it was made
     at (a rate applied the wrong way round would be 0.6 s off after 120 s at 0.25 %)."""
-    from fuzzynav.sim.loaders.akit_timing import ClockMap
+    from fuzzynav.realdata.loaders.akit_timing import ClockMap
 
     clock = ClockMap(offset_s=-0.46, rate=1.0025, dvl_offset_s=0.3)
     t = np.array([0.0, 1.5, 60.0, 120.0])

@@ -8,7 +8,7 @@ one :class:`~fuzzynav.errors.InputFileError` naming the file, the column (or lin
 and what was wrong; a filter never runs on data that failed.
 
 The thresholds are the module constants below, gathered in :class:`Limits`; pass another
-``Limits`` to :func:`fuzzynav.sim.loaders.rtklib.load_rtklib` for an unusual sensor.
+``Limits`` to :func:`fuzzynav.realdata.loaders.rtklib.load_rtklib` for an unusual sensor.
 """
 from __future__ import annotations
 
@@ -136,7 +136,7 @@ def clock_rate(csv_path, tag_path, tag, method: str, rate: float, csv_bytes: int
     ----------
     csv_path, tag_path : path-like
         The IMU file and its time tag (for the message).
-    tag : fuzzynav.sim.loaders.timetag.TimeTag
+    tag : fuzzynav.realdata.loaders.timetag.TimeTag
     method : str
         ``"tag-fit"`` or ``"endpoints"`` (the stretch fallback).
     rate : float
@@ -265,7 +265,7 @@ def gyro_scale(path, imu, fixes, limits: Limits = DEFAULT_LIMITS) -> None:
     """Check that the gyros turn as the GNSS course does while driving (their unit, scale).
 
     Skipped when the recording does not move and turn enough to tell
-    (:func:`fuzzynav.sim.loaders.sync.gyro_course_gain`).
+    (:func:`fuzzynav.realdata.loaders.sync.gyro_course_gain`).
 
     Parameters
     ----------
@@ -276,7 +276,7 @@ def gyro_scale(path, imu, fixes, limits: Limits = DEFAULT_LIMITS) -> None:
     fixes : SensorData
         The RTK-fixed epochs.
     """
-    from fuzzynav.sim.loaders.sync import gyro_course_gain
+    from fuzzynav.realdata.loaders.sync import gyro_course_gain
 
     gain = gyro_course_gain(imu, fixes)
     lo, hi = limits.gyro_course_gain_range

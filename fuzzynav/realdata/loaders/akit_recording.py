@@ -14,9 +14,9 @@ Conventions, established from the data (``docs/data.md``; the numbers come from
   body FRD to NED; velocity NED; altitude is minus the depth;
 * the reference and DVL stamps are not on the IMU's clock: they run 0.25 % slow against it
   (each stream's samples were spread over 0-400 s) and start offset by a fraction of a
-  second; :func:`~fuzzynav.sim.loaders.akit_timing.estimate_clock` measures the map from
+  second; :func:`~fuzzynav.realdata.loaders.akit_timing.estimate_clock` measures the map from
   the gyros (negative offsets allowed) and the reference and the DVL are moved onto the IMU
-  clock by it (module :mod:`~fuzzynav.sim.loaders.akit_timing`);
+  clock by it (module :mod:`~fuzzynav.realdata.loaders.akit_timing`);
 * the DVL velocity is that of the IMU point (the filter's residuals show no lever-arm
   effect), while the reference is given at a point about 1.8 m forward of it: the lateral
   difference between the DVL and the reference velocity rotated into the body is the yaw
@@ -36,8 +36,8 @@ import numpy as np
 
 from fuzzynav.errors import DataMissingError, InputFileError, brief
 from fuzzynav.nav import attitude
-from fuzzynav.sim.loaders import akit_checks as checks
-from fuzzynav.sim.loaders.akit_timing import ClockMap, dvl_offset, estimate_clock
+from fuzzynav.realdata.loaders import akit_checks as checks
+from fuzzynav.realdata.loaders.akit_timing import ClockMap, dvl_offset, estimate_clock
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.sim.sensors import SensorData
 

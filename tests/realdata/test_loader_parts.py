@@ -7,14 +7,14 @@ from scipy import stats
 
 from fuzzynav.errors import InputFileError
 from fuzzynav.nav import attitude
-from fuzzynav.sim import coarse_align, degrade
+from fuzzynav.realdata import coarse_align, degrade
 from fuzzynav.sim.imu import ImuData
-from fuzzynav.sim.loaders import increments, sync, timetag
-from fuzzynav.sim.loaders.mounting import Mounting, passive_rpy_matrix
+from fuzzynav.realdata.loaders import increments, sync, timetag
+from fuzzynav.realdata.loaders.mounting import Mounting, passive_rpy_matrix
 from fuzzynav.sim.log import simulate
 from fuzzynav.sim.scenario import scenario_from_dict
 from fuzzynav.sim.sensors import SensorData
-from tests.sim.rtklib_files import tag_bytes
+from tests.realdata.rtklib_files import tag_bytes
 
 ALPHA = 1e-6
 
