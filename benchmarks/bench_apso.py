@@ -1,7 +1,7 @@
 """Paper 004's APSO study: particle-iterations per minute with warm kernels and loaded data.
 
 Runs the swarm of ``studies/paper004_apso.toml`` (a baseline study on the PSO sampler,
-:func:`fuzzynav.tuning.run.run_study`, as ``fuzzynav study run`` does) with its
+:func:`fuzzynav.tuning.study_run.run_study`, as ``fuzzynav study run`` does) with its
 particles and iterations set to make ``--budget`` particle-iterations (10 x 10 for 100),
 after the training recordings were loaded and the kernels compiled: the state of a user's
 second run.  Each particle-iteration is one fitness, i.e. one run of the SINS/DVL EKF on
@@ -25,9 +25,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _report import machine, write_section  # noqa: E402
 
 from fuzzynav.errors import DataMissingError, FuzzynavError  # noqa: E402
-from fuzzynav.tuning.baselines import load_baseline_config  # noqa: E402
-from fuzzynav.tuning.kinds.baselines import BaselinePlan  # noqa: E402
-from fuzzynav.tuning.run import run_study  # noqa: E402
+from fuzzynav.tuning.baseline_config import load_baseline_config  # noqa: E402
+from fuzzynav.tuning.kinds.baseline_studies import BaselinePlan  # noqa: E402
+from fuzzynav.tuning.study_run import run_study  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "studies" / "paper004_apso.toml"

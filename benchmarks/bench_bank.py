@@ -25,7 +25,7 @@ import numpy as np  # noqa: E402
 from fuzzynav.experiment import perturbed_initial_state, setup_for  # noqa: E402
 from fuzzynav.filters.bank_fusion import fuse, fusion_work  # noqa: E402
 from fuzzynav.filters.runner import run_filter  # noqa: E402
-from fuzzynav.sim.log import simulate  # noqa: E402
+from fuzzynav.sim.sensor_log import simulate  # noqa: E402
 from fuzzynav.sim.scenario import load_scenario  # noqa: E402
 
 CASES = {"ekf": ("ekf", {}), "centralized": ("centralized", {}),

@@ -39,7 +39,7 @@ from fuzzynav import metrics  # noqa: E402
 from fuzzynav.experiment import perturbed_initial_state, setup_for  # noqa: E402
 from fuzzynav.filters import loop, numba_patch_dispatch as patch, runner  # noqa: E402
 from fuzzynav.filters.measurements import polarization_rows  # noqa: E402
-from fuzzynav.sim.log import simulate  # noqa: E402
+from fuzzynav.sim.sensor_log import simulate  # noqa: E402
 from fuzzynav.sim.scenario import load_scenario  # noqa: E402
 
 
@@ -231,7 +231,7 @@ def time_pruners(n_params: int, rounds: int, calls: int = 200):
 
 def n_study_params() -> int:
     """Parameters of a ``paper000_tune`` trial (its search space, both controllers)."""
-    from fuzzynav.tuning.config import load_study_config
+    from fuzzynav.tuning.study_config import load_study_config
     from fuzzynav.tuning.space import ControllerSpace, build_all
 
     cfg = load_study_config(Path(__file__).resolve().parents[1] / "studies"

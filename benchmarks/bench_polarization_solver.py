@@ -1,6 +1,6 @@
 """Speed of the imaging polarization solver against a straightforward numpy/scipy solve.
 
-Times ``fuzzynav.nav.polarization.imaging_pitch_heading`` (7 views) per call, from a compiled
+Times ``fuzzynav.nav.polarization_solver.imaging_pitch_heading`` (7 views) per call, from a compiled
 loop (as the filter calls it) and from Python, on two sets of epochs:
 
 * the imaging-sensor epochs of the built-in ``paper000`` run (seed 1, 5 Hz, 0.3° AoP noise),
@@ -14,7 +14,7 @@ tolerances 1e-15, polished by plain Gauss-Newton steps) on residuals of the nump
 per call of both and the largest pitch / heading difference on fits with both variances
 below 0.01 rad² (what the filter uses); the others are fits on the fold, where the attitude
 is undetermined.  With
-``--git-rev REV`` the kernel of that revision (``git show REV:fuzzynav/nav/polarization.py``)
+``--git-rev REV`` the kernel of that revision (``git show REV:fuzzynav/nav/polarization_solver.py``, or ``polarization.py`` of older revisions)
 is timed in the same run as well.  Usage:
 ``python benchmarks/bench_polarization_solver.py [--git-rev ac794d1]``.
 """
@@ -37,7 +37,7 @@ from scipy.optimize import least_squares
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _report import machine, write_section  # noqa: E402
 
-from fuzzynav.nav import polarization as ps  # noqa: E402
+from fuzzynav.nav import polarization_solver as ps  # noqa: E402
 from fuzzynav.nav import polarization_imaging as pim  # noqa: E402
 from fuzzynav.nav.attitude import euler_to_dcm  # noqa: E402
 from fuzzynav.sim import skylight as sk  # noqa: E402
@@ -49,7 +49,7 @@ MAX_VAR = 0.01  # rad^2, the filter's bound on a usable variance
 
 def paper000_epochs():
     """(aops, sun_n, roll/pitch-prior/heading-prior, views) of the paper000 imaging sensor."""
-    from fuzzynav.sim.log import simulate
+    from fuzzynav.sim.sensor_log import simulate
     from fuzzynav.sim.scenario import load_scenario
 
     log = simulate(load_scenario("paper000"), seed=1)
@@ -200,8 +200,13 @@ def _timed(f):
 
 def kernel_of_revision(rev):
     """imaging_pitch_heading of an older revision, imported from a temporary copy."""
-    src = subprocess.run(["git", "show", f"{rev}:fuzzynav/nav/polarization.py"], check=True,
-                         capture_output=True, text=True, cwd=Path(__file__).resolve().parents[1])
+    root = Path(__file__).resolve().parents[1]
+    for name in ("polarization_solver", "polarization"):  # the module's name before 2026-12
+        src = subprocess.run(["git", "show", f"{rev}:fuzzynav/nav/{name}.py"],
+                             capture_output=True, text=True, cwd=root)
+        if src.returncode == 0:
+            break
+    src.check_returncode()
     path = Path(tempfile.mkdtemp()) / f"polarization_{rev}.py"
     path.write_text(src.stdout)
     spec = importlib.util.spec_from_file_location(path.stem, path)

@@ -38,8 +38,8 @@ STUDY = "paper000_tune.toml"
 RUNNER = """
 import json, sys, time
 import fuzzynav
-from fuzzynav.tuning.config import load_study_config
-from fuzzynav.tuning.run import run_study
+from fuzzynav.tuning.study_config import load_study_config
+from fuzzynav.tuning.study_run import run_study
 cfg = load_study_config(sys.argv[1])
 t0 = time.perf_counter()
 study = run_study(cfg, int(sys.argv[2]), int(sys.argv[3]), None, sys.argv[4], progress=False)

@@ -28,9 +28,9 @@ PARAMS = ROOT / "studies" / "paper000_baselines.json"
 
 def tune(trials: int, workers: int, work: Path, cache: str):
     """Run (or resume) the study; the chosen trial's systems and the config."""
-    from fuzzynav.tuning.config import load_study_config
+    from fuzzynav.tuning.study_config import load_study_config
     from fuzzynav.tuning.export import choose_trial, systems_of
-    from fuzzynav.tuning.run import run_study
+    from fuzzynav.tuning.study_run import run_study
 
     cfg = load_study_config(STUDY)
     study = run_study(cfg, trials, workers, f"journal:{work / 'fair_ctl.journal'}", cache)

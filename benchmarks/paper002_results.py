@@ -20,8 +20,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from fuzzynav import units  # noqa: E402
-from fuzzynav.align import run as R  # noqa: E402
-from fuzzynav.align.experiment import ALIGN_ROWS, monte_carlo_alignment  # noqa: E402
+from fuzzynav.align import alignment_run as R  # noqa: E402
+from fuzzynav.align.monte_carlo import ALIGN_ROWS, monte_carlo_alignment  # noqa: E402
 from fuzzynav.align.scenario import load_alignment_scenario  # noqa: E402
 from fuzzynav.claims import claims_for  # noqa: E402
 from fuzzynav.fileio import publish  # noqa: E402

@@ -26,7 +26,7 @@ from fuzzynav.experiment import monte_carlo, run_on_log  # noqa: E402
 from fuzzynav.filters.named import parse_filter_spec  # noqa: E402
 from fuzzynav.metrics import errors_vs_trajectory, mean_ci  # noqa: E402
 from fuzzynav.report import render  # noqa: E402
-from fuzzynav.sim.log import simulate  # noqa: E402
+from fuzzynav.sim.sensor_log import simulate  # noqa: E402
 from fuzzynav.sim.scenario import load_scenario  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -32,11 +32,11 @@ APSO_LABEL = "APSO Q/R (tuned on the other four)"
 
 def fuzzy_fold(path) -> pd.DataFrame:
     """One row per (held-out trajectory, filter) of a fuzzy study's best trial."""
-    from fuzzynav.tuning.config import load_study_config
+    from fuzzynav.tuning.study_config import load_study_config
     from fuzzynav.tuning.evaluate import run_table
     from fuzzynav.tuning.export import choose_trial, systems_of
     from fuzzynav.tuning.objective import Evaluator
-    from fuzzynav.tuning.study import open_study
+    from fuzzynav.tuning.optuna_study import open_study
 
     cfg = load_study_config(ROOT / path)
     trial = choose_trial(open_study(cfg), cfg)
@@ -48,7 +48,7 @@ def fuzzy_fold(path) -> pd.DataFrame:
 
 def apso_fold(path) -> pd.DataFrame:
     """One row per held-out trajectory of an APSO baseline study's tuned multipliers."""
-    from fuzzynav.tuning.baselines import load_baseline_config
+    from fuzzynav.tuning.baseline_config import load_baseline_config
     from fuzzynav.tuning.evaluate import run_table
     from fuzzynav.tuning.objective import Evaluator
 

@@ -28,7 +28,7 @@ from fuzzynav.claims.paper004 import PAPER004_IMPROVEMENT, PAPER004_LAKE  # noqa
 from fuzzynav.experiment import monte_carlo, run_on_log  # noqa: E402
 from fuzzynav.metrics import errors_vs_trajectory, improvement_ci, mean_ci  # noqa: E402
 from fuzzynav.report import render  # noqa: E402
-from fuzzynav.sim.log import simulate  # noqa: E402
+from fuzzynav.sim.sensor_log import simulate  # noqa: E402
 from fuzzynav.sim.scenario import load_scenario  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]

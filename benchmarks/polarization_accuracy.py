@@ -10,7 +10,7 @@ import time
 import numpy as np
 
 from fuzzynav.nav.attitude import euler_to_dcm
-from fuzzynav.nav import polarization as ps
+from fuzzynav.nav import polarization_solver as ps
 from fuzzynav.sim import skylight as sk
 from fuzzynav.sim import sun
 

@@ -31,8 +31,8 @@ try:  # this tree: feedback has its own module (filter banks)
 except ImportError:  # the base revision: it lived in the loop module
     _apply_feedback = loop._feedback
 from fuzzynav.nav import strapdown
-from fuzzynav.nav.layout import PREV_SIZE
-from fuzzynav.sim.log import simulate
+from fuzzynav.nav.state_layout import PREV_SIZE
+from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.sim.scenario import load_scenario
 
 

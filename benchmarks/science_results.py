@@ -60,8 +60,8 @@ METRICS = ("rms_pos_m", "rms_vel_mps", "rms_att_deg")
 
 # -- tuning ------------------------------------------------------------------------------------
 def tune_baselines(trials: int, work: Path, cache: str):
-    from fuzzynav.tuning.baselines import load_baseline_config
-    from fuzzynav.tuning.kinds.baselines import run_baselines
+    from fuzzynav.tuning.baseline_config import load_baseline_config
+    from fuzzynav.tuning.kinds.baseline_studies import run_baselines
 
     bcfg = load_baseline_config(BASELINES)
     study = replace(bcfg.study, trials=trials, storage=f"journal:{work / 'baselines.journal'}")
@@ -71,9 +71,9 @@ def tune_baselines(trials: int, work: Path, cache: str):
 
 
 def tune_fuzzy(trials: int, workers: int, work: Path, cache: str):
-    from fuzzynav.tuning.config import load_study_config
+    from fuzzynav.tuning.study_config import load_study_config
     from fuzzynav.tuning.export import choose_trial, systems_of
-    from fuzzynav.tuning.run import run_study
+    from fuzzynav.tuning.study_run import run_study
 
     cfg = load_study_config(FAIR)
     storage = f"journal:{work / 'fair.journal'}"

@@ -17,7 +17,7 @@ from fuzzynav.filters.runner import InitialState
 from fuzzynav.metrics import errors_vs_trajectory, improvement_ci, mean_ci, rms_metrics
 from fuzzynav.nav import attitude, earth
 from fuzzynav.runpath import RunInputs, RunOutcome, make_setup, run
-from fuzzynav.sim.log import SensorLog, component_rng, simulate
+from fuzzynav.sim.sensor_log import SensorLog, component_rng, simulate
 from fuzzynav.sim.scenario import Scenario, load_scenario
 
 

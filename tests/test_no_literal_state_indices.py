@@ -1,6 +1,6 @@
 """Lint: no literal index into the error-state or navigation-state vectors outside the layouts.
 
-Offsets come from ``fuzzynav.filters.layout`` (error state) and ``fuzzynav.nav.layout``
+Offsets come from ``fuzzynav.filters.layout`` (error state) and ``fuzzynav.nav.state_layout``
 (``nav`` and the strapdown work array ``prev``).  The patterns below catch the forms the
 code used before (``nav[7]``, ``x[9 + j]``, ``H[m, 6 + i]``, ``F[5, 6]``, ``nav[:, 7:10]``,
 ``blk_start[b] - 9``) on the names that hold such vectors; small fixed matrices (``C[0, 1]``,

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from fuzzynav.experiment import run_on_log
-from fuzzynav.sim.log import simulate
+from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.sim.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]

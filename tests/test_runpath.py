@@ -13,7 +13,7 @@ from fuzzynav.experiment import SimulatedSource
 from fuzzynav.filters.named import FilterContext, get_filter
 from fuzzynav.filters.runner import InitialState
 from fuzzynav.metrics import errors_vs_trajectory, rms_metrics
-from fuzzynav.sim.log import simulate
+from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.sim.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]

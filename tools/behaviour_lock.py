@@ -72,7 +72,7 @@ def _guard(fn):
 
 def simulated(out, seeds, scenarios):
     from fuzzynav.experiment import run_on_log
-    from fuzzynav.sim.log import simulate
+    from fuzzynav.sim.sensor_log import simulate
     from fuzzynav.sim.scenario import load_scenario
 
     for name in scenarios:
@@ -85,10 +85,10 @@ def simulated(out, seeds, scenarios):
 
 def alignment(out, seeds):
     from fuzzynav.align.chain import run_aligned
-    from fuzzynav.align.experiment import monte_carlo_alignment
-    from fuzzynav.align.run import ALIGN_FILTERS
+    from fuzzynav.align.monte_carlo import monte_carlo_alignment
+    from fuzzynav.align.alignment_run import ALIGN_FILTERS
     from fuzzynav.align.scenario import load_alignment_scenario
-    from fuzzynav.sim.log import simulate
+    from fuzzynav.sim.sensor_log import simulate
     from fuzzynav.sim.scenario import load_scenario
 
     df = monte_carlo_alignment(load_alignment_scenario("paper002"), list(ALIGN_FILTERS), seeds)
@@ -150,7 +150,7 @@ def study_runs(out, skipped, names, filters=("ekf", "fuzzy", "sage-husa-tuned"))
 
 
 def als(out):
-    from fuzzynav.sim.log import simulate
+    from fuzzynav.sim.sensor_log import simulate
     from fuzzynav.sim.scenario import load_scenario
     from fuzzynav.tuning.als_fit import run_scales
 

@@ -16,7 +16,7 @@ import dataclasses
 import numpy as np
 
 from fuzzynav import units
-from fuzzynav.align import coarse, run as R
+from fuzzynav.align import coarse, alignment_run as R
 from fuzzynav.align.fine import run_fine
 from fuzzynav.align.fuzzy_r import policy_for
 from fuzzynav.align.mechanize import mechanize

@@ -32,7 +32,7 @@ import dataclasses
 import numpy as np
 
 from fuzzynav.align.fine import run_fine
-from fuzzynav.align.layout import EAST, NORTH, UP, AlignLayout
+from fuzzynav.align.alignment_states import EAST, NORTH, UP, AlignLayout
 from fuzzynav.nav import earth
 
 #: the level filter: horizontal velocity errors and level misalignment

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fuzzynav.align.layout import AlignLayout
+from fuzzynav.align.alignment_states import AlignLayout
 from fuzzynav.align.model import AlignNoise, measurement_matrix, transition
 from fuzzynav.filters.reference import predict, update
 

@@ -119,7 +119,7 @@ def policy_for(fuzzy: bool, rules=None):
     Parameters
     ----------
     fuzzy : bool
-        Whether the filter adapts R (:attr:`fuzzynav.align.run.AlignFilter.fuzzy`).
+        Whether the filter adapts R (:attr:`fuzzynav.align.alignment_run.AlignFilter.fuzzy`).
     rules : str, path or FuzzySystem, optional
         The ROR -> t controller (default: the paper's, :data:`DEFAULT_RULES`).
     """

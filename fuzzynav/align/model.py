@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from fuzzynav import units
-from fuzzynav.align.layout import LAYOUT_12, AlignLayout
+from fuzzynav.align.alignment_states import LAYOUT_12, AlignLayout
 from fuzzynav.nav import attitude, earth
 
 

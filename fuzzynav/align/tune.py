@@ -25,8 +25,8 @@ from pathlib import Path
 import numpy as np
 
 from fuzzynav import __version__
-from fuzzynav.align import run as R
-from fuzzynav.align.experiment import metrics
+from fuzzynav.align import alignment_run as R
+from fuzzynav.align.monte_carlo import metrics
 from fuzzynav.align.scenario import load_alignment_scenario
 from fuzzynav.fileio import publish
 from fuzzynav.fuzzy import load_fis

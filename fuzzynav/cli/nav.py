@@ -88,7 +88,7 @@ def _cmd_scenarios(args) -> int:
     print("\nfilters (--filter NAME):")
     for f in list_filters():
         print(f"  {f.name:<24} {f.description}")
-    from fuzzynav.align.cli import describe_alignment
+    from fuzzynav.align.compare_cli import describe_alignment
 
     print(describe_alignment())
     return 0
@@ -172,7 +172,7 @@ def _cmd_run(args) -> int:
         raise FuzzynavError(f"{', '.join(unused_recording_options(args))}: only with --data "
                             "(simulated scenarios take their settings from the scenario)")
     if args.align:
-        from fuzzynav.align.cli import run_with_alignment
+        from fuzzynav.align.compare_cli import run_with_alignment
 
         return run_with_alignment(args)
     return run_scenario_filters(args, [args.filter], baseline=None)
@@ -192,7 +192,7 @@ def _cmd_compare(args) -> int:
     from fuzzynav.align.scenario import is_alignment_scenario
 
     if is_alignment_scenario(str(args.scenario)):  # alignment filters: their own runner
-        from fuzzynav.align.cli import compare_alignment
+        from fuzzynav.align.compare_cli import compare_alignment
 
         return compare_alignment(args, filters, claims, labels, rows_for(str(args.scenario)))
     if args.align_threshold is not None:
@@ -253,7 +253,7 @@ def _plot_first_seed(scn, filters, seed, args) -> None:
     from fuzzynav.experiment import run_on_log
     from fuzzynav.filters.named import parse_filter_spec
     from fuzzynav.metrics import errors_vs_trajectory
-    from fuzzynav.sim.log import simulate
+    from fuzzynav.sim.sensor_log import simulate
 
     log = simulate(scn, seed, args.cache)
     outs = {}

@@ -57,7 +57,7 @@ def _plan(args):
 
 
 def _open(plan, args) -> dict:
-    from fuzzynav.tuning.run import open_plan_studies
+    from fuzzynav.tuning.study_run import open_plan_studies
 
     return open_plan_studies(plan, args.storage)  # a missing study: error, no file created
 
@@ -71,7 +71,7 @@ def _cmd_run(args) -> int:
         plan = _plan(args)
         if cold and plan.kind == "fuzzy":
             compile_by_running(plan.cfg, args.cache)
-    from fuzzynav.tuning.run import run_plan
+    from fuzzynav.tuning.study_run import run_plan
 
     studies, lines = run_plan(plan, args.trials, args.workers, args.storage)
     for line in lines:

@@ -1,7 +1,7 @@
 """Tuned classical baselines: named filters whose parameters come from a baseline study.
 
 A baseline study (``fuzzynav study run studies/paper000_baselines.toml``, see
-:mod:`fuzzynav.tuning.baselines`) tunes each classical filter with the same budget and
+:mod:`fuzzynav.tuning.baseline_config`) tunes each classical filter with the same budget and
 training runs as a fuzzy study and writes the best parameters to a JSON file::
 
     {"format": "fuzzynav-baselines", "version": 1, "study": "...",

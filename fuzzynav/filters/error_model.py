@@ -26,7 +26,7 @@ from fuzzynav.filters.kalman import diagonal_tail, square_tail
 from fuzzynav.filters.layout import (BLOCK_KINDS, CORE, COUPLE_ACCEL, COUPLE_GYRO, X_ATT,
                                      X_POS, X_VEL, StateLayout, kind_of)
 from fuzzynav.nav.earth import E2, OMEGA_IE, gravity_sin_nb, radii_sin_nb
-from fuzzynav.nav.layout import NAV_H, NAV_LAT, NAV_VEL
+from fuzzynav.nav.state_layout import NAV_H, NAV_LAT, NAV_VEL
 
 # velocity error components, and the position error's rows/columns: in radians
 # (dlat, dlon, dh) while F is formed, then ENU metres (dE, dN, dU) after _to_metric

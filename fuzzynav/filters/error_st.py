@@ -32,7 +32,7 @@ from fuzzynav.filters.error_model import transition
 from fuzzynav.filters.kalman import sparse_left_mul
 from fuzzynav.filters.layout import X_ATT, X_VEL
 from fuzzynav.nav.earth import OMEGA_IE, gravity_nb
-from fuzzynav.nav.layout import NAV_H, NAV_LAT, NAV_VEL
+from fuzzynav.nav.state_layout import NAV_H, NAV_LAT, NAV_VEL
 
 EM_PHI, EM_ST = 0, 1
 #: error-model name -> code passed into the compiled loop

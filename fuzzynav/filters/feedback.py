@@ -8,7 +8,7 @@ import numba as nb
 
 from fuzzynav.filters.layout import COUPLE_ACCEL, COUPLE_GYRO, N_CORE, X_ATT, X_POS, X_VEL
 from fuzzynav.nav.earth import radii_nb
-from fuzzynav.nav.layout import NAV_H, NAV_LAT, NAV_LON, NAV_Q, NAV_VEL, PREV_LLA, PREV_VEL
+from fuzzynav.nav.state_layout import NAV_H, NAV_LAT, NAV_LON, NAV_Q, NAV_VEL, PREV_LLA, PREV_VEL
 from fuzzynav.nav.strapdown import quat_mul, rv2q, set_quat
 
 

@@ -32,7 +32,7 @@ from fuzzynav.filters.layout import AUX_FORCE, AUX_RATE, AUX_XS
 from fuzzynav.filters.loop_args import (  # noqa: F401
     Bank, BankState, EventOutputs, Events, Imu, Model, Outputs, Sensors, Settings, Start)
 from fuzzynav.filters.record import record_output
-from fuzzynav.nav.layout import PREV_SIZE
+from fuzzynav.nav.state_layout import PREV_SIZE
 from fuzzynav.nav.strapdown import init_prev, mech_step, quat_to_dcm_into
 
 

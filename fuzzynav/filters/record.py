@@ -8,7 +8,7 @@ import numba as nb
 
 from fuzzynav.filters.error_st import EM_ST, st_velocity_variance
 from fuzzynav.filters.layout import X_VEL
-from fuzzynav.nav.layout import NAV_SIZE
+from fuzzynav.nav.state_layout import NAV_SIZE
 
 
 @nb.njit(cache=True, error_model="numpy")

@@ -17,7 +17,7 @@ from fuzzynav.filters import loop
 from fuzzynav.filters.numba_patch_dispatch import memoise_kernel_addresses
 from fuzzynav.filters.result import EventLog, FilterResult, LocalStates
 from fuzzynav.nav import strapdown
-from fuzzynav.nav.layout import LLA_SLICE, NAV_SIZE, Q_SLICE, VEL_SLICE
+from fuzzynav.nav.state_layout import LLA_SLICE, NAV_SIZE, Q_SLICE, VEL_SLICE
 
 # the kernel tables are the same few tuples run after run: numba types them once (every
 # loop's tables: fuzzynav.filters.loop), and looks their kernels' addresses up once

@@ -13,7 +13,7 @@ import numpy as np
 
 from fuzzynav.fuzzy._where import FisEvaluationError
 from fuzzynav.fuzzy.inference import EvalInfo, python_exact
-from fuzzynav.fuzzy.layout import CLAMPED, NAN_INPUT, NO_RULE
+from fuzzynav.fuzzy.compiled_layout import CLAMPED, NAN_INPUT, NO_RULE
 from fuzzynav.fuzzy.sampled import sampled_evaluate
 
 #: batches at least this long use the parallel compiled kernel

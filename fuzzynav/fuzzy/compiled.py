@@ -5,7 +5,7 @@
 >>> status = eval_compiled(cf.fparams, cf.iparams, x, y, work)
 
 Two flat arrays carry the whole system (``fparams`` float64, ``iparams`` int64; layout
-in :mod:`fuzzynav.fuzzy.layout`), so a filter can pass them through numba first-class
+in :mod:`fuzzynav.fuzzy.compiled_layout`), so a filter can pass them through numba first-class
 functions with fixed signatures.  Outputs with curved Mamdani terms (gauss, gbell...)
 are refused: their exact path is adaptive quadrature in Python
 (:mod:`fuzzynav.fuzzy.quadrature`).
@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fuzzynav.fuzzy import layout as L
+from fuzzynav.fuzzy import compiled_layout as L
 from fuzzynav.fuzzy._where import FisCompileError
 from fuzzynav.fuzzy.kernels import (eval_compiled, eval_compiled_batch, eval_compiled_into,
                                     eval_compiled_parallel)

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from fuzzynav.fuzzy.layout import GAP_RTOL, MAX_RTOL
+from fuzzynav.fuzzy.compiled_layout import GAP_RTOL, MAX_RTOL
 from fuzzynav.fuzzy.membership import evaluate_mf
 
 

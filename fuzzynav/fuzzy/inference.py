@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fuzzynav.fuzzy.defuzz import Implied, pwl_defuzz, singleton_defuzz
-from fuzzynav.fuzzy.layout import CLAMPED, NAN_INPUT, NO_RULE
+from fuzzynav.fuzzy.compiled_layout import CLAMPED, NAN_INPUT, NO_RULE
 from fuzzynav.fuzzy.membership import evaluate_mf
 from fuzzynav.fuzzy.quadrature import curved_defuzz
 

@@ -2,7 +2,7 @@
 
 ``eval_compiled(fparams, iparams, x, y, work)`` evaluates one input vector without
 allocating; the batch functions loop over rows.  The array layout is described in
-:mod:`fuzzynav.fuzzy.layout` and built by :func:`fuzzynav.fuzzy.compiled.compile_fis`.
+:mod:`fuzzynav.fuzzy.compiled_layout` and built by :func:`fuzzynav.fuzzy.compiled.compile_fis`.
 """
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import math
 import numba
 import numpy as np
 
-from fuzzynav.fuzzy import layout as L
+from fuzzynav.fuzzy import compiled_layout as L
 from fuzzynav.fuzzy.membership import CONSTANT, mf_scalar
 from fuzzynav.fuzzy.probor_kernels import probor_defuzz
 from fuzzynav.fuzzy.pwl_kernels import build_piece, envelope_defuzz, merge

@@ -13,7 +13,7 @@ import math
 
 import numba
 
-from fuzzynav.fuzzy.layout import DEF_CENTROID, DEF_LOM, DEF_MOM, DEF_SOM
+from fuzzynav.fuzzy.compiled_layout import DEF_CENTROID, DEF_LOM, DEF_MOM, DEF_SOM
 from fuzzynav.fuzzy.pwl_kernels import maximum_threshold, point_maxima, vertex_limits
 
 

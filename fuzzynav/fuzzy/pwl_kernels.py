@@ -23,7 +23,7 @@ import math
 
 import numba
 
-from fuzzynav.fuzzy.layout import (AGG_MAX, AGG_SUM, DEF_BISECTOR, DEF_CENTROID, DEF_LOM,
+from fuzzynav.fuzzy.compiled_layout import (AGG_MAX, AGG_SUM, DEF_BISECTOR, DEF_CENTROID, DEF_LOM,
                                    DEF_MOM, DEF_SOM, GAP_RTOL, IMP_MIN, MAX_RTOL)
 from fuzzynav.fuzzy.membership import TRAP
 

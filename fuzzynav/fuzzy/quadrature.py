@@ -19,7 +19,7 @@ from scipy.integrate import quad
 from scipy.optimize import brentq
 
 from fuzzynav.fuzzy.defuzz import aggregate
-from fuzzynav.fuzzy.layout import MAX_RTOL
+from fuzzynav.fuzzy.compiled_layout import MAX_RTOL
 from fuzzynav.fuzzy.membership import evaluate_mf, knots, peak_interval
 
 #: documented bound: centroid error / range width, bisector area split (relative)

@@ -3,7 +3,7 @@
 Angle folding, the elementary rotations of the Euler sequence of :mod:`fuzzynav.nav.attitude`,
 the AoP of a body view direction with its gradient on the body sun direction, and the body
 sun direction with its partials on the Euler angles.  The model and its conventions are
-described in :mod:`fuzzynav.nav.polarization`.
+described in :mod:`fuzzynav.nav.polarization_solver`.
 """
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Pitch and heading from an imaging polarization sensor (several view directions), given roll.
 
-The numba kernel :func:`imaging_pitch_heading` (re-exported by :mod:`fuzzynav.nav.polarization`,
+The numba kernel :func:`imaging_pitch_heading` (re-exported by :mod:`fuzzynav.nav.polarization_solver`,
 whose docstring states the measurement model) runs at every imaging epoch inside the compiled
 filter as :func:`imaging_fit_sun` (the data rows carry the AoPs' cosines and sines and the
 sun's body direction of :func:`sun_from_aops`,

@@ -15,7 +15,7 @@ One step integrates the increments ``dtheta_b`` [rad] and ``dv_b`` [m/s] of one 
 * trapezoidal position update and the attitude update
   ``q <- q(-omega_in_n dt) * q * q(phi)``.
 
-The navigation state is a float64 array ``nav`` laid out as :mod:`fuzzynav.nav.layout` says
+The navigation state is a float64 array ``nav`` laid out as :mod:`fuzzynav.nav.state_layout` says
 (quaternion of ``C_bn``, ENU velocity, latitude, longitude, height).  The step keeps the
 previous increments and state in a work array ``prev`` (same module; initialise it with
 :func:`init_prev`).
@@ -28,7 +28,7 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.nav.earth import OMEGA_IE, radii_gravity_sin_nb
-from fuzzynav.nav.layout import (LLA_SLICE, NAV_H, NAV_LAT, NAV_LON, NAV_Q, NAV_SIZE, NAV_VEL,
+from fuzzynav.nav.state_layout import (LLA_SLICE, NAV_H, NAV_LAT, NAV_LON, NAV_Q, NAV_SIZE, NAV_VEL,
                                  PREV_DTH, PREV_DV, PREV_FLAG, PREV_LLA, PREV_SIZE, PREV_TRIG,
                                  PREV_VEL,
                                  Q_SLICE, VEL_SLICE)

@@ -18,7 +18,7 @@ from fuzzynav.realdata.score import errors_against, outage_drifts, score
 from fuzzynav.realdata.session import (GnssSource, Start, constraints_for, context_for,
                                        start_from)
 from fuzzynav.runpath import run
-from fuzzynav.sim.log import check_seed
+from fuzzynav.sim.sensor_log import check_seed
 
 #: feed name -> label in tables and figures
 FEEDS = {"gnss": "GNSS throughout", "outages": "with outages"}

@@ -1,4 +1,4 @@
-"""``fuzzynav study report`` of a baseline study (:mod:`fuzzynav.tuning.kinds.baselines`).
+"""``fuzzynav study report`` of a baseline study (:mod:`fuzzynav.tuning.kinds.baseline_studies`).
 
 The report writes ``report.md`` and ``runs.csv``: the tuned parameters
 and the train / held-out table of the tuned filters beside the config's ``compare`` filters

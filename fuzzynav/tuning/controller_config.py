@@ -3,7 +3,7 @@
 Keys (``docs/studies.md``): ``name``, ``template`` (a rule file), ``tune``, ``partitions``,
 ``free_triangles``, ``rule_weights``, ``window``, ``output_range``, ``output_low``,
 ``types``.  Every problem is one :class:`fuzzynav.errors.InputFileError` naming the file
-and key (:mod:`fuzzynav.tuning.config` reads the rest of the study file).
+and key (:mod:`fuzzynav.tuning.study_config` reads the rest of the study file).
 """
 from __future__ import annotations
 

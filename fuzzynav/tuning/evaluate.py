@@ -12,7 +12,7 @@ import pandas as pd
 from fuzzynav.experiment import run_on_log
 from fuzzynav.filters.named import parse_filter_spec
 from fuzzynav.metrics import check_finite_metrics, mean_ci
-from fuzzynav.tuning.config import GROUP_METRICS
+from fuzzynav.tuning.study_config import GROUP_METRICS
 from fuzzynav.tuning.objective import CANDIDATE
 
 

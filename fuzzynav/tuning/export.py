@@ -23,7 +23,7 @@ from fuzzynav.fuzzy import FuzzySystem, load_fis, save_fis
 from fuzzynav.tuning.evaluate import run_table, summary
 from fuzzynav.tuning.objective import Evaluator
 from fuzzynav.tuning.space import ControllerSpace, build_all
-from fuzzynav.tuning.study import best_trials
+from fuzzynav.tuning.optuna_study import best_trials
 
 #: metrics recorded in ``expected`` (and compared by the regression tests)
 EXPECTED_METRICS = ("rms_pos_m", "rms_vel_mps", "rms_att_deg", "rms_pos_e_m", "rms_pos_n_m",

@@ -24,9 +24,9 @@ from fuzzynav.filters.catalog import bind_systems
 from fuzzynav.filters.named import FilterSetup
 from fuzzynav.realdata.dataspec import is_recording_name
 from fuzzynav.realdata.studyruns import recording_run
-from fuzzynav.sim.log import simulate
+from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.sim.scenario import load_scenario
-from fuzzynav.tuning.config import EXTRA_GROUP_METRICS, GROUP_METRICS
+from fuzzynav.tuning.study_config import EXTRA_GROUP_METRICS, GROUP_METRICS
 from fuzzynav.tuning.pareto import accuracy_and_worst
 from fuzzynav.tuning.space import ControllerSpace, build_all
 
@@ -75,7 +75,7 @@ def score_metrics(metrics: dict, baseline: dict, weights: dict) -> RunScore:
     weights : dict
         Group -> weight of its ratio in the score (the core groups of
         :data:`GROUP_METRICS` are always scored; a weighted extra group of
-        :data:`~fuzzynav.tuning.config.EXTRA_GROUP_METRICS` too).
+        :data:`~fuzzynav.tuning.study_config.EXTRA_GROUP_METRICS` too).
     """
     ok = metrics.get("completed", 1.0) >= 1.0
     ratios = {}
@@ -197,9 +197,9 @@ class TrialObjective:
 
     A subclass implements ``_run(trial)`` (score the trial's candidate, set ``n_runs``);
     this base names the worker as the trial's owner (:meth:`claim`, read by
-    :func:`fuzzynav.tuning.study.reap_stale`), records heartbeats (:meth:`_beat`) and keeps
+    :func:`fuzzynav.tuning.optuna_study.reap_stale`), records heartbeats (:meth:`_beat`) and keeps
     the number of the trial being run and the exception that failed it (read by the
-    worker loop, :func:`fuzzynav.tuning.study.run_worker`).
+    worker loop, :func:`fuzzynav.tuning.optuna_study.run_worker`).
 
     Parameters
     ----------
@@ -236,7 +236,7 @@ class TrialObjective:
 
     def claim(self, trial) -> None:
         """Name this worker as ``trial``'s owner (host, pid, worker, first heartbeat); once
-        per trial, as early as possible (see :func:`fuzzynav.tuning.study.reap_stale`)."""
+        per trial, as early as possible (see :func:`fuzzynav.tuning.optuna_study.reap_stale`)."""
         if self._claimed == trial.number:
             return
         trial.set_user_attr("host", socket.gethostname())

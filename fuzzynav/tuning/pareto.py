@@ -58,7 +58,7 @@ def objective_names(cfg) -> tuple:
     """Names of a multi-objective study's values, in order."""
     if cfg.robust:
         return ROBUST_NAMES
-    from fuzzynav.tuning.config import GROUP_METRICS
+    from fuzzynav.tuning.study_config import GROUP_METRICS
 
     return tuple(f"{g} ratio" for g in GROUP_METRICS)
 
@@ -83,7 +83,7 @@ def front_table(cfg, front) -> list:
 
 def front_section(study, cfg, front) -> list:
     """The report's Pareto section (empty for a single-objective study); ``front``: the
-    Pareto-optimal trials (:func:`fuzzynav.tuning.study.best_trials`)."""
+    Pareto-optimal trials (:func:`fuzzynav.tuning.optuna_study.best_trials`)."""
     if not cfg.multi_objective:
         return []
     lines = ["", "## Pareto front", ""]

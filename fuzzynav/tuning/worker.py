@@ -1,6 +1,6 @@
 """One study worker process: ``python -m fuzzynav.tuning.worker CONFIG --total N ...``.
 
-Started by :func:`fuzzynav.tuning.run.run_study` (one per ``--workers``) where workers are
+Started by :func:`fuzzynav.tuning.study_run.run_study` (one per ``--workers``) where workers are
 not forked; it opens the study file's plan (:mod:`fuzzynav.tuning.kinds`: any kind of
 study), loads study ``--part`` from the shared storage and runs trials until it holds
 ``--total`` finished ones.  Killing it (even with SIGKILL) loses no completed trial: its
@@ -25,7 +25,7 @@ def main(argv=None) -> int:
     ap.add_argument("--part", default="", help="which of the file's studies (default: its one)")
     args = ap.parse_args(argv)
     from fuzzynav.tuning.kinds import load_plan
-    from fuzzynav.tuning.study import run_worker
+    from fuzzynav.tuning.optuna_study import run_worker
 
     try:
         plan = load_plan(args.config, args.cache)

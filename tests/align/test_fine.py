@@ -6,8 +6,8 @@ import pytest
 from scipy import stats
 
 from fuzzynav import units
-from fuzzynav.align import run as R
-from fuzzynav.align.layout import LAYOUT_10, NORTH
+from fuzzynav.align import alignment_run as R
+from fuzzynav.align.alignment_states import LAYOUT_10, NORTH
 from fuzzynav.align.scenario import load_alignment_scenario
 from fuzzynav.nav import earth
 from fuzzynav.sim.imu import ImuSpec

@@ -4,9 +4,9 @@ import dataclasses
 import numpy as np
 
 from fuzzynav import units
-from fuzzynav.align import run as R
+from fuzzynav.align import alignment_run as R
 from fuzzynav.align.fuzzy_r import DEFAULT_RULES, AlignRScaling
-from fuzzynav.align.layout import UP
+from fuzzynav.align.alignment_states import UP
 from fuzzynav.align.scenario import load_alignment_scenario
 from fuzzynav.sim.imu import ImuSpec
 

@@ -4,7 +4,7 @@ import pytest
 from scipy.linalg import expm
 
 from fuzzynav import units
-from fuzzynav.align.layout import LAYOUT_10, LAYOUT_12
+from fuzzynav.align.alignment_states import LAYOUT_10, LAYOUT_12
 from fuzzynav.align.model import system_matrix, transition
 from fuzzynav.nav.attitude import euler_to_dcm
 

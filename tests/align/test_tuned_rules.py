@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from fuzzynav.align import run as R
-from fuzzynav.align.experiment import metrics
+from fuzzynav.align import alignment_run as R
+from fuzzynav.align.monte_carlo import metrics
 from fuzzynav.align.scenario import load_alignment_scenario
 from fuzzynav.align.tune import Runs
 from fuzzynav.cli import main

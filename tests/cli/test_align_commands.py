@@ -152,7 +152,7 @@ def test_rules_go_to_the_navigation_filter_and_align_at_to_the_aligner(capsys, m
         raise _Called
 
     monkeypatch.setattr(chain, "run_aligned", fake)
-    monkeypatch.setattr("fuzzynav.sim.log.simulate", lambda *a, **k: None)
+    monkeypatch.setattr("fuzzynav.sim.sensor_log.simulate", lambda *a, **k: None)
     try:
         main(["run", "paper000-nominal", "--filter", "fakf", "--align", f"align-fuzzy@{ROR}",
               "--rules", str(GPS)])

@@ -18,7 +18,7 @@ import pytest
 
 import fuzzynav.experiment
 import fuzzynav.runpath
-import fuzzynav.sim.log
+import fuzzynav.sim.sensor_log
 from fuzzynav.cli import main
 from fuzzynav.metrics import check_finite_metrics
 from fuzzynav.errors import RunDivergedError
@@ -78,7 +78,7 @@ def test_a_file_name_too_long_for_the_system(capsys, tmp_path):
 
 
 def test_a_long_scenario_name_gives_a_short_cache_file_name(tmp_path):
-    from fuzzynav.sim.log import cache_path
+    from fuzzynav.sim.sensor_log import cache_path
     from fuzzynav.sim.scenario import load_scenario
 
     scn = load_scenario(TINY)
@@ -99,13 +99,13 @@ def _raise(code):
 @pytest.mark.parametrize("target, code", [("np.savez", errno.ENOSPC),
                                           ("tempfile.mkstemp", errno.EROFS)])
 def test_cache_on_a_full_or_read_only_disk(capsys, tmp_path, monkeypatch, target, code):
-    from fuzzynav.sim.log import cache_path
+    from fuzzynav.sim.sensor_log import cache_path
     from fuzzynav.sim.scenario import load_scenario
 
     old = cache_path(tmp_path, load_scenario(TINY), 0)
     old.write_bytes(b"an old damaged cache file")  # not trusted, so it is rewritten
     module, name = target.split(".")
-    monkeypatch.setattr(getattr(fuzzynav.sim.log, module), name, _raise(code))
+    monkeypatch.setattr(getattr(fuzzynav.sim.sensor_log, module), name, _raise(code))
     code_, _, err = _run(capsys, "run", TINY, "--cache", tmp_path)
     assert code_ == 2 and _one_line(err)
     assert str(old) in err and "simulation cache" in err and os.strerror(code) in err

@@ -15,7 +15,7 @@ from fuzzynav.filters.layout import X_POS
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.filters.runner import run_filter
 from fuzzynav.nav import attitude, strapdown
-from fuzzynav.nav.layout import NAV_H, NAV_VEL
+from fuzzynav.nav.state_layout import NAV_H, NAV_VEL
 from fuzzynav.sim.sensors import SensorData
 from tests.filters.simple_data import CONFIG, run_inputs, trajectory
 from tests.filters.test_measurements import ATT, LLA, VEL, _call, _numeric_H

@@ -13,7 +13,7 @@ from fuzzynav.filters.error_model import ErrorModel, fill_F
 from fuzzynav.filters.layout import COUPLE_NONE, register_block
 from fuzzynav.filters.runner import run_filter
 from fuzzynav.nav import attitude, strapdown
-from fuzzynav.nav.layout import Q_SLICE
+from fuzzynav.nav.state_layout import Q_SLICE
 from tests.filters.simple_data import CONFIG, run_inputs, trajectory
 
 # a sensor module would do this at import: a 1-state odometer scale factor

@@ -51,7 +51,7 @@ def test_paper000_system_with_compass_is_consistent(sim_cache):
     from fuzzynav.experiment import run_on_log
     from fuzzynav.metrics import _enu_difference
     from fuzzynav.nav import attitude
-    from fuzzynav.sim.log import simulate
+    from fuzzynav.sim.sensor_log import simulate
     from fuzzynav.sim.scenario import load_scenario
 
     scn = load_scenario("paper000-nominal")

@@ -49,7 +49,7 @@ def test_fill_and_statistics_follow_their_definitions():
     ctx[context.CTX_M] = M
     g = earth.gravity(START[0], START[2])
     nav = np.zeros(16)
-    from fuzzynav.nav.layout import NAV_H, NAV_LAT, NAV_VEL
+    from fuzzynav.nav.state_layout import NAV_H, NAV_LAT, NAV_VEL
     nav[NAV_LAT], nav[NAV_H] = START[0], START[2]
     nav[NAV_VEL:NAV_VEL + 3] = (3.0, 4.0, 0.0)
     aux = np.array([0.0, 0.06, 0.08, 0.0, 3.0, g + 1.0])

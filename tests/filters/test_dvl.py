@@ -13,7 +13,7 @@ from fuzzynav.filters.sensor_states import with_sensor_states
 from fuzzynav.filters.named import FilterSetup
 from fuzzynav.filters.config import FilterConfig
 from fuzzynav.nav import attitude
-from fuzzynav.nav.layout import PREV_SIZE
+from fuzzynav.nav.state_layout import PREV_SIZE
 from fuzzynav.nav.strapdown import init_prev, make_nav, quat_to_dcm_into
 from fuzzynav.sim.sensors import SensorData
 

@@ -121,7 +121,7 @@ def _epochs(st):
 @pytest.fixture(scope="module")
 def log(tmp_path_factory):
     """The first 160 s of paper000 with outliers (rest, acceleration, cruise, a turn)."""
-    from fuzzynav.sim.log import simulate
+    from fuzzynav.sim.sensor_log import simulate
     from fuzzynav.sim.scenario import load_scenario
 
     scn = load_scenario("paper000-outliers")

@@ -10,7 +10,7 @@ from fuzzynav.filters.error_model import ErrorModel
 from fuzzynav.filters.layout import (BLOCK_KINDS, CORE, COUPLE_ACCEL, COUPLE_GYRO, COUPLE_NONE,
                                      LAYOUT_15, LAYOUT_18, N_CORE, X_ATT, X_POS, X_VEL,
                                      StateLayout, register_block)
-from fuzzynav.nav import layout as navl
+from fuzzynav.nav import state_layout as navl
 
 
 def test_slices_by_name_cover_the_state_once_in_order():

@@ -94,7 +94,7 @@ def test_log_scale_and_bias_converge_with_a_position_fix():
     from dataclasses import replace
 
     from fuzzynav.experiment import run_on_log, setup_for
-    from fuzzynav.sim.log import simulate
+    from fuzzynav.sim.sensor_log import simulate
     from fuzzynav.sim.scenario import load_scenario, scenario_from_dict
 
     d = load_scenario("paper003").to_dict()

@@ -5,7 +5,7 @@ import pytest
 from fuzzynav.experiment import run_on_log, setup_for
 from fuzzynav.metrics import errors_vs_trajectory
 from fuzzynav.nav import earth
-from fuzzynav.sim.log import simulate
+from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.sim.scenario import load_scenario
 
 #: the magnetic disturbance zone of scenario paper001 (seconds; 1-Hz magnetometer)

@@ -8,7 +8,7 @@ from fuzzynav.experiment import run_on_log, setup_for
 from fuzzynav.filters.named import select_sensors
 from fuzzynav.filters.runner import run_filter
 from fuzzynav.experiment import perturbed_initial_state
-from fuzzynav.sim.log import simulate
+from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.sim.scenario import load_scenario
 
 

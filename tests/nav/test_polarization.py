@@ -4,7 +4,7 @@ import pytest
 from scipy.optimize import brentq
 
 from fuzzynav.nav.attitude import dcm_to_euler, euler_to_dcm, rotvec_to_dcm
-from fuzzynav.nav import polarization as ps
+from fuzzynav.nav import polarization_solver as ps
 from fuzzynav.sim import skylight as sk
 
 ZENITH = np.array([0.0, 0.0, 1.0])

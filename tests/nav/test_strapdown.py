@@ -2,7 +2,7 @@
 import numpy as np
 
 from fuzzynav.nav import attitude, earth, strapdown
-from fuzzynav.nav.layout import PREV_SIZE, Q_SLICE
+from fuzzynav.nav.state_layout import PREV_SIZE, Q_SLICE
 from fuzzynav.sim.segments import manoeuvring_profile
 from fuzzynav.sim.trajectory import Segment, generate
 

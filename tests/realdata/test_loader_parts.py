@@ -11,7 +11,7 @@ from fuzzynav.realdata import coarse_align, degrade
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.realdata.loaders import increments, sync, timetag
 from fuzzynav.realdata.loaders.mounting import Mounting, passive_rpy_matrix
-from fuzzynav.sim.log import simulate
+from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.sim.scenario import scenario_from_dict
 from fuzzynav.sim.sensors import SensorData
 from tests.realdata.rtklib_files import tag_bytes

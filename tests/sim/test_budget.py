@@ -7,7 +7,7 @@ import pytest
 from fuzzynav.errors import InputFileError
 from fuzzynav.fileio import safe_stem
 from fuzzynav.sim import budget
-from fuzzynav.sim.log import simulate
+from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.sim.scenario import load_scenario
 from fuzzynav.sim.tomltable import MAX_TOML_BYTES
 

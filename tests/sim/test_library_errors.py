@@ -15,7 +15,7 @@ from fuzzynav.experiment import summary_table
 from fuzzynav.realdata.validate import validate
 from fuzzynav.realdata.loaders import sync
 from fuzzynav.realdata.loaders.rtklib import load_rtklib
-from fuzzynav.sim.log import check_seed, simulate
+from fuzzynav.sim.sensor_log import check_seed, simulate
 from fuzzynav.sim.scenario import load_scenario
 from fuzzynav.sim.segments import Segment
 from tests.realdata.rtklib_files import write_drive

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from fuzzynav.sim import log as simlog
+from fuzzynav.sim import sensor_log as simlog
 from fuzzynav.sim.scenario import scenario_from_dict
 
 DOC = {

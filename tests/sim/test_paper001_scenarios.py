@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from fuzzynav.sim.log import simulate
+from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.sim.scenario import list_scenarios, load_scenario
 
 FAMILY = ("paper001", "paper001-nodist", "paper001-strong", "paper001-outages",

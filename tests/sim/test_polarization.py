@@ -7,7 +7,7 @@ from scipy import stats
 
 from fuzzynav.errors import InputFileError
 from fuzzynav.nav.attitude import euler_to_dcm, euler_to_quat
-from fuzzynav.nav import polarization as ps
+from fuzzynav.nav import polarization_solver as ps
 from fuzzynav.sim import skylight as sk
 from fuzzynav.sim import sun
 from fuzzynav.sim.sensors import SensorData, spec_class
@@ -221,7 +221,7 @@ def test_simulate_needs_a_start_time():
 
 def test_paper000_scenario_with_a_polarization_sensor(tmp_path):
     # through the scenario loader and the .npz cache: the sensor table, start_utc and meta
-    from fuzzynav.sim.log import simulate
+    from fuzzynav.sim.sensor_log import simulate
     from fuzzynav.sim.scenario import load_scenario, scenario_from_dict
 
     d = load_scenario("paper000").to_dict()

@@ -83,8 +83,8 @@ def write_study(directory, doc=None, file_name=None, **changes) -> Path:
 
 def finished_study(directory, cache_dir, trials=4, **changes):
     """Run a tiny study to ``trials`` in ``directory``: ``(config, study)``."""
-    from fuzzynav.tuning.config import load_study_config
-    from fuzzynav.tuning.run import run_study
+    from fuzzynav.tuning.study_config import load_study_config
+    from fuzzynav.tuning.study_run import run_study
 
     cfg = load_study_config(write_study(directory, **changes))
     return cfg, run_study(cfg, trials=trials, cache_dir=cache_dir, progress=False)

@@ -18,7 +18,7 @@ from fuzzynav.cli import main
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
 from fuzzynav.tuning.kinds import KINDS, StudyKind, register_kind, study_settings
 from fuzzynav.tuning.objective import TrialObjective
-from fuzzynav.tuning.study import best_trials, open_study
+from fuzzynav.tuning.optuna_study import best_trials, open_study
 
 
 class ToyObjective(TrialObjective):

@@ -11,9 +11,9 @@ import pytest
 from fuzzynav.errors import InputFileError
 from fuzzynav.experiment import run_on_log
 from fuzzynav.realdata.dataspec import DATA_DIR_ENV
-from fuzzynav.sim.log import simulate
+from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.sim.scenario import load_scenario
-from fuzzynav.tuning.baselines import SPACES, load_baseline_config, sub_config
+from fuzzynav.tuning.baseline_config import SPACES, load_baseline_config, sub_config
 from fuzzynav.tuning.pso import PsoSampler, history
 from tests.tuning.studies import TINY
 
@@ -43,7 +43,7 @@ def test_shipped_configs_are_pso_studies_held_out_on_other_trajectories(path, fa
 
 def _bowl_study(iterations=25):
     """A PSO study over the apso space whose objective is a bowl with a known minimum."""
-    from fuzzynav.tuning.config import PsoConfig, study_config_from_dict
+    from fuzzynav.tuning.study_config import PsoConfig, study_config_from_dict
 
     doc = {"study": {"sampler": "pso", "seed": 3, "trials": 8 * iterations},
            "objective": {"weights": {"pos": 1.0, "vel": 0.0, "att": 0.0}},

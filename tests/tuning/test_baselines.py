@@ -9,8 +9,8 @@ import pytest
 from fuzzynav.errors import FuzzynavError, InputFileError
 from fuzzynav.filters.baselines import read_params
 from fuzzynav.filters.params_file import PARAMS_FORMAT
-from fuzzynav.tuning.baselines import is_baseline_config, load_baseline_config, space_of
-from fuzzynav.tuning.kinds.baselines import run_baselines
+from fuzzynav.tuning.baseline_config import is_baseline_config, load_baseline_config, space_of
+from fuzzynav.tuning.kinds.baseline_studies import run_baselines
 
 STUDY = Path(__file__).resolve().parents[2] / "studies" / "paper000_baselines.toml"
 
@@ -84,7 +84,7 @@ def test_als_in_a_baseline_study_gets_its_training_score(tmp_path):
 def test_als_recovers_the_unreported_gnss_noise_of_a_training_run(tmp_path):
     # paper000-steps: GNSS noise x3 for 150 s and x10 for 80 s of a 755-s run, unreported;
     # the run's mean true/claimed variance ratio is the independent truth ALS should find
-    from fuzzynav.sim.log import simulate
+    from fuzzynav.sim.sensor_log import simulate
     from fuzzynav.sim.scenario import load_scenario
     from fuzzynav.tuning.als_fit import run_scales
 

@@ -8,7 +8,7 @@ import sys
 import pytest
 
 from fuzzynav.errors import DataMissingError, FuzzynavError, InputFileError
-from fuzzynav.tuning.config import load_study_config
+from fuzzynav.tuning.study_config import load_study_config
 from tests.tuning.studies import (ATT_CONTROLLER, BASE, GPS, ROOT, STUDIES, TINY, study_doc,
                                   write_study)
 

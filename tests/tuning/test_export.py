@@ -14,11 +14,11 @@ from fuzzynav import __version__
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.experiment import run_on_log
 from fuzzynav.fuzzy import load_fis
-from fuzzynav.sim.log import simulate
+from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.sim.scenario import load_scenario
 from fuzzynav.tuning import export as export_mod
 from fuzzynav.tuning.export import choose_trial, export_rules, systems_of
-from fuzzynav.tuning.study import best_trials, pareto_front
+from fuzzynav.tuning.optuna_study import best_trials, pareto_front
 from tests.test_rules_regression import check_expected
 from tests.tuning.studies import ATT_CONTROLLER, BASE, finished_study
 

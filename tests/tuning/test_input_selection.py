@@ -6,7 +6,7 @@ import optuna
 import pytest
 
 from fuzzynav.errors import InputFileError
-from fuzzynav.tuning.config import load_study_config, study_config_from_dict
+from fuzzynav.tuning.study_config import load_study_config, study_config_from_dict
 from fuzzynav.tuning.space import ControllerSpace
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -15,11 +15,11 @@ import pytest
 from optuna.trial import TrialState
 
 from fuzzynav.cli import main
-from fuzzynav.tuning.config import load_study_config
+from fuzzynav.tuning.study_config import load_study_config
 from fuzzynav.tuning.journal import salvage, tail_ok
-from fuzzynav.tuning.run import run_study
+from fuzzynav.tuning.study_run import run_study
 from fuzzynav.tuning.space import build_all
-from fuzzynav.tuning.study import Objective, open_study
+from fuzzynav.tuning.optuna_study import Objective, open_study
 from tests.tuning.studies import write_study
 
 optuna.logging.set_verbosity(optuna.logging.ERROR)

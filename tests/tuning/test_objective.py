@@ -10,7 +10,7 @@ import pytest
 
 from fuzzynav.experiment import run_on_log
 from fuzzynav.fuzzy import load_fis
-from fuzzynav.tuning.config import load_study_config
+from fuzzynav.tuning.study_config import load_study_config
 from fuzzynav.tuning.objective import FAILED_RATIO, Evaluator, Objective, score_metrics
 from fuzzynav.tuning.space import ControllerSpace, build_all
 from tests.tuning.studies import ATT, ATT_CONTROLLER, BASE, GPS, TINY, write_study

@@ -8,8 +8,8 @@ import optuna
 import pytest
 
 from fuzzynav.tuning.export import choose_trial
-from fuzzynav.tuning.report import write_report
-from fuzzynav.tuning.study import best_trials
+from fuzzynav.tuning.study_report import write_report
+from fuzzynav.tuning.optuna_study import best_trials
 from tests.tuning.studies import BASE, TINY, finished_study
 
 optuna.logging.set_verbosity(optuna.logging.ERROR)

@@ -19,9 +19,9 @@ from pathlib import Path
 import pytest
 from optuna.trial import TrialState
 
-from fuzzynav.tuning.config import load_study_config
-from fuzzynav.tuning.run import run_study
-from fuzzynav.tuning.study import open_study
+from fuzzynav.tuning.study_config import load_study_config
+from fuzzynav.tuning.study_run import run_study
+from fuzzynav.tuning.optuna_study import open_study
 from tests.tuning.studies import write_study
 
 
@@ -119,7 +119,7 @@ def test_baseline_and_alignment_studies_share_postgresql_too(tmp_path, sim_cache
     """The other study kinds run on the same driver: two workers through PostgreSQL, then
     resumed from there; nothing goes to the default journal file."""
     from fuzzynav.tuning.kinds import load_plan
-    from fuzzynav.tuning.run import run_plan
+    from fuzzynav.tuning.study_run import run_plan
     from tests.tuning.test_study_kinds import BASELINE, _alignment_study
 
     if kind == "baselines":

@@ -15,9 +15,9 @@ import pytest
 from optuna.trial import TrialState
 
 from fuzzynav.tuning import objective, prefetch
-from fuzzynav.tuning.config import load_study_config
+from fuzzynav.tuning.study_config import load_study_config
 from fuzzynav.tuning.objective import Evaluator, Objective
-from fuzzynav.tuning.run import run_study, wait_for_exit
+from fuzzynav.tuning.study_run import run_study, wait_for_exit
 from tests.tuning.studies import TINY, write_study
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"),

@@ -16,11 +16,11 @@ from optuna.trial import TrialState
 
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.tuning import pso
-from fuzzynav.tuning import study as study_mod
-from fuzzynav.tuning.config import load_study_config
-from fuzzynav.tuning.run import run_study
+from fuzzynav.tuning import optuna_study as study_mod
+from fuzzynav.tuning.study_config import load_study_config
+from fuzzynav.tuning.study_run import run_study
 from fuzzynav.tuning.space import build_all
-from fuzzynav.tuning.study import Objective, open_study, reap_stale
+from fuzzynav.tuning.optuna_study import Objective, open_study, reap_stale
 from tests.tuning.studies import write_study
 
 optuna.logging.set_verbosity(optuna.logging.ERROR)

@@ -18,9 +18,9 @@ from optuna.storages.journal import JournalFileBackend, JournalStorage
 from optuna.trial import TrialState
 
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.tuning import study as study_mod
-from fuzzynav.tuning.config import load_study_config
-from fuzzynav.tuning.study import (MAX_FAILS_IN_ROW, Objective, open_study, reap_orphans,
+from fuzzynav.tuning import optuna_study as study_mod
+from fuzzynav.tuning.study_config import load_study_config
+from fuzzynav.tuning.optuna_study import (MAX_FAILS_IN_ROW, Objective, open_study, reap_orphans,
                                    reap_stale, run_worker)
 from tests.tuning.studies import write_study
 

@@ -10,7 +10,7 @@ import pytest
 
 from fuzzynav.errors import InputFileError
 from fuzzynav.realdata.dataspec import DATA_DIR_ENV
-from fuzzynav.tuning.config import load_study_config
+from fuzzynav.tuning.study_config import load_study_config
 from fuzzynav.tuning.evaluate import run_table
 from fuzzynav.tuning.objective import Evaluator, score_metrics
 from tests.realdata.akit_files import auv_trajectory, write_akit
@@ -141,8 +141,8 @@ def test_export_of_a_recording_study_records_expected_on_the_simulated_run(
     import json
 
     from fuzzynav.tuning.export import export_rules
-    from fuzzynav.tuning.run import run_study
-    from fuzzynav.tuning.study import open_study
+    from fuzzynav.tuning.study_run import run_study
+    from fuzzynav.tuning.optuna_study import open_study
 
     doc = _doc(["akit:auv:1"], ["akit:auv:2"])
     doc["study"].update(trials=2)

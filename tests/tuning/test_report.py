@@ -11,10 +11,10 @@ import pandas as pd
 import pytest
 from optuna.trial import TrialState
 
-from fuzzynav.tuning.config import load_study_config
+from fuzzynav.tuning.study_config import load_study_config
 from fuzzynav.tuning.evaluate import summary
-from fuzzynav.tuning.report import write_report
-from fuzzynav.tuning.study import open_study
+from fuzzynav.tuning.study_report import write_report
+from fuzzynav.tuning.optuna_study import open_study
 from tests.tuning.studies import ATT_CONTROLLER, BASE, finished_study, write_study
 
 optuna.logging.set_verbosity(optuna.logging.ERROR)

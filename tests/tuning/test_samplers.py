@@ -9,11 +9,11 @@ from optuna.trial import TrialState
 
 from fuzzynav.errors import UnknownNameError
 from fuzzynav.tuning import journal
-from fuzzynav.tuning.config import load_study_config
+from fuzzynav.tuning.study_config import load_study_config
 from fuzzynav.tuning.objective import Objective
-from fuzzynav.tuning.run import run_study
+from fuzzynav.tuning.study_run import run_study
 from fuzzynav.tuning.samplers import OPTIMISERS, Optimiser, get_optimiser, register_optimiser
-from fuzzynav.tuning.study import make_pruner
+from fuzzynav.tuning.optuna_study import make_pruner
 from tests.tuning.studies import write_study
 
 optuna.logging.set_verbosity(optuna.logging.ERROR)

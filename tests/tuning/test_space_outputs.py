@@ -12,7 +12,7 @@ from fuzzynav.filters.adaptation.rq_scaling import FuzzyRQScaling
 from fuzzynav.fuzzy import load_fis
 from fuzzynav.fuzzy.io import save_fis
 from fuzzynav.fuzzy.kernels import eval_compiled_batch
-from fuzzynav.tuning.config import load_study_config, study_config_from_dict
+from fuzzynav.tuning.study_config import load_study_config, study_config_from_dict
 from fuzzynav.tuning.space import ControllerSpace
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -16,14 +16,14 @@ from optuna.storages.journal import JournalFileBackend, JournalStorage
 from optuna.trial import TrialState
 
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.sim.log import simulate
+from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.sim.scenario import load_scenario
-from fuzzynav.tuning import study as study_mod
-from fuzzynav.tuning.config import load_study_config
-from fuzzynav.tuning.run import run_study
+from fuzzynav.tuning import optuna_study as study_mod
+from fuzzynav.tuning.study_config import load_study_config
+from fuzzynav.tuning.study_run import run_study
 from fuzzynav.tuning.slots import TrialSlots
 from fuzzynav.tuning.space import build_all
-from fuzzynav.tuning.study import (Objective, open_study, run_worker)
+from fuzzynav.tuning.optuna_study import (Objective, open_study, run_worker)
 from tests.tuning.studies import ROOT, write_study
 
 optuna.logging.set_verbosity(optuna.logging.ERROR)

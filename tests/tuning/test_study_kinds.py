@@ -19,7 +19,7 @@ from fuzzynav.cli import main
 from fuzzynav.errors import InputFileError
 from fuzzynav.filters.baselines import read_params
 from fuzzynav.tuning.kinds import kind_of, load_plan
-from fuzzynav.tuning.study import open_study
+from fuzzynav.tuning.optuna_study import open_study
 from tests.tuning.studies import ROOT, RULES, TINY
 
 optuna.logging.set_verbosity(optuna.logging.ERROR)

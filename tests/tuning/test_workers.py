@@ -14,11 +14,11 @@ import pytest
 from optuna.storages.journal import JournalFileBackend, JournalStorage
 from optuna.trial import TrialState
 
-from fuzzynav.sim.log import simulate
+from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.sim.scenario import load_scenario
-from fuzzynav.tuning.config import load_study_config
-from fuzzynav.tuning.run import run_study
-from fuzzynav.tuning.study import _alive, open_study
+from fuzzynav.tuning.study_config import load_study_config
+from fuzzynav.tuning.study_run import run_study
+from fuzzynav.tuning.optuna_study import _alive, open_study
 from tests.tuning.studies import write_study
 
 optuna.logging.set_verbosity(optuna.logging.ERROR)

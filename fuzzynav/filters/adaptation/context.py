@@ -35,7 +35,7 @@ from fuzzynav import units
 from fuzzynav.filters.layout import AUX_FORCE, AUX_RATE
 from fuzzynav.filters.adaptation import window
 from fuzzynav.nav.earth import gravity_nb
-from fuzzynav.nav.layout import NAV_H, NAV_LAT, NAV_VEL
+from fuzzynav.nav.state_layout import NAV_H, NAV_LAT, NAV_VEL
 
 CTX_SPEED, CTX_RATE, CTX_FORCE, CTX_M, CTX_R = 0, 1, 2, 3, 4
 

@@ -33,7 +33,7 @@ from fuzzynav import units
 from fuzzynav.filters.layout import AUX_XS, N_CORE, X_ATT, X_VEL
 from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
-from fuzzynav.nav.layout import NAV_VEL
+from fuzzynav.nav.state_layout import NAV_VEL
 
 #: state blocks this model can use, in the order of their starts in ``par[3:6]``
 DVL_BLOCKS = ("dvl_scale", "dvl_misalignment", "lever_arm")

@@ -23,7 +23,7 @@ from fuzzynav.filters.layout import X_ATT, X_POS, X_VEL
 from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, default_rows, register
 from fuzzynav.nav.earth import radii_nb
-from fuzzynav.nav.layout import NAV_H, NAV_LAT, NAV_LON, NAV_VEL
+from fuzzynav.nav.state_layout import NAV_H, NAV_LAT, NAV_LON, NAV_VEL
 
 
 @njit_signature(MEAS_SIG)

@@ -31,7 +31,7 @@ import numpy as np
 from fuzzynav.filters.layout import AUX_XS, COUPLE_NONE, N_CORE, X_ATT, X_VEL, register_block
 from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
-from fuzzynav.nav.layout import NAV_VEL
+from fuzzynav.nav.state_layout import NAV_VEL
 
 register_block("log_bias", 1, COUPLE_NONE)
 register_block("water_current", 2, COUPLE_NONE, axes="en")

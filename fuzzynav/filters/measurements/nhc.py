@@ -18,7 +18,7 @@ import numpy as np
 from fuzzynav.filters.layout import X_ATT, X_VEL
 from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
-from fuzzynav.nav.layout import NAV_VEL
+from fuzzynav.nav.state_layout import NAV_VEL
 
 
 @njit_signature(MEAS_SIG)

@@ -39,7 +39,7 @@ import numpy as np
 from fuzzynav.filters.layout import X_ATT
 from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
-from fuzzynav.nav import polarization as ps
+from fuzzynav.nav import polarization_solver as ps
 from fuzzynav.nav.attitude import mod_pos, wrap_pi
 from fuzzynav.nav.polarization_geometry import TWO_PI, fold_half_pi
 from fuzzynav.filters.measurements.polarization_rows import fill_extra, rows

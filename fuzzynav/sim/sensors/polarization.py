@@ -28,7 +28,7 @@ misalignment, then ``aop = AoP(v_c, C_cn sun_n) + e``.  The error ``e`` is ``noi
 a standard normal draw, or a Student-t draw when ``student_t_dof > 0`` (its standard deviation
 is then ``noise_deg sqrt(dof / (dof - 2))``), plus, with probability ``outlier_rate``, a
 normal outlier of 1-sigma ``outlier_scale * noise_deg``.  The filter inverts the model with
-:mod:`fuzzynav.nav.polarization`.
+:mod:`fuzzynav.nav.polarization_solver`.
 """
 from __future__ import annotations
 

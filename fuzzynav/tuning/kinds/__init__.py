@@ -2,7 +2,7 @@
 
 Every study file -- fuzzy controllers (``[[controllers]]``), classical baselines
 (``[baselines]``), the alignment filter's rules (``kind = "alignment"``) -- runs through the
-same driver (:func:`fuzzynav.tuning.run.run_plan`): its workers, storages (journal file,
+same driver (:func:`fuzzynav.tuning.study_run.run_plan`): its workers, storages (journal file,
 PostgreSQL), slot locks, reaping, resume, export and report.  A kind is one module here
 with a *plan* class and one :func:`register_kind` call; the driver reads only the plan.
 
@@ -14,7 +14,7 @@ A plan is a study file opened with its simulation cache.  It has
     the keys of the Optuna studies it runs, in order (``""`` for one study; a baseline
     file runs one study per searched filter);
 ``config(key)``
-    the :class:`~fuzzynav.tuning.config.StudyConfig` of a part (name, storage, sampler,
+    the :class:`~fuzzynav.tuning.study_config.StudyConfig` of a part (name, storage, sampler,
     seed, trials, pruner, stale-trial period: what the driver reads);
 ``warm(processes, progress)``
     load what every trial needs, once, in the parent before workers fork (idempotent);
@@ -69,11 +69,11 @@ def register_kind(kind: StudyKind) -> StudyKind:
 
 def study_settings(path, name: str, *, sampler: str, seed: int, trials: int, storage: str = "",
                    stale_after_s: float = 300.0, train=(), test=(), space=(), **more):
-    """The :class:`~fuzzynav.tuning.config.StudyConfig` of a kind's study that has none of a
+    """The :class:`~fuzzynav.tuning.study_config.StudyConfig` of a kind's study that has none of a
     fuzzy study's controllers, weights or baseline filter: what the driver reads (name,
     storage, sampler, seed, trials, stale-trial period; ``train``: what ``n_runs`` of a
     complete trial counts), no pruner, one objective.  ``more``: other fields to set."""
-    from fuzzynav.tuning.config import PsoConfig, StudyConfig
+    from fuzzynav.tuning.study_config import PsoConfig, StudyConfig
 
     fields = dict(name=name, description="", path=Path(path).resolve(), sampler=sampler,
                   seed=seed, trials=trials, pruner="none", multi_objective=False,

@@ -177,7 +177,7 @@ class AlignmentPlan:
 
     def chosen(self, study, trial=None):
         """The best complete trial of ``study``, or trial number ``trial`` (complete)."""
-        from fuzzynav.tuning.study import best_trials
+        from fuzzynav.tuning.optuna_study import best_trials
 
         full = best_trials(study, self.acfg.study)
         if trial is None:
@@ -192,7 +192,7 @@ class AlignmentPlan:
 
     def _write(self, study, out, trial=None) -> tuple:
         from fuzzynav.align.tune import tuned_rules, write_json
-        from fuzzynav.tuning.study import n_finished
+        from fuzzynav.tuning.optuna_study import n_finished
 
         chosen = self.chosen(study, trial)
         doc, summary = tuned_rules(self.acfg, chosen.params, chosen.value, n_finished(study),

@@ -15,7 +15,7 @@ def write_alignment_report(plan, study, out, evaluate: bool = True) -> Path:
     rule file's provenance records).
     """
     from fuzzynav.align.tune import tuned_rules
-    from fuzzynav.tuning.study import n_finished
+    from fuzzynav.tuning.optuna_study import n_finished
 
     acfg, best = plan.acfg, plan.chosen(study)
     lines = [f"# Alignment study `{plan.name}`", "",

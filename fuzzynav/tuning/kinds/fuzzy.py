@@ -3,7 +3,7 @@
 One Optuna study per file; a trial is a candidate rule set scored by
 :class:`~fuzzynav.tuning.objective.Objective` (ratios of RMS errors to the baseline filter on
 the training runs).  Summary, export and report are :mod:`fuzzynav.tuning.evaluate`,
-:mod:`fuzzynav.tuning.export` and :mod:`fuzzynav.tuning.report`.
+:mod:`fuzzynav.tuning.export` and :mod:`fuzzynav.tuning.study_report`.
 """
 from __future__ import annotations
 
@@ -84,14 +84,14 @@ class FuzzyPlan:
         return export_rules(self.cfg, studies[""], out, trial, pareto, self.cache_dir)
 
     def report(self, studies: dict, out, evaluate: bool = True):
-        from fuzzynav.tuning.report import write_report
+        from fuzzynav.tuning.study_report import write_report
 
         return write_report(self.cfg, studies[""], out, self.cache_dir, evaluate=evaluate)
 
 
 def load(path, cache_dir=None) -> FuzzyPlan:
-    """Read and check a fuzzy study file (:func:`fuzzynav.tuning.config.load_study_config`)."""
-    from fuzzynav.tuning.config import load_study_config
+    """Read and check a fuzzy study file (:func:`fuzzynav.tuning.study_config.load_study_config`)."""
+    from fuzzynav.tuning.study_config import load_study_config
 
     return FuzzyPlan(load_study_config(Path(path)), cache_dir)
 

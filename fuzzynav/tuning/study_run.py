@@ -6,7 +6,7 @@ its workers: they start warm, without importing the package, loading kernels or 
 baseline again (on other platforms they start as new interpreters, :data:`WORKER_BOOT`).
 The parent supervises its workers: it polls every one of them (so a worker that dies is
 reaped at once and never lingers as a zombie), fails and re-enqueues the trial a dead worker
-left ``RUNNING`` (:func:`fuzzynav.tuning.study.reap_stale`), and starts a replacement while
+left ``RUNNING`` (:func:`fuzzynav.tuning.optuna_study.reap_stale`), and starts a replacement while
 the study is short of its total.  A worker that exits with code 2 (a user error such as
 repeated failed trials) is not restarted: the run ends with that error.
 """
@@ -26,7 +26,7 @@ from tqdm.auto import tqdm
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.tuning.prefetch import warm_shared
 from fuzzynav.tuning.samplers import get_optimiser
-from fuzzynav.tuning.study import n_finished, open_study, reap_orphans, run_worker
+from fuzzynav.tuning.optuna_study import n_finished, open_study, reap_orphans, run_worker
 
 #: a worker is started with this program instead of ``python -m``, which would put the
 #: current directory first on its import path (a stray ``inspect.py`` there broke workers)

@@ -19,13 +19,13 @@ import numpy as np
 from fuzzynav.align.fast import fast_azimuth, level_history
 from fuzzynav.align.fine import Epochs, FineResult, run_fine
 from fuzzynav.align.fuzzy_r import policy_for
-from fuzzynav.align.layout import LAYOUT_10, LAYOUT_12, NORTH, UP
+from fuzzynav.align.alignment_states import LAYOUT_10, LAYOUT_12, NORTH, UP
 from fuzzynav.align.mechanize import mechanize
 from fuzzynav.align.scenario import AlignScenario
 from fuzzynav.align.simulate import AlignLog, simulate_alignment
 from fuzzynav.nav import attitude, earth
 from fuzzynav.registry import Registry
-from fuzzynav.sim.log import component_rng
+from fuzzynav.sim.sensor_log import component_rng
 
 
 @dataclass(frozen=True)

@@ -26,10 +26,10 @@ from fuzzynav.errors import FuzzynavError
 from fuzzynav.fileio import staged, write_atomic
 from fuzzynav.tuning.evaluate import format_summary, run_table
 from fuzzynav.tuning.export import choose_trial, systems_of
-from fuzzynav.tuning.config import GROUP_METRICS
+from fuzzynav.tuning.study_config import GROUP_METRICS
 from fuzzynav.tuning import pareto
 from fuzzynav.tuning.objective import Evaluator, weighted_score
-from fuzzynav.tuning.study import best_trials
+from fuzzynav.tuning.optuna_study import best_trials
 
 plt = plots.plt
 

@@ -31,7 +31,7 @@ import optuna
 from optuna.trial import TrialState
 
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.tuning.config import GROUP_METRICS
+from fuzzynav.tuning.study_config import GROUP_METRICS
 from fuzzynav.tuning.objective import Objective
 from fuzzynav.tuning.samplers import get_optimiser
 from fuzzynav.tuning.slots import TrialSlots
@@ -277,7 +277,7 @@ def run_worker(cfg, n_total: int, storage_url=None, worker: int = 0, cache_dir=N
     """Run trials until the study has ``n_total`` finished ones; returns trials run here.
 
     Trials running in other workers count towards the total, so parallel workers do not
-    overshoot it (:func:`fuzzynav.tuning.run.run_study` rounds the total to what the
+    overshoot it (:func:`fuzzynav.tuning.study_run.run_study` rounds the total to what the
     optimiser runs: whole swarms for PSO).  ``evaluator``: a warm
     :class:`~fuzzynav.tuning.objective.Evaluator` to use (logs, baselines loaded).
     ``make_objective``: ``make_objective(worker) ->``

@@ -3,10 +3,10 @@ from __future__ import annotations
 
 import json
 
-from fuzzynav.align.experiment import ALIGN_ROWS, monte_carlo_alignment
+from fuzzynav.align.monte_carlo import ALIGN_ROWS, monte_carlo_alignment
 from fuzzynav.align.scenario import load_alignment_scenario
 from fuzzynav.align.fuzzy_r import AlignRScaling
-from fuzzynav.align.run import get_align_filter
+from fuzzynav.align.alignment_run import get_align_filter
 from fuzzynav.errors import FuzzynavError, brief
 from fuzzynav.metrics import mean_ci
 from fuzzynav.report import comparison_rows, render
@@ -96,7 +96,7 @@ def run_with_alignment(args) -> int:
 
     from fuzzynav.align.chain import run_aligned
     from fuzzynav.report import NAV_ROWS
-    from fuzzynav.sim.log import simulate
+    from fuzzynav.sim.sensor_log import simulate
     from fuzzynav.sim.scenario import load_scenario
 
     _refuse(args, ("plot", "--plot"), ("json", "--json"), ("t_start", "--t-start"))
@@ -120,7 +120,7 @@ def run_with_alignment(args) -> int:
 
 def describe_alignment() -> str:
     """The alignment scenarios and filters, for ``fuzzynav scenarios``."""
-    from fuzzynav.align.run import ALIGN_FILTERS
+    from fuzzynav.align.alignment_run import ALIGN_FILTERS
     from fuzzynav.align.scenario import list_alignment_scenarios
 
     lines = ["\nalignment scenarios (compare NAME --filters align-kf,align-fuzzy,...):"]

@@ -3,7 +3,7 @@
 One Optuna study per searched filter (``<name>.<filter>``, in the file's storage), each a
 part of the plan run by the one driver; ALS is estimated, not searched
 (:mod:`fuzzynav.tuning.als_fit`).  :meth:`BaselinePlan.finish` writes the tuned-parameter
-file the named filters read (``ekf-tuned@FILE``; :mod:`fuzzynav.tuning.baselines`).
+file the named filters read (``ekf-tuned@FILE``; :mod:`fuzzynav.tuning.baseline_config`).
 """
 from __future__ import annotations
 
@@ -43,13 +43,13 @@ class BaselinePlan:
         return [name for name in self.bcfg.tune if name != "als"]
 
     def space(self, key: str) -> dict:
-        from fuzzynav.tuning.baselines import space_of, training_channels
+        from fuzzynav.tuning.baseline_config import space_of, training_channels
 
         return space_of(key, training_channels(self.evaluator, self.bcfg.study.train))
 
     def config(self, key: str):
-        """The study of filter ``key`` (:func:`fuzzynav.tuning.baselines.sub_config`)."""
-        from fuzzynav.tuning.baselines import sub_config
+        """The study of filter ``key`` (:func:`fuzzynav.tuning.baseline_config.sub_config`)."""
+        from fuzzynav.tuning.baseline_config import sub_config
 
         if key not in self.parts():
             raise FuzzynavError(f"{self.path}: [baselines] tune has no searched filter {key!r}")
@@ -69,7 +69,7 @@ class BaselinePlan:
         return self.evaluator
 
     def objective(self, key: str, worker: int = 0):
-        from fuzzynav.tuning.baselines import BaselineObjective
+        from fuzzynav.tuning.baseline_config import BaselineObjective
 
         return BaselineObjective(self.config(key), self.evaluator, key, self.space(key),
                                  worker)
@@ -81,7 +81,7 @@ class BaselinePlan:
     def write(self, studies: dict, out=None) -> Path:
         """Estimate ALS (if listed), take every study's best trial and write the
         parameter file (``out``: elsewhere than the config's ``[baselines] out``)."""
-        from fuzzynav.tuning.baselines import best_params, train_score, write_params
+        from fuzzynav.tuning.baseline_config import best_params, train_score, write_params
         from fuzzynav.tuning.pso import history as swarm_history
 
         bcfg = self.bcfg if out is None else replace(self.bcfg, out=Path(out))
@@ -129,8 +129,8 @@ class BaselinePlan:
 def run_baselines(bcfg, trials=None, storage=None, cache_dir=None,
                   workers: int = 1, progress: bool = False) -> Path:
     """Tune every filter of the config (ALS: estimate) with the one study driver
-    (:func:`fuzzynav.tuning.run.run_plan`) and write their parameter file; returns it."""
-    from fuzzynav.tuning.run import run_plan
+    (:func:`fuzzynav.tuning.study_run.run_plan`) and write their parameter file; returns it."""
+    from fuzzynav.tuning.study_run import run_plan
 
     plan = BaselinePlan(bcfg, cache_dir)
     run_plan(plan, trials, workers, storage, progress)
@@ -138,7 +138,7 @@ def run_baselines(bcfg, trials=None, storage=None, cache_dir=None,
 
 
 def _load(path, cache_dir=None) -> BaselinePlan:
-    from fuzzynav.tuning.baselines import load_baseline_config
+    from fuzzynav.tuning.baseline_config import load_baseline_config
 
     return BaselinePlan(load_baseline_config(path), cache_dir)
 

@@ -10,7 +10,7 @@ tables of a fuzzy study (``docs/studies.md``) and, instead of ``[[controllers]]`
 
 Each tuned filter (:data:`fuzzynav.filters.baselines.TUNED`) gets its own Optuna study
 ``<name>.<filter>`` in the same storage, run by the one study driver (workers, reaping,
-resume: :mod:`fuzzynav.tuning.kinds.baselines`), with the configured sampler, pruner and number of
+resume: :mod:`fuzzynav.tuning.kinds.baseline_studies`), with the configured sampler, pruner and number of
 trials, scored exactly as a fuzzy candidate (:class:`~fuzzynav.tuning.objective.Evaluator`:
 weighted mean of RMS ratios to the baseline filter on the training runs).  ``als`` is not
 searched: its Q and R come from autocovariance least squares on the training runs
@@ -33,7 +33,7 @@ from fuzzynav.filters import measurements
 from fuzzynav.filters.baselines import Q_FIELDS, TUNED
 from fuzzynav.filters.params_file import PARAMS_FORMAT, check_params
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
-from fuzzynav.tuning.config import study_config_from_dict
+from fuzzynav.tuning.study_config import study_config_from_dict
 from fuzzynav.tuning.objective import TrialObjective
 
 #: filters a baseline study can tune: the searched ones, the ALS estimate and paper 004's

@@ -89,7 +89,7 @@ class StudyConfig:
     #: objective "robust": (mean training score, worst training scenario's mean score)
     robust: bool = False
     #: a baseline study's searched parameters, ``((name, lo, hi, kind), ...)`` with kind
-    #: ``"log"``, ``"linear"`` or ``"int"`` (:mod:`fuzzynav.tuning.baselines`); a PSO swarm
+    #: ``"log"``, ``"linear"`` or ``"int"`` (:mod:`fuzzynav.tuning.baseline_config`); a PSO swarm
     #: moves over these when there are no controllers
     space: tuple = ()
 
@@ -244,7 +244,7 @@ def load_study_config(path) -> StudyConfig:
 def study_config_from_dict(doc: dict, path: Path | None = None,
                            need_controllers: bool = True) -> StudyConfig:
     """Build a :class:`StudyConfig` from a parsed TOML document (a baseline study,
-    :mod:`fuzzynav.tuning.baselines`, has no controllers: ``need_controllers=False``)."""
+    :mod:`fuzzynav.tuning.baseline_config`, has no controllers: ``need_controllers=False``)."""
     top = Table(doc)
     here = path.parent if path is not None else Path.cwd()
     name = top.string("name", path.stem if path is not None else "study")

@@ -12,8 +12,8 @@ import numpy as np
 import pandas as pd
 
 from fuzzynav import units
-from fuzzynav.align import run as R
-from fuzzynav.align.layout import EAST, NORTH, UP
+from fuzzynav.align import alignment_run as R
+from fuzzynav.align.alignment_states import EAST, NORTH, UP
 from fuzzynav.align.scenario import AlignScenario
 
 #: (row label, metric key) of the comparison table
@@ -55,7 +55,7 @@ def monte_carlo_alignment(scn: AlignScenario, filters, seeds, rules=None,
     ----------
     scn : AlignScenario
     filters : list of str
-        Named alignment filters (:data:`fuzzynav.align.run.ALIGN_FILTERS`).
+        Named alignment filters (:data:`fuzzynav.align.alignment_run.ALIGN_FILTERS`).
     seeds : iterable of int
     rules : str, optional
         Rule file for the fuzzy filters (default: the paper's).
