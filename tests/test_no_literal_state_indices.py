@@ -16,7 +16,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1] / "fuzzynav"
 SCANNED = [ROOT / "filters", ROOT / "nav", ROOT / "align"]
-LAYOUT_MODULES = {ROOT / "filters" / "layout.py", ROOT / "nav" / "layout.py"}
+LAYOUT_MODULES = {ROOT / "filters" / "layout.py", ROOT / "nav" / "state_layout.py"}
 ALLOW = "layout: ok"
 
 _VEC = r"(?<![\w.])(?:x|xs|nav|prev|out_nav|out_xs|out_sig|sigma|sensor_states|P0|qd|q_diag)"

@@ -59,7 +59,7 @@ class StudyKind:
 
 #: the kind of a study file that no other kind claims
 DEFAULT = "fuzzy"
-KINDS = Registry("study kind", "fuzzynav.tuning.kinds", ("baselines", "alignment", "fuzzy"))
+KINDS = Registry("study kind", "fuzzynav.tuning.kinds", ("baseline_studies", "alignment", "fuzzy"))
 
 
 def register_kind(kind: StudyKind) -> StudyKind:
