@@ -151,3 +151,34 @@ def test_the_layer_rule_itself(source, target, ok):
     # the check above must be able to fail: known-bad edges are refused, good ones pass
     allowed = ALLOWED[layer(source)] | BASE | {layer(source)}
     assert (layer(target) in allowed) is ok
+
+
+#: module names shared by design: a sensor kind's simulator and its measurement model
+PAIRED_FOLDERS = ("sim/sensors", "filters/measurements")
+#: the simulator's and the alignment's scenario readers (docs/architecture.md "Conventions")
+SHARED_NAMES = {"__init__", "scenario"}
+
+
+def duplicate_module_names(paths) -> dict:
+    """``{name: [folders]}`` of module file names found in more than one folder, leaving out
+    the kind names paired by :data:`PAIRED_FOLDERS` and :data:`SHARED_NAMES`."""
+    folders = {}
+    for p in paths:
+        rel = p.relative_to(PKG)
+        folders.setdefault(rel.stem, []).append(rel.parent.as_posix())
+    return {name: sorted(where) for name, where in folders.items()
+            if len(where) > 1 and name not in SHARED_NAMES
+            and sorted(where) != sorted(PAIRED_FOLDERS)}
+
+
+def test_module_names_are_unique_but_for_the_sensor_pairs():
+    dup = duplicate_module_names(sorted(PKG.rglob("*.py")))
+    assert not dup, f"rename so each module name says what it holds: {dup}"
+
+
+def test_the_name_rule_itself():
+    # the check above must be able to fail: a third folder with a kind's name is refused
+    paths = [PKG / "sim/sensors/gnss.py", PKG / "filters/measurements/gnss.py",
+             PKG / "nav/layout.py", PKG / "filters/layout.py", PKG / "nav/gnss.py"]
+    assert duplicate_module_names(paths) == {
+        "layout": ["filters", "nav"], "gnss": ["filters/measurements", "nav", "sim/sensors"]}
