@@ -7,11 +7,12 @@ fuzzy
 nav
     Earth model, attitude maths, strapdown mechanization, polarization geometry.
 sim
-    Trajectories, IMU and aiding-sensor simulation, scenarios, recording loaders.
+    Trajectories, IMU and aiding-sensor simulation, scenarios.
 filters
     Error-state Kalman filters, measurement models, adaptation policies, filter banks.
 realdata
-    Recorded sessions (car drive, A-KIT AUV): sources, datasets and their download,
+    Recorded sessions (car drive, A-KIT AUV): loaders and their checks, start options and
+    coarse alignment from the data, sources, datasets and their download, degradation,
     validation protocol, scoring.
 align
     Initial alignment (paper 002): coarse, 10/12-state Kalman filters, fuzzy R-scaling.
@@ -19,6 +20,8 @@ tuning
     Optuna / PSO studies that learn fuzzy rules or tune classical filters; export, reports.
 claims
     The source papers' published figures, shown beside measured results (never asserted).
+papers
+    One folder per source paper (``papers/paperNNN/``): its claims, named filters, scenarios.
 cli
     The ``fuzzynav`` command.
 
@@ -30,6 +33,8 @@ Top-level modules: ``runpath`` (the one run path: a source, a named filter, one 
 import warnings as _warnings
 
 __version__ = "0.1.0"
+
+__all__ = ["source_key"]
 
 
 def source_key(root, salt: str = "") -> str:

@@ -16,6 +16,9 @@ import sys
 import threading
 from pathlib import Path
 
+__all__ = ["COLD_RUN_S", "COLD_TEXT", "PARTIAL_TEXT", "kernel_cache", "compiled_count",
+           "cache_is_cold", "notice_text", "CompileNotice", "install", "announce"]
+
 #: a cold ``fuzzynav run paper000 --filter ekf`` [s] on a 2-core machine (docs/benchmarks.md)
 COLD_RUN_S = 50
 

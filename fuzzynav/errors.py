@@ -6,6 +6,9 @@ a TOML key) and what was wrong.  The CLI prints that one line and exits with cod
 """
 from __future__ import annotations
 
+__all__ = ["MAX_MESSAGE", "MAX_QUOTE", "brief", "bounded", "FuzzynavError", "InputFileError",
+           "UnknownNameError", "DataMissingError", "OutputError", "RunDivergedError"]
+
 
 #: longest message a fuzzynav error carries (characters); a longer one is cut and says by
 #: how much, so a library caller (a notebook, a study worker's log) gets a readable line too

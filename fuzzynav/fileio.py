@@ -21,6 +21,10 @@ from pathlib import Path
 
 from fuzzynav.errors import InputFileError, OutputError, brief
 
+__all__ = ["FILE_MODE", "publish", "MAX_STEM", "safe_stem", "output_errors", "SYSTEM_DIRS",
+           "is_inside", "check_place", "study_output", "make_dir", "write_atomic",
+           "publish_all", "sweep_staged", "staged"]
+
 
 def _umask() -> int:
     mask = os.umask(0)

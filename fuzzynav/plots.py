@@ -13,6 +13,8 @@ import numpy as np
 
 from fuzzynav.fileio import write_atomic
 
+__all__ = ["error_curves", "adaptation_curves", "membership_functions", "save"]
+
 _AXES = ("east", "north", "up")
 _STYLES = ("-", "--", "-.", ":")
 

@@ -14,6 +14,8 @@ import importlib
 
 from fuzzynav.errors import UnknownNameError
 
+__all__ = ["Registry"]
+
 
 class Registry(dict):
     """A registry of ``what`` (e.g. "filter"), with built-ins in ``package.<module>``."""

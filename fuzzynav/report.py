@@ -6,6 +6,8 @@ import pandas as pd
 
 from fuzzynav.metrics import improvement_ci, mean_ci
 
+__all__ = ["NAV_ROWS", "comparison_rows", "render"]
+
 #: (row label, metric key) in the order of the papers' tables
 NAV_ROWS = (
     ("east position (m)", "rms_pos_e_m"), ("north position (m)", "rms_pos_n_m"),

@@ -7,6 +7,9 @@ from __future__ import annotations
 
 import math
 
+__all__ = ["G0", "DEG", "ARCMIN", "DPH", "DPS", "DPSH", "DPH_PSQRTHZ", "DPS_PSQRTHZ", "MG",
+           "UG", "UG_PSQRTHZ", "MPS_PSH", "DPH_PSH", "PPM", "NT"]
+
 #: standard gravity used for accelerometer units [m/s^2]
 G0 = 9.80665
 #: degree [rad]

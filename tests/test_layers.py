@@ -182,3 +182,11 @@ def test_the_name_rule_itself():
              PKG / "nav/layout.py", PKG / "filters/layout.py", PKG / "nav/gnss.py"]
     assert duplicate_module_names(paths) == {
         "layout": ["filters", "nav"], "gnss": ["filters/measurements", "nav", "sim/sensors"]}
+
+
+def test_the_package_docstring_names_every_subpackage():
+    import fuzzynav
+
+    subpackages = {p.name for p in PKG.iterdir() if (p / "__init__.py").is_file()}
+    listed = {line.strip() for line in fuzzynav.__doc__.splitlines()}
+    assert subpackages <= listed, f"add to fuzzynav/__init__.py: {subpackages - listed}"

@@ -27,6 +27,9 @@ from fuzzynav.nav import attitude, earth
 from fuzzynav.registry import Registry
 from fuzzynav.sim.sensor_log import component_rng
 
+__all__ = ["AlignFilter", "ALIGN_FILTERS", "get_align_filter", "AlignRun", "simulate",
+           "epochs", "true_misalignment", "run_align_filter", "true_state", "nees"]
+
 
 @dataclass(frozen=True)
 class AlignFilter:

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+__all__ = ["AlignLayout", "LAYOUT_10", "LAYOUT_12"]
+
 #: axis numbers inside a three-axis block
 EAST, NORTH, UP = 0, 1, 2
 

@@ -29,6 +29,8 @@ from fuzzynav.nav import attitude
 from fuzzynav.runpath import RunInputs, run
 from fuzzynav.sim.imu import ImuData
 
+__all__ = ["REST_SIGMA_MPS", "align_on_rest", "AlignedSource", "run_aligned"]
+
 #: sigma of the zero-velocity reference of a vehicle at rest [m/s]
 REST_SIGMA_MPS = 0.01
 

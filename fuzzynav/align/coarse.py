@@ -30,6 +30,8 @@ import numpy as np
 from fuzzynav.nav import attitude, earth
 from fuzzynav.nav.earth import OMEGA_IE
 
+__all__ = ["CoarseResult", "uncertainty", "analytic", "inertial_frame"]
+
 
 @dataclass(frozen=True)
 class CoarseResult:

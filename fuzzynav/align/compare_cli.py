@@ -11,6 +11,9 @@ from fuzzynav.errors import FuzzynavError, brief
 from fuzzynav.metrics import mean_ci
 from fuzzynav.report import comparison_rows, render
 
+__all__ = ["MAX_THRESHOLD_ARCMIN", "compare_alignment", "ALIGNED_NAV_ROWS", "parse_align_spec",
+           "run_with_alignment", "describe_alignment"]
+
 
 def _refuse(args, *options) -> None:
     """Options that mean nothing here: one line, not silence."""

@@ -35,6 +35,8 @@ from fuzzynav.align.fine import run_fine
 from fuzzynav.align.alignment_states import EAST, NORTH, UP, AlignLayout
 from fuzzynav.nav import earth
 
+__all__ = ["LAYOUT_LEVEL", "level_history", "fast_azimuth"]
+
 #: the level filter: horizontal velocity errors and level misalignment
 LAYOUT_LEVEL = AlignLayout((("vel", 2), ("att", 2)))
 

@@ -17,6 +17,8 @@ from fuzzynav.align.alignment_states import AlignLayout
 from fuzzynav.align.model import AlignNoise, measurement_matrix, transition
 from fuzzynav.filters.reference import predict, update
 
+__all__ = ["Epochs", "FineResult", "run_fine"]
+
 
 @dataclass(frozen=True)
 class Epochs:

@@ -19,6 +19,8 @@ from fuzzynav.filters.catalog import find_rule_file
 from fuzzynav.fuzzy import load_fis
 from fuzzynav.fuzzy.kernels import eval_compiled
 
+__all__ = ["DEFAULT_RULES", "AlignRScaling", "FuzzyRScaling", "policy_for"]
+
 #: the rule file shipped with the paper's three hand rules
 DEFAULT_RULES = "paper002_ror.json"
 

@@ -17,6 +17,8 @@ import numpy as np
 from fuzzynav.nav import attitude, earth
 from fuzzynav.nav.strapdown import quat_mul, rv2q
 
+__all__ = ["mechanize"]
+
 
 @nb.njit(cache=True)
 def _rotate(q0, q1, q2, q3, x, y, z):

@@ -17,6 +17,8 @@ from fuzzynav import units
 from fuzzynav.align.alignment_states import LAYOUT_12, AlignLayout
 from fuzzynav.nav import attitude, earth
 
+__all__ = ["AlignNoise", "system_matrix", "TAYLOR_TERMS", "transition", "measurement_matrix"]
+
 
 @dataclass(frozen=True)
 class AlignNoise:

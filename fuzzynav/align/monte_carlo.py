@@ -16,6 +16,8 @@ from fuzzynav.align import alignment_run as R
 from fuzzynav.align.alignment_states import EAST, NORTH, UP
 from fuzzynav.align.scenario import AlignScenario
 
+__all__ = ["ALIGN_ROWS", "alignment_time", "metrics", "monte_carlo_alignment"]
+
 #: (row label, metric key) of the comparison table
 ALIGN_ROWS = (
     ("azimuth alignment time [s]", "align_time_s"),

@@ -21,6 +21,8 @@ import numpy as np
 from fuzzynav.nav import attitude, earth
 from fuzzynav.sim.imu import ImuData, ImuSpec
 
+__all__ = ["Sway", "AlignLog", "ideal_increments", "simulate_alignment"]
+
 
 @dataclass(frozen=True)
 class Sway:

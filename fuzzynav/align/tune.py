@@ -31,6 +31,8 @@ from fuzzynav.align.scenario import load_alignment_scenario
 from fuzzynav.fileio import publish
 from fuzzynav.fuzzy import load_fis
 
+__all__ = ["SPACE", "candidate", "suggest", "Runs", "tuned_rules", "write_json"]
+
 #: the searched numbers: key -> (low, high, kind), in the order they are drawn
 SPACE = {"t_less": (0.5, 0.99, "linear"), "t_more": (1.01, 2.0, "linear"),
          "more_start": (1.0, 2.0, "linear"), "more_rise": (0.2, 2.0, "linear"),

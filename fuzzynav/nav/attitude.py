@@ -28,6 +28,11 @@ import math
 import numba as nb
 import numpy as np
 
+__all__ = ["TWO_PI", "mod_pos", "wrap_pi", "wrap_2pi", "skew", "euler_to_dcm", "dcm_to_euler",
+           "quat_multiply", "quat_conj", "quat_normalize", "quat_to_dcm", "dcm_to_quat",
+           "rotvec_to_quat", "quat_to_rotvec", "rotvec_to_dcm", "dcm_to_rotvec",
+           "euler_to_quat", "quat_to_euler", "attitude_error", "euler_error"]
+
 TWO_PI = 2.0 * math.pi
 
 

@@ -18,6 +18,11 @@ import math
 import numba as nb
 import numpy as np
 
+__all__ = ["A", "F", "E2", "B", "OMEGA_IE", "GM", "GAMMA_E", "K_SOMIGLIANA", "M_RATIO",
+           "radii_nb", "radii_sin_nb", "radii_gravity_sin_nb", "gravity_nb", "gravity_sin_nb",
+           "radii", "gravity", "omega_ie_n", "omega_en_n", "lla_to_ecef", "ecef_to_lla",
+           "lla_to_enu", "enu_to_lla", "delta_lla_to_enu", "enu_to_delta_lla"]
+
 #: semi-major axis [m]
 A = 6378137.0
 #: flattening

@@ -35,6 +35,8 @@ import math
 import numba as nb
 import numpy as np
 
+__all__ = ["neutral_points_n", "image_point", "pair_beta", "images", "heading_from_beta"]
+
 #: point pairs used, by code: (A, B) indices into the (Babinet, Brewster, Arago, fourth) rows
 PAIR_ARAGO_BABINET, PAIR_BREWSTER_BABINET = 0, 1
 _PAIRS = ((2, 0), (1, 0))

@@ -14,6 +14,11 @@ import numpy as np
 
 from fuzzynav.nav.attitude import mod_pos
 
+__all__ = ["HALF_PI", "TWO_PI", "atan_small", "fold_half_pi", "rot_z", "rot_x", "rot_y",
+           "rot_x_cs", "rot_y_cs", "aop_unfolded_and_gradient", "aop_unfolded_and_gradient3",
+           "aop_residual_and_gradient3", "aop_gradient", "aop_and_gradient",
+           "sun_body_partials", "sun_body_partials_cs", "dot3"]
+
 HALF_PI = 0.5 * math.pi
 TWO_PI = 2.0 * math.pi
 

@@ -24,6 +24,9 @@ from fuzzynav.nav.attitude import mod_pos, wrap_pi
 from fuzzynav.nav.polarization_geometry import (HALF_PI, TWO_PI, aop_residual_and_gradient3,
                                                 dot3, rot_x, rot_y_cs, sun_body_partials_cs)
 
+__all__ = ["FRAME", "view_frames", "aop_trig", "imaging_pitch_heading", "imaging_fit",
+           "imaging_fit_frames", "sun_from_aops", "imaging_fit_sun"]
+
 #: entries per view in a frames array (:func:`view_frames`): view, x reference, y reference
 FRAME = 9
 

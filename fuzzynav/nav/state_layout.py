@@ -19,6 +19,10 @@ into the compiled code), Python code the slices.
 """
 from __future__ import annotations
 
+__all__ = ["NAV_Q", "NAV_VEL", "NAV_LAT", "NAV_LON", "NAV_H", "NAV_SIZE", "Q_SLICE",
+           "VEL_SLICE", "LLA_SLICE", "PREV_DTH", "PREV_DV", "PREV_VEL", "PREV_LLA",
+           "PREV_FLAG", "PREV_TRIG", "PREV_SIZE"]
+
 NAV_Q = 0
 NAV_VEL = NAV_Q + 4
 NAV_LAT = NAV_VEL + 3

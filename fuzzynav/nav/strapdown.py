@@ -33,6 +33,9 @@ from fuzzynav.nav.state_layout import (LLA_SLICE, NAV_H, NAV_LAT, NAV_LON, NAV_Q
                                  PREV_VEL,
                                  Q_SLICE, VEL_SLICE)
 
+__all__ = ["quat_mul", "rv2q", "quat_to_dcm_into", "dcm_into", "sin_cos_lat", "inv_norm",
+           "init_prev", "mech_step", "set_quat", "make_nav", "integrate"]
+
 
 @nb.njit(cache=True, error_model="numpy")
 def quat_mul(a0, a1, a2, a3, b0, b1, b2, b3):

@@ -22,6 +22,9 @@ from fuzzynav.realdata.score import antenna_track
 from fuzzynav.runpath import RunInputs, run
 from fuzzynav.sim.imu import ImuSpec
 
+__all__ = ["INIT_OPTIONS", "PHINS", "ROWS", "context", "initial_state", "AkitSource",
+           "run_trajectory", "distance_travelled", "score", "run_all"]
+
 #: initial uncertainty of the start taken from the reference: Delph post-processing gives
 #: roll/pitch to ~0.01 deg and heading to a few 0.01 deg; its position is the reference
 #: itself (0.5 m allows for the unknown IMU-to-reference offset)

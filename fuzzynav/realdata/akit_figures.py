@@ -10,6 +10,8 @@ from fuzzynav.metrics import errors_vs_reference
 from fuzzynav.nav import earth
 from fuzzynav.realdata.score import antenna_track, horizontal
 
+__all__ = ["plt", "map_figure", "error_figure", "write_figures"]
+
 plt = plots.plt
 
 

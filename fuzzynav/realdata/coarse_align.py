@@ -41,6 +41,10 @@ from fuzzynav.nav import attitude, earth
 from fuzzynav.nav.strapdown import quat_mul, rv2q
 from fuzzynav.realdata.start_options import StartOptions
 
+__all__ = ["StartEstimate", "opening_rest", "level", "relative_attitude",
+           "heading_from_course", "heading_from_track", "heading_from_specific_force",
+           "initial_state"]
+
 
 @dataclass(frozen=True)
 class StartEstimate:

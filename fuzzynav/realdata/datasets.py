@@ -27,6 +27,10 @@ from pathlib import Path
 
 from fuzzynav.errors import DataMissingError, InputFileError
 
+__all__ = ["DATA_DIR_ENV", "DEV_DATA_DIR", "REGISTRY_FILE", "DataFile", "Dataset",
+           "load_registry", "DATASETS", "user_cache_dir", "dev_data_dir", "data_dirs",
+           "fetch_home", "find_directory", "missing_dataset_message", "locate"]
+
 #: environment variable naming the data directory (overrides the user cache)
 DATA_DIR_ENV = "FUZZYNAV_DATA"
 #: the maintainers' data directory, relative to the repository (the package's parent)

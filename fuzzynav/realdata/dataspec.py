@@ -46,6 +46,10 @@ from fuzzynav.realdata.sources import (
     split_options,
 )
 
+__all__ = ["Window", "RecordingSpec", "is_recording_name", "parse_window",
+           "parse_recording_spec", "data_dir", "resolve", "expand", "identity", "overlaps",
+           "until", "within"]
+
 _WINDOW_RE = re.compile(r"^\s*(\d+(?:\.\d*)?)\s*-\s*(\d+(?:\.\d*)?)\s*(%?)\s*$")
 
 

@@ -14,6 +14,8 @@ from fuzzynav.nav import earth
 from fuzzynav.sim.sensors import SensorData
 from fuzzynav.sim.sensors.gnss import in_windows, outage_windows
 
+__all__ = ["add_white_noise", "with_outages"]
+
 
 #: meta entries that are constants of the sensor, never per-epoch arrays
 _CONSTANT_META = ("lever_arm_b", "outage_windows", "rate_hz")

@@ -24,6 +24,9 @@ from fuzzynav.errors import DataMissingError, OutputError, UnknownNameError
 from fuzzynav.fileio import make_dir
 from fuzzynav.realdata.datasets import DATASETS, Dataset, fetch_home
 
+__all__ = ["DATA_URL_ENV", "DEFAULT_BASE_URL", "RETRIES", "TIMEOUT_S", "FetchError",
+           "base_url", "get_dataset", "fetch", "dataset_status"]
+
 #: environment variable replacing :data:`DEFAULT_BASE_URL` (a mirror laid out alike)
 DATA_URL_ENV = "FUZZYNAV_DATA_URL"
 #: where the registry's URL paths are relative to: ``owner/repo/commit/path``

@@ -15,6 +15,8 @@ from fuzzynav.realdata.score import antenna_track, horizontal
 from fuzzynav.realdata.validate import FEEDS
 from fuzzynav.sim.sensors.gnss import in_windows
 
+__all__ = ["plt", "horizontal_error_figure", "trajectory_figure", "write_figures"]
+
 plt = plots.plt
 
 

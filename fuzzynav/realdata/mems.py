@@ -29,6 +29,8 @@ from dataclasses import dataclass
 from fuzzynav import units
 from fuzzynav.sim.imu import ImuNoise, TriadNoise
 
+__all__ = ["MemsModel", "CONSUMER_MEMS"]
+
 
 @dataclass(frozen=True)
 class MemsModel:

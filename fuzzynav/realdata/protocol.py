@@ -29,6 +29,9 @@ from fuzzynav.realdata import degrade
 from fuzzynav.sim.sensors import SensorData
 from fuzzynav.sim.sensors.gnss import outage_windows
 
+__all__ = ["VELOCITY_MODES", "ProtocolSettings", "read_later", "degraded_fixes",
+           "windows_after", "with_outages"]
+
 VELOCITY_MODES = ("shift", "raw", "inflate", "off")
 
 

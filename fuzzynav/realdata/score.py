@@ -21,6 +21,9 @@ from fuzzynav.nav import attitude, earth
 from fuzzynav.realdata.protocol import read_later
 from fuzzynav.sim.sensors.gnss import in_windows
 
+__all__ = ["OutageDrift", "antenna_track", "errors_against", "horizontal", "outage_drifts",
+           "score"]
+
 
 @dataclass(frozen=True)
 class OutageDrift:

@@ -24,6 +24,9 @@ from fuzzynav.runpath import RunInputs
 from fuzzynav.realdata import coarse_align
 from fuzzynav.sim.imu import ImuData
 
+__all__ = ["GNSS_SENSOR", "Start", "start_from", "constraints_for", "GnssSource",
+           "context_for"]
+
 #: the name of the GNSS stream; rule-file bindings may name it or its kind ``gnss``
 GNSS_SENSOR = "gnss"
 

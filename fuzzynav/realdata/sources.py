@@ -18,6 +18,10 @@ from typing import Callable
 
 from fuzzynav.errors import DataMissingError, FuzzynavError, UnknownNameError
 
+__all__ = ["DataSource", "SOURCES", "register_source", "MOUNTINGS_DIR", "builtin_mountings",
+           "resolve_mounting", "split_options", "data_options", "split_dataset_spec",
+           "parse_data_spec"]
+
 
 @dataclass(frozen=True)
 class DataSource:

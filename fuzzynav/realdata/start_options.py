@@ -38,6 +38,8 @@ from dataclasses import dataclass
 from fuzzynav.errors import InputFileError
 from fuzzynav.sim.sensors.gnss import MAX_LEVER_ARM_M
 
+__all__ = ["HEADING_METHODS", "StartOptions", "KEYS", "parse_start_options"]
+
 HEADING_METHODS = ("auto", "course", "track", "specific-force")
 
 

@@ -31,6 +31,8 @@ from fuzzynav.realdata.session import GnssSource, context_for
 from fuzzynav.realdata.sources import SOURCES, data_options
 from fuzzynav.realdata.validate import fed_sigma, prepare_feeds, required_names
 
+__all__ = ["STUDY_FEED", "UNSCORED", "RecordingRun", "MIN_SCORED_S", "recording_run"]
+
 #: which protocol feed a GNSS study run gets: the fixes throughout.  With the simulated
 #: outages the free-inertial drift of a consumer MEMS IMU (hundreds of metres in 60 s,
 #: docs/validation.md) would drown what a noise controller does to the aided error

@@ -18,6 +18,9 @@ import os
 
 from fuzzynav.errors import InputFileError
 
+__all__ = ["BYTES_PER_IMU_SAMPLE", "BYTES_PER_EPOCH_COLUMN", "MAX_SPELLS", "DEFAULT_SHARE",
+           "ENV_VAR", "memory_limit", "human_bytes", "check_run_size"]
+
 #: bytes held per IMU sample through simulation and filtering (measured peak about
 #: 3.6 kB on paper000 at 100 Hz: 2.6 kB simulating, 1 kB more filtering; rounded up)
 BYTES_PER_IMU_SAMPLE = 4096

@@ -24,6 +24,8 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+__all__ = ["gm_coefficients", "rw_coefficients", "propagate", "gauss_markov_series"]
+
 #: below this x = h / tau the closed form of var(I) loses digits; its series is used
 _SERIES_X = 1e-3
 

@@ -20,6 +20,9 @@ import numpy as np
 from fuzzynav import units
 from fuzzynav.errors import DataMissingError, UnknownNameError
 
+__all__ = ["FIELD_MODELS", "DIPOLE_2020_NT", "IGRF_RADIUS_M", "field_enu_t", "dipole_enu_t",
+           "declination_rad", "inclination_rad"]
+
 FIELD_MODELS = ("igrf", "dipole")
 #: IGRF-13 degree-1 Gauss coefficients for epoch 2020.0 [nT] (Alken et al. 2021, Table 2)
 DIPOLE_2020_NT = {"g10": -29404.8, "g11": -1450.9, "h11": 4652.5}

@@ -26,6 +26,8 @@ from fuzzynav.errors import InputFileError
 from fuzzynav.sim import gauss_markov as gm
 from fuzzynav.sim.tomltable import Table
 
+__all__ = ["FILTER_STATES", "TriadNoise", "ImuNoise", "ImuData", "ImuSpec"]
+
 _ZERO3 = (0.0, 0.0, 0.0)
 _ZERO33 = (_ZERO3, _ZERO3, _ZERO3)
 #: how filters model the biases (ImuSpec.filter_states)

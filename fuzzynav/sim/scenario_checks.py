@@ -13,6 +13,8 @@ import math
 from fuzzynav.errors import InputFileError
 from fuzzynav.sim.budget import check_run_size
 
+__all__ = ["MAX_SPEED_MPS", "POLE_MARGIN_DEG", "check_scenario"]
+
 #: fastest vehicle the near-surface Earth model is meant for [m/s] (jets fly < 1000 m/s)
 MAX_SPEED_MPS = 3000.0
 #: closest approach to a pole [deg of latitude]: the ENU mechanization's longitude rate

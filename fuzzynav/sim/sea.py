@@ -30,6 +30,8 @@ import numpy as np
 from fuzzynav.errors import InputFileError
 from fuzzynav.sim.tomltable import Table
 
+__all__ = ["MOTIONS", "SeaState"]
+
 _TWO_PI = 2.0 * np.pi
 #: motion names, in the order of the amplitude/period/phase fields
 MOTIONS = ("roll", "pitch", "yaw", "heave")

@@ -17,6 +17,8 @@ import numpy as np
 
 from fuzzynav.errors import InputFileError
 
+__all__ = ["SEGMENT_KINDS", "Segment", "Piece", "Profile", "manoeuvring_profile"]
+
 SEGMENT_KINDS = ("static", "accelerate", "cruise", "turn", "climb", "figure8", "s-turns")
 
 

@@ -31,6 +31,9 @@ from fuzzynav.sim.scenario import Scenario
 from fuzzynav.sim.sensors import SensorData
 from fuzzynav.sim.trajectory import Trajectory, generate
 
+__all__ = ["DATA_VERSION", "SensorLog", "check_seed", "component_rng", "cache_key",
+           "cache_path", "simulate"]
+
 #: bump when the simulation or the file layout changes (invalidates every cache file)
 DATA_VERSION = 3
 

@@ -37,6 +37,9 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["DOP_MAX_CLEAR", "fold_half_pi", "scattering_angle", "degree_of_polarization",
+           "e_vector", "local_reference", "angle_of_polarization", "stokes", "view_direction"]
+
 #: maximum degree of polarization of a clear sky (ideal Rayleigh: 1)
 DOP_MAX_CLEAR = 0.75
 

@@ -45,6 +45,9 @@ import numpy as np
 
 from fuzzynav.nav.attitude import wrap_pi
 
+__all__ = ["J2000_JD", "UNIX_EPOCH_JD", "DELTA_T_S", "julian_day", "sun_position_nb",
+           "sun_vector_nb", "SunPosition", "sun_position", "sun_vector_n", "refraction_rad"]
+
 #: Julian day of the J2000.0 epoch (2000-01-01 12:00 TT)
 J2000_JD = 2451545.0
 #: Julian day of the Unix epoch 1970-01-01 00:00 UTC

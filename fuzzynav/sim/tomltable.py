@@ -20,6 +20,8 @@ from pathlib import Path
 
 from fuzzynav.errors import DataMissingError, InputFileError
 
+__all__ = ["MAX_TOML_BYTES", "MAX_TOML_DEPTH", "Table", "with_path", "parse_toml", "read_toml"]
+
 _REQUIRED = object()
 #: scenario and study files are hand-written: a few kB; anything far larger is a mistake
 MAX_TOML_BYTES = 1024 * 1024

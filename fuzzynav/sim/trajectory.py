@@ -20,6 +20,8 @@ import numpy as np
 from fuzzynav.nav import attitude, earth
 from fuzzynav.sim.segments import SEGMENT_KINDS, Profile, Segment  # noqa: F401 (re-exported)
 
+__all__ = ["Trajectory", "generate"]
+
 #: Gauss-Legendre nodes per quadrature interval (exact for polynomials of degree 9)
 _GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(5)
 #: fixed-point sweeps for latitude, whose rate depends weakly on latitude itself

@@ -24,6 +24,8 @@ from fuzzynav.filters.named import FilterSetup
 from fuzzynav.runpath import run
 from fuzzynav.nav import earth
 
+__all__ = ["INS_RATE_HZ", "ins_minus_gnss", "axis_r", "run_scales", "als_params"]
+
 #: autocovariance lags and the filter transient dropped [epochs]
 LAGS, SKIP = 15, 20
 #: output rate of the free INS [Hz] (interpolated to the fix epochs)

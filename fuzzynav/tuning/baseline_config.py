@@ -36,6 +36,10 @@ from fuzzynav.sim.tomltable import Table, read_toml, with_path
 from fuzzynav.tuning.study_config import study_config_from_dict
 from fuzzynav.tuning.objective import TrialObjective
 
+__all__ = ["TUNABLE", "Q_BOUNDS", "R_BOUNDS", "SPACES", "BaselineConfig", "is_baseline_config",
+           "load_baseline_config", "training_channels", "space_of", "suggest", "run_params",
+           "BaselineObjective", "sub_config", "best_params", "write_params", "train_score"]
+
 #: filters a baseline study can tune: the searched ones, the ALS estimate and paper 004's
 #: APSO (the ``apso`` filter's Q/R multipliers, best with ``sampler = "pso"``)
 TUNABLE = tuple(TUNED) + ("apso",)

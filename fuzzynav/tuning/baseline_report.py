@@ -15,6 +15,8 @@ from fuzzynav.fileio import staged, write_atomic
 from fuzzynav.tuning.evaluate import format_summary, run_table
 from fuzzynav.tuning.objective import Evaluator
 
+__all__ = ["tuned_specs", "evaluate_baselines", "write_baseline_report"]
+
 
 def tuned_specs(bcfg) -> dict:
     """``NAME@FILE`` of every tuned filter -> its plain name (for tables)."""

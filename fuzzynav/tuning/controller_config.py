@@ -14,6 +14,9 @@ from fuzzynav.errors import InputFileError, brief
 from fuzzynav.filters.adaptation.binding import WINDOW_RANGE
 from fuzzynav.sim.tomltable import Table
 
+__all__ = ["TUNE_MODES", "FIS_TYPES", "MAX_OUTPUT_FACTOR", "ControllerConfig", "user_file",
+           "parse_controller"]
+
 TUNE_MODES = ("both", "rules", "breakpoints")
 FIS_TYPES = ("mamdani", "sugeno")
 #: a tuned output scales a covariance or R: a positive factor, at most this

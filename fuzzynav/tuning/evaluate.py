@@ -15,6 +15,8 @@ from fuzzynav.metrics import check_finite_metrics, mean_ci
 from fuzzynav.tuning.study_config import GROUP_METRICS
 from fuzzynav.tuning.objective import CANDIDATE
 
+__all__ = ["run_table", "summary", "format_summary"]
+
 
 def run_table(evaluator, systems: dict, runs, compare=()) -> pd.DataFrame:
     """One row per (run, filter): metrics and ratios to the baseline.

@@ -25,6 +25,8 @@ from fuzzynav.tuning.objective import Evaluator
 from fuzzynav.tuning.space import ControllerSpace, build_all
 from fuzzynav.tuning.optuna_study import best_trials
 
+__all__ = ["EXPECTED_METRICS", "choose_trial", "systems_of", "export_rules"]
+
 #: metrics recorded in ``expected`` (and compared by the regression tests)
 EXPECTED_METRICS = ("rms_pos_m", "rms_vel_mps", "rms_att_deg", "rms_pos_e_m", "rms_pos_n_m",
                     "rms_pos_u_m", "rms_heading_deg")

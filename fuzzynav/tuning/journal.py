@@ -31,6 +31,9 @@ from optuna.storages.journal import JournalFileBackend
 from fuzzynav.errors import FuzzynavError, OutputError
 from fuzzynav.fileio import write_atomic
 
+__all__ = ["RECORD_START", "LAZY_OPS", "tail_ok", "salvage", "repair", "SyncOnStateBackend",
+           "open_journal"]
+
 #: how every Optuna journal record starts (where a record appended to a cut one begins)
 RECORD_START = b'{"op_code":'
 #: bytes read from the end of the file for the quick check of its last record

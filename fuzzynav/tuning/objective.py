@@ -30,6 +30,9 @@ from fuzzynav.tuning.study_config import EXTRA_GROUP_METRICS, GROUP_METRICS
 from fuzzynav.tuning.pareto import accuracy_and_worst
 from fuzzynav.tuning.space import ControllerSpace, build_all
 
+__all__ = ["FAILED_RATIO", "CANDIDATE", "HEARTBEAT_S", "RunScore", "weighted_score",
+           "score_metrics", "setup_with_systems", "Evaluator", "TrialObjective", "Objective"]
+
 #: ratio given to a metric when the candidate's run failed or is not finite
 FAILED_RATIO = 10.0
 #: the filter name a candidate's runs are recorded under

@@ -36,6 +36,11 @@ from fuzzynav.tuning.objective import Objective
 from fuzzynav.tuning.samplers import get_optimiser
 from fuzzynav.tuning.slots import TrialSlots
 
+__all__ = ["FINISHED", "MAX_RETRIES", "MAX_FAILS_IN_ROW", "READY_POLL_S", "RUN_ATTRS",
+           "journal_path", "with_driver", "make_storage", "sampler_seed", "make_sampler",
+           "make_pruner", "open_study", "n_finished", "reap_stale", "reap_orphans",
+           "run_worker", "pareto_front", "best_trials"]
+
 optuna.logging.set_verbosity(optuna.logging.WARNING)
 FINISHED = (TrialState.COMPLETE, TrialState.PRUNED)
 MAX_RETRIES = 2

@@ -20,6 +20,9 @@ import numpy as np
 
 from fuzzynav import plots
 
+__all__ = ["ROBUST_NAMES", "scenario_label", "accuracy_and_worst", "objective_names",
+           "front_table", "front_section", "robust_figure"]
+
 ROBUST_NAMES = ("accuracy (mean score)", "robustness (worst scenario)")
 
 

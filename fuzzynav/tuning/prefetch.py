@@ -18,6 +18,8 @@ from __future__ import annotations
 import multiprocessing
 import threading
 
+__all__ = ["split", "Helper", "prepare_shared", "warm_shared"]
+
 
 def split(runs: list, processes: int) -> tuple:
     """``(the parent's share, [each helper's share])`` of ``runs``, dealt in turn."""

@@ -33,6 +33,9 @@ from fuzzynav.errors import FuzzynavError
 from fuzzynav.tuning.samplers import Optimiser, register_optimiser
 from fuzzynav.tuning.space import ControllerSpace
 
+__all__ = ["POLL_S", "structure", "to_params", "inertia", "history", "swarm_budget", "slots",
+           "iteration_values", "positions", "next_slot", "swarm_ready", "PsoSampler"]
+
 _PENDING = (TrialState.WAITING, TrialState.RUNNING)
 #: user attributes placing a trial in the swarm
 ITERATION, PARTICLE = "pso_iteration", "particle"

@@ -10,6 +10,9 @@ from fuzzynav.errors import FuzzynavError
 from fuzzynav.realdata.dataspec import (expand, is_recording_name, overlaps,
                                         parse_recording_spec, resolve)
 
+__all__ = ["recording_runs", "check_recordings_held_out", "check_no_attitude",
+           "check_no_t_start"]
+
 
 def recording_runs(t, seeds: list) -> list:
     """``(single-session spec, seed)`` of every recording of table ``t`` x ``seeds``."""

@@ -15,6 +15,8 @@ import optuna
 
 from fuzzynav.registry import Registry
 
+__all__ = ["Optimiser", "OPTIMISERS", "register_optimiser", "get_optimiser", "optimiser_names"]
+
 
 def _all_trials(cfg, total: int) -> int:
     return total

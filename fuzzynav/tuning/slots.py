@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import zlib
 
+__all__ = ["TrialSlots"]
+
 
 class TrialSlots:
     """Exclusive "count, then start a trial" among the workers of one study.

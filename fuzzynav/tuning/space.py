@@ -41,6 +41,8 @@ from fuzzynav.filters.adaptation.binding import Binding
 from fuzzynav.fuzzy import (Antecedent, FuzzySystem, Operators, Rule, Term, Variable,
                             load_fis, standard_labels, triangular_partition)
 
+__all__ = ["check_against_template", "ControllerSpace", "build_all"]
+
 _GAP = (0.05, 1.0)
 _SPREAD = (0.3, 1.5)
 

@@ -37,6 +37,9 @@ from fuzzynav.tuning.recording_config import (check_no_attitude, check_no_t_star
                                               check_recordings_held_out, recording_runs)
 from fuzzynav.tuning.samplers import get_optimiser, optimiser_names
 
+__all__ = ["PRUNERS", "GROUP_METRICS", "EXTRA_GROUP_METRICS", "PsoConfig", "StudyConfig",
+           "load_study_config", "study_config_from_dict"]
+
 PRUNERS = ("none", "median", "wilcoxon")
 #: objective groups and the metric each is measured by
 GROUP_METRICS = {"pos": "rms_pos_m", "vel": "rms_vel_mps", "att": "rms_att_deg"}

@@ -31,6 +31,8 @@ from fuzzynav.tuning import pareto
 from fuzzynav.tuning.objective import Evaluator, weighted_score
 from fuzzynav.tuning.optuna_study import best_trials
 
+__all__ = ["plt", "trials_frame", "write_report"]
+
 plt = plots.plt
 
 

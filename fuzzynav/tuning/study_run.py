@@ -28,6 +28,10 @@ from fuzzynav.tuning.prefetch import warm_shared
 from fuzzynav.tuning.samplers import get_optimiser
 from fuzzynav.tuning.optuna_study import n_finished, open_study, reap_orphans, run_worker
 
+__all__ = ["WORKER_BOOT", "FORK", "MAX_RESTARTS", "USER_ERROR", "POLL_S", "worker_command",
+           "ForkedWorker", "wait_for_exit", "supervise", "run_study", "run_plan",
+           "open_plan_studies", "warm_evaluator"]
+
 #: a worker is started with this program instead of ``python -m``, which would put the
 #: current directory first on its import path (a stray ``inspect.py`` there broke workers)
 WORKER_BOOT = ("import sys\n"

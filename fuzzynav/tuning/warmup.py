@@ -16,6 +16,9 @@ from tqdm.auto import tqdm
 
 from fuzzynav import compile_notice
 
+__all__ = ["MESSAGE", "kernel_cache", "compiled_count", "is_cold", "compile_by_running",
+           "compiling", "warm_up"]
+
 #: the live count's label (on a terminal; the one-line notice is
 #: :mod:`fuzzynav.compile_notice`'s, printed whether stderr is a terminal or not)
 MESSAGE = "numba kernels compiled"

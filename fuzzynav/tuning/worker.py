@@ -14,6 +14,8 @@ import sys
 
 from fuzzynav.errors import FuzzynavError
 
+__all__ = ["main"]
+
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m fuzzynav.tuning.worker")

@@ -20,6 +20,14 @@ from fuzzynav.nav import earth
 from fuzzynav.realdata.loaders import akit_timing as timing
 from fuzzynav.realdata.loaders.checks import DEFAULT_LIMITS, MAX_IMU_GAP_S, ImuColumns, imu_physics
 
+__all__ = ["MAX_FILE_BYTES", "NOMINAL_RATE_HZ", "RATE_TOLERANCE", "MAX_START_S",
+           "MAX_SPAN_SHORTFALL_S", "MAX_ROTATION_MISFIT_DEG", "MAX_DVL_FORWARD_RMS_MPS",
+           "GRAVITY_TOLERANCE", "MAX_RATE_DEVIATION", "PITCH_WINDOW_S",
+           "MIN_PITCH_CORRELATION", "MAX_SPEED_MPS", "ALTITUDE_RANGE_M",
+           "MAX_TRACK_VELOCITY_RMS_MPS", "AKIT_IMU", "file_size", "timing_of", "imu_of",
+           "reference_of", "pitch_correlation", "pitch_sign", "dvl_of", "spans",
+           "rotation_misfit_deg", "belong_together", "dvl_forward_rms", "clock_map"]
+
 #: largest A-KIT file read [bytes]: the IMU files are 3.5 MB (400 s at 100 Hz); a file of
 #: hundreds of MB would take gigabytes before a row is checked
 MAX_FILE_BYTES = 64 * 1024 * 1024

@@ -41,6 +41,12 @@ from fuzzynav.realdata.loaders.akit_timing import ClockMap, dvl_offset, estimate
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.sim.sensors import SensorData
 
+__all__ = ["SWAP", "IMU_FILE_TO_FRD", "COLUMNS", "DVL_SIGMA_MPS", "Reference", "AkitRecording",
+           "MAX_TRAJECTORY", "parse_trajectories", "read_table", "imu_increments",
+           "reference_attitude", "reference_at", "forward_velocity", "reference_clock",
+           "body_velocity", "yaw_rate_at", "reference_offset", "reference_on_imu_clock",
+           "load_trajectory", "load_akit"]
+
 #: FRD <-> RFU and NED <-> ENU: the same axis swap (a proper rotation, its own inverse)
 SWAP = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
 #: sign of the IMU file's x, y, z columns in body FRD: the y axis is reversed (left).  Found

@@ -25,6 +25,10 @@ import numpy as np
 
 from fuzzynav.nav import attitude
 
+__all__ = ["EARTH_RATE", "MAX_OFFSET_S", "SEGMENTS", "ClockMap", "parabola_min",
+           "attitude_track", "track_at", "without_earth_rate", "epoch_misfits",
+           "segment_offsets", "estimate_clock", "MIN_OFFSET_CONTRAST", "dvl_offset"]
+
 #: earth rotation rate [rad/s] (WGS-84)
 EARTH_RATE = 7.292115e-5
 #: largest offset searched either side of zero [s]

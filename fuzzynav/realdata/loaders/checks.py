@@ -21,6 +21,12 @@ import numpy as np
 from fuzzynav import units
 from fuzzynav.errors import InputFileError
 
+__all__ = ["IMU_RATE_RANGE_HZ", "MAX_IMU_GAP_S", "MIN_IMU_SAMPLES", "CLOCK_RATE_TOLERANCE",
+           "MAX_STRETCH_S", "GRAVITY_BAND", "GYRO_REST_MAX_RPS", "GYRO_MAX_RPS",
+           "ACCEL_MAX_MPS2", "GYRO_COURSE_GAIN_RANGE", "REST_BLOCK_S", "MIN_FIXED_EPOCHS",
+           "MIN_OVERLAP_FRACTION", "Limits", "DEFAULT_LIMITS", "imu_ticks", "clock_rate",
+           "ImuColumns", "imu_physics", "gyro_scale", "gnss_overlap"]
+
 #: plausible IMU sample rates [Hz]: MEMS and FOG IMUs log at 1 Hz (slow AHRS) to 2 kHz
 IMU_RATE_RANGE_HZ = (1.0, 2000.0)
 #: longest gap between consecutive IMU samples that is bridged (rates interpolated) [s];

@@ -21,6 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+__all__ = ["SampleClock", "regular_sample_times", "integrate_rates", "grid_bounds"]
+
 
 @dataclass(frozen=True)
 class SampleClock:

@@ -27,6 +27,8 @@ from fuzzynav.errors import InputFileError
 from fuzzynav.sim.sensors.gnss import MAX_LEVER_ARM_M
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
 
+__all__ = ["C_RFU_FRD", "passive_rpy_matrix", "Mounting"]
+
 #: forward-right-down body axes to right-forward-up: (x, y, z)_rfu = (y, x, -z)_frd
 C_RFU_FRD = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
 

@@ -10,6 +10,8 @@ from pathlib import Path
 
 from fuzzynav.errors import DataMissingError, InputFileError
 
+__all__ = ["sessions", "find_files"]
+
 
 def _one(directory: Path, pattern: str, what: str, several: str, keep=None) -> Path:
     found = sorted(p for p in directory.glob(pattern) if keep is None or keep(p.name))

@@ -47,6 +47,9 @@ from fuzzynav.realdata.loaders.rtkpos import read_pos
 from fuzzynav.sim.sensors import SensorData
 from fuzzynav.realdata.start_options import StartOptions
 
+__all__ = ["DEFAULT_IMU_DELAY_S", "TimeAlignment", "Recording", "read_imu_csv", "align_time",
+           "load_rtklib"]
+
 #: sample-to-fitted-arrival delay of the rtklib-drive IMU [s] (see the module docstring)
 DEFAULT_IMU_DELAY_S = 0.21
 _CSV_COLUMNS = 7

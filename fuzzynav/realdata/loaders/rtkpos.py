@@ -19,6 +19,8 @@ import numpy as np
 
 from fuzzynav.errors import InputFileError
 
+__all__ = ["PosFile", "read_pos"]
+
 #: columns after the two date-time fields, by header name -> our name
 _COLUMNS = {"latitude(deg)": "lat_deg", "longitude(deg)": "lon_deg", "height(m)": "h_m",
             "Q": "q", "ns": "ns", "sdn(m)": "sd_n", "sde(m)": "sd_e", "sdu(m)": "sd_u",

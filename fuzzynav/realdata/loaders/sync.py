@@ -20,6 +20,8 @@ import numpy as np
 from fuzzynav.errors import InputFileError
 from fuzzynav.nav import earth
 
+__all__ = ["gyro_course_gain", "course_rate_lag", "velocity_lag"]
+
 
 def _chord_courses(gnss, max_gap_factor=1.5):
     """Midpoint times, courses [rad] and speeds [m/s] of chords between consecutive fixes."""

@@ -22,6 +22,9 @@ import numpy as np
 
 from fuzzynav.errors import InputFileError
 
+__all__ = ["HEADER_TEXT_LEN", "HEADER_LEN", "RECORD", "TimeTag", "read_timetag",
+           "arrival_ticks", "logged_line_ends", "fit_clock"]
+
 HEADER_TEXT_LEN = 60
 _FIXED = struct.Struct("<IId")
 HEADER_LEN = HEADER_TEXT_LEN + _FIXED.size   # 76

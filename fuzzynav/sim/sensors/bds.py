@@ -18,6 +18,8 @@ from fuzzynav.sim.sensors import register
 from fuzzynav.sim.sensors.gnss import MAX_POS_M, Spec as GnssSpec
 from fuzzynav.sim.tomltable import Table
 
+__all__ = ["Spec"]
+
 _BIAS_FIELDS = ("bias_m", "bias_sigma_m")
 
 

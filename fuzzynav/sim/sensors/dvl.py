@@ -34,6 +34,8 @@ from fuzzynav.sim.sensors import SensorData, epoch_indices, register
 from fuzzynav.sim.sensors.gnss import in_windows, random_directions
 from fuzzynav.sim.tomltable import Table
 
+__all__ = ["Spec"]
+
 _ZERO3 = (0.0, 0.0, 0.0)
 _MAX_VEL_MPS = 100.0
 _MAX_LEVER_M = 100.0

@@ -34,6 +34,9 @@ from fuzzynav.sim.gauss_markov import gauss_markov_series
 from fuzzynav.sim.sensors import SensorData, epoch_indices, register, spec_table
 from fuzzynav.sim.tomltable import Table
 
+__all__ = ["MAX_POS_M", "MAX_LEVER_ARM_M", "outage_windows", "in_windows", "random_directions",
+           "NoiseWindow", "Spec", "antenna_truth"]
+
 _ZERO3 = (0.0, 0.0, 0.0)
 #: largest sensible figures: anything beyond describes no receiver and overflows squares
 MAX_POS_M = 1e5          # a 100-km error is no longer a fix

@@ -26,6 +26,8 @@ from fuzzynav.nav import attitude
 from fuzzynav.sim.sensors import SensorData, epoch_indices, register
 from fuzzynav.sim.tomltable import Table
 
+__all__ = ["body_velocity", "Spec"]
+
 
 def body_velocity(truth, idx, through_water: bool = True) -> np.ndarray:
     """Hull velocity in body axes at samples ``idx``, (k, 3) [m/s].

@@ -39,6 +39,8 @@ from fuzzynav.sim import geomag
 from fuzzynav.sim.sensors import SensorData, epoch_indices, register, spec_table
 from fuzzynav.sim.tomltable import Table
 
+__all__ = ["Disturbance", "Spec"]
+
 _IDENTITY = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 #: largest sensible figures [nT]: the earth's field is at most ~65 000 nT
 _MAX_NT = 1e6

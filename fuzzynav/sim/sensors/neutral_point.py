@@ -35,6 +35,8 @@ from fuzzynav.sim import sun
 from fuzzynav.sim.sensors import SensorData, epoch_indices, register
 from fuzzynav.sim.tomltable import Table
 
+__all__ = ["Spec"]
+
 
 @register("neutral_point")
 @dataclass(frozen=True)

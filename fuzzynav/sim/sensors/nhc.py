@@ -25,6 +25,8 @@ from fuzzynav.sim.sensors import SensorData, epoch_indices, register
 from fuzzynav.sim.sensors.log import body_velocity
 from fuzzynav.sim.tomltable import Table
 
+__all__ = ["Spec"]
+
 
 @register("nhc")
 @dataclass(frozen=True)

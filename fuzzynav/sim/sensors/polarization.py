@@ -42,6 +42,8 @@ from fuzzynav.sim import skylight, sun
 from fuzzynav.sim.sensors import SensorData, epoch_indices, register
 from fuzzynav.sim.tomltable import Table
 
+__all__ = ["SENSOR_TYPES", "MAX_VIEW_ZENITH_DEG", "Spec"]
+
 SENSOR_TYPES = ("point", "imaging")
 #: largest angle of a view from the boresight [deg] (the AoP reference needs v != +-x_c)
 MAX_VIEW_ZENITH_DEG = 80.0

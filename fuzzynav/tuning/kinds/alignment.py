@@ -17,6 +17,9 @@ from fuzzynav.sim.tomltable import Table, read_toml, with_path
 from fuzzynav.tuning.kinds import StudyKind, register_kind, study_settings
 from fuzzynav.tuning.objective import TrialObjective
 
+__all__ = ["DEFAULT_SAMPLER", "AlignmentConfig", "load_alignment_config", "AlignmentObjective",
+           "AlignmentPlan"]
+
 #: the sampler of an alignment study unless its file names one (Optuna's default TPE,
 #: which the study used before it ran on the one driver)
 DEFAULT_SAMPLER = "tpe-univariate"

@@ -5,6 +5,8 @@ from pathlib import Path
 
 from fuzzynav.fileio import staged, write_atomic
 
+__all__ = ["write_alignment_report"]
+
 
 def write_alignment_report(plan, study, out, evaluate: bool = True) -> Path:
     """Write the report of ``plan``'s ``study`` into directory ``out`` (staged: all or

@@ -13,6 +13,8 @@ from pathlib import Path
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.tuning.kinds import StudyKind, register_kind
 
+__all__ = ["BaselinePlan", "run_baselines"]
+
 
 class BaselinePlan:
     """A baseline study file opened with its simulation cache (see

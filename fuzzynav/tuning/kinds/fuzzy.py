@@ -12,6 +12,8 @@ from pathlib import Path
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.tuning.kinds import StudyKind, register_kind
 
+__all__ = ["FuzzyPlan", "load"]
+
 
 class FuzzyPlan:
     """A fuzzy study config opened with its simulation cache (see :mod:`fuzzynav.tuning.kinds`)."""
