@@ -7,12 +7,13 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import pandas as pd
 
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.metrics import check_finite_metrics
+from fuzzynav.runpath import check_outcomes
 
 POOLED = "all"
 
@@ -92,15 +93,15 @@ def _json_ready(x):
 
 def run_akit(spec, recs, filter_name, options, args) -> int:
     """Run, print the table or JSON; ``--plot DIR`` writes a trajectory and error figure."""
-    from fuzzynav.realdata.akit import AkitSource, run_all
+    from fuzzynav.realdata.akit import outcomes_table, run_outcomes
 
-    df, results = run_all(recs, filter_name, options)
+    outcomes = run_outcomes(recs, filter_name, options)
     # the guarantee every source keeps: non-finite metrics print nothing and exit 3 (the
     # attitude is not scored against the reference here: its RMS columns are NaN by design)
-    scored = list(AkitSource.required(df.columns))
-    check_finite_metrics(df.assign(scenario=[f"{spec} ({f})" for f in df["filter"]],
-                                   filter=filter_name), pd.DataFrame(True, df.index, scored),
-                         source="recording")
+    check_outcomes([replace(o, filter=filter_name, scenario=f"{spec} (traj {r.trajectory})",
+                            seed=r.trajectory)
+                    for r, o in zip(recs, outcomes)], "recording")
+    df, results = outcomes_table(recs, outcomes)
     if (df["completed"] < 1).any():
         raise FuzzynavError(f"{spec}: the filter stopped early on some trajectory "
                             "(covariance lost)")
