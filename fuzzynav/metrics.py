@@ -173,6 +173,14 @@ def mean_ci(values, level: float = 0.95) -> Estimate:
     return Estimate(m, m - h, m + h, int(x.size))
 
 
+def summary_json(values) -> dict:
+    """The JSON of per-run values in every table: ``{"mean", "ci95": [lo, hi], "values"}``
+    (:func:`mean_ci`; non-finite values stay as floats: see :func:`fuzzynav.fileio.
+    json_ready`)."""
+    est = mean_ci(values)
+    return {"mean": est.mean, "ci95": [est.lo, est.hi], "values": [float(x) for x in values]}
+
+
 def improvement_ci(baseline, candidate, level: float = 0.95, n_boot: int = 2000,
                    seed: int = 0) -> Estimate:
     """Improvement [%] of ``candidate`` over ``baseline``: ``100 (1 - mean(c) / mean(b))``.

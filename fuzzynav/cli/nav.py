@@ -235,15 +235,13 @@ def run_scenario_filters(args, filters, baseline=None, claims=None, claim_labels
 
 
 def _json_summary(df, scn, filters, seeds) -> dict:
-    from fuzzynav.metrics import mean_ci
+    from fuzzynav.metrics import summary_json
 
     metrics = [c for c in df.columns if c.startswith(("rms_", "max_"))]
     out = {"scenario": scn.name, "seeds": seeds, "filters": {}}
     for f in filters:
         sub = df[df["filter"] == f]
-        out["filters"][f] = {m: {"mean": mean_ci(sub[m]).mean, "ci95": [mean_ci(sub[m]).lo,
-                                                                          mean_ci(sub[m]).hi],
-                                 "values": sub[m].tolist()} for m in metrics}
+        out["filters"][f] = {m: summary_json(sub[m]) for m in metrics}
     return out
 
 

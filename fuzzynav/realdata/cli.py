@@ -193,20 +193,11 @@ def text_summary(spec, rec, vals, df) -> str:
     return "\n".join(lines)
 
 
-def _clean(x):
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    if isinstance(x, dict):
-        return {k: _clean(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_clean(v) for v in x]
-    return x
-
-
 def json_summary(spec, rec, vals, df) -> dict:
     """Everything of the run as JSON-ready data (NaN -> null: only the metrics that may be
     NaN, :func:`~fuzzynav.realdata.validate.required_names`, reach it)."""
-    from fuzzynav.metrics import mean_ci
+    from fuzzynav.fileio import json_ready
+    from fuzzynav.metrics import summary_json
     from fuzzynav.realdata.mems import CONSUMER_MEMS
     from fuzzynav.realdata.validate import FEEDS
 
@@ -217,15 +208,13 @@ def json_summary(spec, rec, vals, df) -> dict:
     feeds = {}
     for label in FEEDS.values():
         sub = df[df["filter"] == label]
-        feeds[label] = {m: {"mean": mean_ci(sub[m]).mean,
-                            "ci95": [mean_ci(sub[m]).lo, mean_ci(sub[m]).hi],
-                            "values": [float(x) for x in sub[m]]} for m in metric_cols}
+        feeds[label] = {m: summary_json(sub[m]) for m in metric_cols}
     outages = [{"start_s": d.start_s, "end_s": d.end_s, "complete": d.complete,
                 "drift_h_m": {FEEDS[f]: [v.runs[f].drifts[i].drift_h_m for v in vals]
                               for f in FEEDS},
                 "max_h_m": [v.runs["outages"].drifts[i].max_h_m for v in vals]}
                for i, d in enumerate(v0.runs["outages"].drifts)]
-    return _clean({
+    return json_ready({
         "data": str(spec), "directory": str(rec.directory), "filter": v0.filter,
         "seeds": [v.seed for v in vals], "settings": v0.settings.as_dict(),
         "imu_model": asdict(CONSUMER_MEMS),
