@@ -16,7 +16,7 @@ from fuzzynav.filters.named import FilterContext, FilterSetup
 from fuzzynav.filters.runner import InitialState
 from fuzzynav.metrics import errors_vs_trajectory, improvement_ci, mean_ci, rms_metrics
 from fuzzynav.nav import attitude, earth
-from fuzzynav.runpath import RunInputs, RunOutcome, make_setup, run
+from fuzzynav.runpath import RunInputs, RunOutcome, check_outcomes, make_setup, run
 from fuzzynav.sim.sensor_log import SensorLog, component_rng, simulate
 from fuzzynav.sim.scenario import Scenario, load_scenario
 
@@ -55,6 +55,12 @@ def _draw_initial_state(seed, truth, sig) -> InitialState:
 class OnSimulatedLog:
     """What every run source on a simulated log (attribute ``log``) shares: its name and
     seed, the filter context of the log, and that every RMS and maximum must be finite."""
+
+    # a scenario file sets its sensors' noise, outages and mounting itself
+    SETTINGS = frozenset({"mc", "t_start"})
+    KIND = "simulated scenarios"
+    SETTINGS_NOTE = ("they take their noise, outages and mounting from the scenario file; "
+                     "the recording options need --data")
 
     @property
     def name(self) -> str:
@@ -118,7 +124,7 @@ def run_on_log(log, filter_name: str, options=None, t_start_s: float = 0.0,
 
 
 def monte_carlo(scenario, filters, seeds, options=None, cache_dir=None, t_start_s=0.0,
-                progress=False) -> pd.DataFrame:
+                progress=False, refuse_diverged=False) -> pd.DataFrame:
     """Metrics of every filter on every seed, one row per (filter, seed).
 
     Parameters
@@ -134,10 +140,14 @@ def monte_carlo(scenario, filters, seeds, options=None, cache_dir=None, t_start_
         Shared filter options; ``options[filter_name]`` (dict) overrides per filter.
     cache_dir : path, optional
         Where simulated logs are cached.
+    refuse_diverged : bool
+        Refuse the table when a run diverged (:func:`fuzzynav.runpath.check_outcomes`,
+        ``RunDivergedError``), as the command line does; by default such runs are rows
+        with their non-finite metrics.
     """
     scn = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     options = dict(options or {})
-    rows = []
+    rows, outcomes = [], []
     seeds = list(seeds)
     bar = _progress(len(seeds) * len(filters), progress, f"{scn.name}")
     for seed in seeds:
@@ -147,8 +157,11 @@ def monte_carlo(scenario, filters, seeds, options=None, cache_dir=None, t_start_
             opts.update(options.get(name, {}) if isinstance(options.get(name), dict) else {})
             out = run_on_log(log, name, opts, t_start_s)  # NAME@FILE: resolved by the run
             rows.append({"scenario": scn.name, "filter": name, "seed": int(seed), **out.metrics})
+            outcomes.append(out)
             bar.update(1)
     bar.close()
+    if refuse_diverged:
+        check_outcomes(outcomes)
     return pd.DataFrame(rows)
 
 

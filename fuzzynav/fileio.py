@@ -11,6 +11,7 @@ files): all are written complete into a temporary directory, then moved into pla
 from __future__ import annotations
 
 import hashlib
+import math
 import os
 import re
 import shutil
@@ -23,7 +24,7 @@ from fuzzynav.errors import InputFileError, OutputError, brief
 
 __all__ = ["FILE_MODE", "publish", "MAX_STEM", "safe_stem", "output_errors", "SYSTEM_DIRS",
            "is_inside", "check_place", "study_output", "make_dir", "write_atomic",
-           "publish_all", "sweep_staged", "staged"]
+           "publish_all", "sweep_staged", "staged", "json_ready"]
 
 
 def _umask() -> int:
@@ -276,3 +277,13 @@ def staged(directory, what: str = "", last=()):
         raise OutputError(directory, exc, what) from None
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+
+
+def json_ready(x):
+    """``x`` with NaN and infinities as ``None``, recursively through dicts, lists and
+    tuples (JSON has no NaN; a metric that may legitimately be NaN is written as null)."""
+    if isinstance(x, dict):
+        return {k: json_ready(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [json_ready(v) for v in x]
+    return None if isinstance(x, float) and not math.isfinite(x) else x

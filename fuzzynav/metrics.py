@@ -11,7 +11,6 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from fuzzynav.errors import RunDivergedError
 from fuzzynav.live_cache import LiveCache
 from fuzzynav.nav import attitude, earth
 
@@ -174,6 +173,14 @@ def mean_ci(values, level: float = 0.95) -> Estimate:
     return Estimate(m, m - h, m + h, int(x.size))
 
 
+def summary_json(values) -> dict:
+    """The JSON of per-run values in every table: ``{"mean", "ci95": [lo, hi], "values"}``
+    (:func:`mean_ci`; non-finite values stay as floats: see :func:`fuzzynav.fileio.
+    json_ready`)."""
+    est = mean_ci(values)
+    return {"mean": est.mean, "ci95": [est.lo, est.hi], "values": [float(x) for x in values]}
+
+
 def improvement_ci(baseline, candidate, level: float = 0.95, n_boot: int = 2000,
                    seed: int = 0) -> Estimate:
     """Improvement [%] of ``candidate`` over ``baseline``: ``100 (1 - mean(c) / mean(b))``.
@@ -195,45 +202,3 @@ def improvement_ci(baseline, candidate, level: float = 0.95, n_boot: int = 2000,
     boot = 100.0 * (1.0 - c[idx].mean(1) / b[idx].mean(1))
     lo, hi = np.percentile(boot, [50 * (1 - level), 50 * (1 + level)])
     return Estimate(point, float(lo), float(hi), int(b.size))
-
-
-def check_finite_metrics(df, required=None, source: str = "scenario") -> None:
-    """Refuse a table of runs with a non-finite metric (a diverged filter run).
-
-    Parameters
-    ----------
-    df : pandas.DataFrame
-        One row per run with columns ``filter``, ``scenario``, ``seed``, the metrics
-        (``rms_*``, ``max_*``) and optionally ``completed`` and ``error``; a row with an
-        ``error`` (a filter that could not run, recorded as such) is not a diverged run.
-    required : pandas.DataFrame of bool, optional
-        Which cells must be finite, for metrics that may legitimately be NaN (its columns
-        are the metrics checked, e.g. the drift of a recording's complete outages); default:
-        every ``rms_*`` and ``max_*`` cell.
-    source : str
-        What the ``scenario`` column names, in the message ("scenario", "recording").
-
-    Raises
-    ------
-    RunDivergedError
-        Naming the first such run's filter, scenario and seed and how many there are.
-    """
-    metrics = list(required.columns) if required is not None else \
-        [c for c in df.columns if c.startswith(("rms_", "max_"))]
-    values = df[metrics].to_numpy(dtype=float)
-    nonfinite = ~np.isfinite(values)
-    if required is not None:
-        nonfinite &= required.to_numpy(dtype=bool)
-    bad = nonfinite.any(axis=1)
-    if "error" in df.columns:
-        bad &= df["error"].isna().to_numpy()
-    if not bad.any():
-        return
-    i = int(np.flatnonzero(bad)[0])
-    row = df.iloc[i]
-    j = int(np.flatnonzero(nonfinite[i])[0])
-    stopped = " (it stopped early: covariance lost)" if row.get("completed", 1.0) < 1 else ""
-    raise RunDivergedError(f"filter {row['filter']} diverged on {source} {row['scenario']} "
-                           f"seed {int(row['seed'])}{stopped}: {metrics[j]} = {values[i, j]}; "
-                           f"{int(bad.sum())} of {len(df)} run(s) have non-finite metrics, "
-                           "no table printed")

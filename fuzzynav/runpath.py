@@ -17,7 +17,10 @@ on.  :func:`run` is the only caller of :func:`fuzzynav.filters.runner.run_filter
   to the source's start;
 * every outcome says whether the run completed (``metrics["completed"]``) and which of the
   metrics its source requires finite are not (:attr:`RunOutcome.diverged`), and
-  :func:`check_outcomes` refuses a table with any (exit 3 on the command line).
+  :func:`check_outcomes` refuses a table with any (exit 3 on the command line);
+* run settings a source does not use (simulated outages on an A-KIT recording, recording
+  options on a scenario) are refused by name (:func:`refuse_settings`, from the source's
+  ``SETTINGS``) before anything is loaded.
 
 A source is any object with the :class:`Source` attributes and methods; adding a dataset
 is one such class.
@@ -31,12 +34,13 @@ from typing import Protocol
 
 import numpy as np
 
-from fuzzynav.errors import RunDivergedError
+from fuzzynav.errors import FuzzynavError, RunDivergedError
 from fuzzynav.filters.named import FilterContext, FilterSetup, get_filter, parse_filter_spec
 from fuzzynav.filters.runner import InitialState, run_filter
 from fuzzynav.filters.sensor_states import with_sensor_states
 
-__all__ = ["RunInputs", "RunOutcome", "Source", "check_outcomes", "make_setup", "run"]
+__all__ = ["RUN_SETTINGS", "RunInputs", "RunOutcome", "Source", "check_outcomes", "make_setup",
+           "nonfinite", "refuse_settings", "run"]
 
 
 @dataclass(frozen=True)
@@ -82,6 +86,11 @@ class Source(Protocol):
 
     name: str
     seed: int
+    #: class attributes: the :data:`RUN_SETTINGS` the source uses, what to call its kind
+    #: and why the other settings do not apply (:func:`refuse_settings`)
+    SETTINGS: frozenset
+    KIND: str
+    SETTINGS_NOTE: str
 
     def context(self, options=None) -> FilterContext:
         """What named filters configure themselves from (IMU model, sensors, options)."""
@@ -171,13 +180,27 @@ def run(source: Source, filter_spec: str, options=None,
                      _merged(setup.sensor_options, inp.sensor_options))
     metrics = source.score(res)
     metrics["completed"] = float(res.ok)
-    bad = tuple(m for m in source.required(metrics)
-                if not math.isfinite(float(metrics.get(m, math.nan))))
-    return RunOutcome(filter_spec, source.name, int(source.seed), res, metrics, bad)
+    return RunOutcome(filter_spec, source.name, int(source.seed), res, metrics,
+                      nonfinite(source, metrics))
+
+
+def nonfinite(source: Source, metrics: dict) -> tuple:
+    """The metrics ``source`` requires finite that are not (a diverged run), in its order."""
+    return tuple(m for m in source.required(metrics)
+                 if not math.isfinite(float(metrics.get(m, math.nan))))
 
 
 def check_outcomes(outcomes, what: str = "scenario") -> None:
     """Refuse a table of runs of which any diverged (:attr:`RunOutcome.diverged`).
+
+    Every command that prints a table of runs passes its outcomes here first, so a run
+    whose required metrics are not finite prints no table on any source (exit 3).
+
+    Parameters
+    ----------
+    outcomes : iterable of RunOutcome
+    what : str
+        What :attr:`RunOutcome.scenario` names, in the message ("scenario", "recording").
 
     Raises
     ------
@@ -194,3 +217,48 @@ def check_outcomes(outcomes, what: str = "scenario") -> None:
                            f"{stopped}: {o.diverged[0]} = {o.metrics.get(o.diverged[0])}; "
                            f"{len(bad)} of {len(outcomes)} run(s) have non-finite metrics, "
                            "no table printed")
+
+
+def refuse_settings(source_type, given: dict) -> None:
+    """Refuse, by name, run settings given for a source that does not use them.
+
+    Parameters
+    ----------
+    source_type : type
+        A source class: its ``SETTINGS`` (the names of :data:`RUN_SETTINGS` it uses),
+        ``KIND`` (what to call it) and ``SETTINGS_NOTE`` (why the others do not apply).
+    given : dict
+        Setting name (a key of :data:`RUN_SETTINGS`) -> how the user spelled it (a flag
+        such as ``--noise``, a study key), for each setting given a non-default value.
+
+    Raises
+    ------
+    FuzzynavError
+        Listing every given setting the source does not use (they would change nothing).
+    """
+    unknown = sorted(set(given) - set(RUN_SETTINGS))
+    if unknown:
+        raise ValueError(f"not run settings: {', '.join(unknown)}")
+    unused = [label for name, label in given.items() if name not in source_type.SETTINGS]
+    if unused:
+        verb = "do" if len(unused) > 1 else "does"
+        raise FuzzynavError(f"{', '.join(unused)}: {verb} not apply to {source_type.KIND} "
+                            f"({source_type.SETTINGS_NOTE})")
+
+
+#: the run settings a command or study may give, by name -> what they set
+RUN_SETTINGS = {
+    "mc": "Monte-Carlo runs (seeds of simulated or added noise)",
+    "t_start": "time the scoring starts [s]",
+    "noise": "white noise added to the fed positions [m]",
+    "vel_noise": "white noise added to the fed velocities [m/s]",
+    "outage_period": "period of simulated GNSS outages [s]",
+    "outage_duration": "length of each simulated outage [s]",
+    "first_outage": "start of the first simulated outage [s]",
+    "gnss_velocity": "how the receiver's velocities are fed",
+    "velocity_lag": "lag of the receiver's velocities [s]",
+    "nhc": "non-holonomic constraints fed [m/s]",
+    "mounting": "mounting file of the recording (IMU to body, lever arm)",
+    "imu_delay": "IMU sample-to-logger delay [s]",
+    "span": "stretch of the recording used [s]",
+}

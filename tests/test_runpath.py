@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from fuzzynav import runpath
-from fuzzynav.errors import RunDivergedError
+from fuzzynav.errors import FuzzynavError, RunDivergedError
 from fuzzynav.experiment import SimulatedSource
 from fuzzynav.filters.named import FilterContext, get_filter
 from fuzzynav.filters.runner import InitialState
@@ -35,6 +35,10 @@ class TruthStart:
     log: object
     name: str = "truth-start"
     seed: int = 0
+    # the run settings it uses (runpath.RUN_SETTINGS): seeds only; the rest are refused
+    SETTINGS = frozenset({"mc"})
+    KIND = "truth-start logs"
+    SETTINGS_NOTE = "they start on the truth and score the whole log"
 
     def context(self, options=None):
         return FilterContext(imu_noise=self.log.scenario.imu.noise_si(),
@@ -112,3 +116,38 @@ def test_run_filter_has_one_caller_outside_filters():
             if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "run_filter":
                 callers.append(path.relative_to(ROOT).as_posix())
     assert callers == ["fuzzynav/runpath.py"]
+
+
+def test_a_stopped_run_is_named_as_such():
+    ok = runpath.RunOutcome("ekf", "s", 7, None, {"rms_pos_m": 1.0, "completed": 1.0})
+    bad = runpath.RunOutcome("fakf", "s", 8, None, {"max_pos_h_m": math.inf, "completed": 0.0},
+                             ("max_pos_h_m",))
+    with pytest.raises(RunDivergedError, match="filter fakf diverged on scenario s seed 8 "
+                                               r"\(it stopped early.*max_pos_h_m = inf; 1 of 3"):
+        runpath.check_outcomes([ok, bad, ok])
+    assert RunDivergedError.exit_code == 3
+
+
+def test_settings_a_source_does_not_use_are_refused_by_name():
+    runpath.refuse_settings(TruthStart, {"mc": "--mc"})  # its own: accepted
+    with pytest.raises(FuzzynavError, match=r"^--noise, --t-start: do not apply to truth-start "
+                                            r"logs \(they start on the truth"):
+        runpath.refuse_settings(TruthStart, {"noise": "--noise", "mc": "--mc",
+                                             "t_start": "--t-start"})
+    with pytest.raises(ValueError, match="not run settings: bogus"):  # a caller's typo
+        runpath.refuse_settings(TruthStart, {"bogus": "--bogus"})
+
+
+def test_every_source_declares_its_settings():
+    from fuzzynav.align.chain import AlignedSource
+    from fuzzynav.realdata.sources import SOURCES
+    from fuzzynav.realdata.studyruns import RecordingRun
+
+    kinds = [SimulatedSource, AlignedSource, RecordingRun,
+             *(s.source_type() for s in SOURCES.values())]
+    for kind in kinds:
+        assert set(kind.SETTINGS) <= set(runpath.RUN_SETTINGS), kind
+        assert kind.KIND and isinstance(kind.SETTINGS_NOTE, str), kind
+    # the car recording runs the validation protocol: every setting applies; A-KIT none
+    assert SOURCES["rtklib"].source_type().SETTINGS == set(runpath.RUN_SETTINGS)
+    assert SOURCES["akit"].source_type().SETTINGS == set()

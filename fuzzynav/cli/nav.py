@@ -8,7 +8,6 @@ from pathlib import Path
 from fuzzynav.cli.values import check_count, check_t_start
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.fileio import safe_stem
-from fuzzynav.metrics import check_finite_metrics
 
 
 def default_cache_dir() -> Path:
@@ -166,11 +165,11 @@ def _cmd_run(args) -> int:
         from fuzzynav.realdata import run_recording
 
         return run_recording(args.data, args.filter, filter_options(args), args)
-    from fuzzynav.realdata.cli import unused_recording_options
+    from fuzzynav.experiment import SimulatedSource
+    from fuzzynav.realdata.cli import given_settings
+    from fuzzynav.runpath import refuse_settings
 
-    if unused_recording_options(args):
-        raise FuzzynavError(f"{', '.join(unused_recording_options(args))}: only with --data "
-                            "(simulated scenarios take their settings from the scenario)")
+    refuse_settings(SimulatedSource, given_settings(args))
     if args.align:
         from fuzzynav.align.compare_cli import run_with_alignment
 
@@ -212,9 +211,9 @@ def run_scenario_filters(args, filters, baseline=None, claims=None, claim_labels
     scn = load_scenario(args.scenario)
     check_t_start(args.t_start, scn.duration_s)
     seeds = list(range(args.seed, args.seed + args.mc))
+    # a diverged run: no table at all, exit 3
     df = monte_carlo(scn, filters, seeds, filter_options(args), args.cache, args.t_start,
-                     progress=not args.json and args.mc > 1)
-    check_finite_metrics(df)  # a diverged run: no table at all, exit 3
+                     progress=not args.json and args.mc > 1, refuse_diverged=True)
     if args.json:
         print(json.dumps(_json_summary(df, scn, filters, seeds), indent=2, allow_nan=False))
     else:
@@ -236,15 +235,13 @@ def run_scenario_filters(args, filters, baseline=None, claims=None, claim_labels
 
 
 def _json_summary(df, scn, filters, seeds) -> dict:
-    from fuzzynav.metrics import mean_ci
+    from fuzzynav.metrics import summary_json
 
     metrics = [c for c in df.columns if c.startswith(("rms_", "max_"))]
     out = {"scenario": scn.name, "seeds": seeds, "filters": {}}
     for f in filters:
         sub = df[df["filter"] == f]
-        out["filters"][f] = {m: {"mean": mean_ci(sub[m]).mean, "ci95": [mean_ci(sub[m]).lo,
-                                                                          mean_ci(sub[m]).hi],
-                                 "values": sub[m].tolist()} for m in metrics}
+        out["filters"][f] = {m: summary_json(sub[m]) for m in metrics}
     return out
 
 

@@ -23,7 +23,8 @@ from fuzzynav.runpath import RunInputs, run
 from fuzzynav.sim.imu import ImuSpec
 
 __all__ = ["INIT_OPTIONS", "PHINS", "ROWS", "context", "initial_state", "AkitSource",
-           "run_trajectory", "distance_travelled", "score", "run_all"]
+           "run_trajectory", "distance_travelled", "score", "run_all", "run_outcomes",
+           "outcomes_table"]
 
 #: initial uncertainty of the start taken from the reference: Delph post-processing gives
 #: roll/pitch to ~0.01 deg and heading to a few 0.01 deg; its position is the reference
@@ -80,6 +81,13 @@ class AkitSource:
         return self.label or f"akit trajectory {self.rec.trajectory}"
 
     seed = 0
+    # nothing drawn, nothing degraded: the recorded sensors as they are, the whole run
+    SETTINGS = frozenset()
+    KIND = "akit recordings"
+    SETTINGS_NOTE = ("the filter starts from the reference, is fed the recorded sensors without "
+                     "simulated outages or noise, and is scored over the whole run: nothing "
+                     "depends on a seed; the loader establishes the frames and lags from the "
+                     "data")
 
     def context(self, options=None) -> FilterContext:
         return context(self.rec, options)
@@ -131,12 +139,19 @@ def score(result, ref) -> dict:
     return m
 
 
+def run_outcomes(recs, filter_name: str, options=None) -> list:
+    """One :class:`~fuzzynav.runpath.RunOutcome` per trajectory of ``recs``."""
+    return [run(AkitSource(rec), filter_name, options) for rec in recs]
+
+
+def outcomes_table(recs, outcomes) -> tuple[pd.DataFrame, dict]:
+    """Metrics per trajectory (one row each, ``filter`` = ``"traj N"``) and the results."""
+    rows = [{"filter": f"traj {rec.trajectory}", "seed": rec.trajectory,
+             "trajectory": rec.trajectory, "reference_offset_s": rec.clock.offset_s,
+             **out.metrics} for rec, out in zip(recs, outcomes)]
+    return pd.DataFrame(rows), {rec.trajectory: out.result for rec, out in zip(recs, outcomes)}
+
+
 def run_all(recs, filter_name: str, options=None) -> tuple[pd.DataFrame, dict]:
     """Metrics per trajectory (one row each, ``filter`` = ``"traj N"``) and the results."""
-    rows, results = [], {}
-    for rec in recs:
-        res, m = run_trajectory(rec, filter_name, options)
-        results[rec.trajectory] = res
-        rows.append({"filter": f"traj {rec.trajectory}", "seed": rec.trajectory,
-                     "trajectory": rec.trajectory, "reference_offset_s": rec.clock.offset_s, **m})
-    return pd.DataFrame(rows), results
+    return outcomes_table(recs, run_outcomes(recs, filter_name, options))

@@ -6,13 +6,13 @@ gives, per column, every metric as ``{"mean", "ci95", "values"}`` like the rtkli
 from __future__ import annotations
 
 import json
-import math
+from dataclasses import replace
 from pathlib import Path
 
 import pandas as pd
 
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.metrics import check_finite_metrics
+from fuzzynav.runpath import check_outcomes
 
 POOLED = "all"
 
@@ -54,7 +54,8 @@ def text_summary(spec, recs, filter_name, df) -> str:
 
 def json_summary(spec, recs, filter_name, df) -> dict:
     """Everything of the run as JSON-ready data (the rtklib layout: columns of metrics)."""
-    from fuzzynav.metrics import mean_ci
+    from fuzzynav.fileio import json_ready
+    from fuzzynav.metrics import summary_json
     from fuzzynav.realdata.akit import INIT_OPTIONS
 
     metric_cols = [c for c in df.columns if c.startswith(("rms_", "max_", "mean_", "end_"))
@@ -63,10 +64,8 @@ def json_summary(spec, recs, filter_name, df) -> dict:
     feeds = {}
     for label in _labels(df):
         sub = full[full["filter"] == label]
-        feeds[label] = {m: {"mean": mean_ci(sub[m]).mean,
-                            "ci95": [mean_ci(sub[m]).lo, mean_ci(sub[m]).hi],
-                            "values": [float(x) for x in sub[m]]} for m in metric_cols}
-    return _json_ready({"data": str(spec), "directory": str(recs[0].directory),
+        feeds[label] = {m: summary_json(sub[m]) for m in metric_cols}
+    return json_ready({"data": str(spec), "directory": str(recs[0].directory),
                    "filter": filter_name, "trajectories": [r.trajectory for r in recs],
                    "settings": {k: list(v) if isinstance(v, tuple) else v
                                 for k, v in INIT_OPTIONS.items()},
@@ -80,27 +79,17 @@ def json_summary(spec, recs, filter_name, df) -> dict:
                               zip(recs, ["ok" if c >= 1 else "stopped" for c in df["completed"]])}})
 
 
-def _json_ready(x):
-    """NaN and infinities as None, recursively (JSON has no NaN)."""
-    if isinstance(x, dict):
-        return {k: _json_ready(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_json_ready(v) for v in x]
-    finite = not isinstance(x, float) or math.isfinite(x)
-    return x if finite else None
-
-
 def run_akit(spec, recs, filter_name, options, args) -> int:
     """Run, print the table or JSON; ``--plot DIR`` writes a trajectory and error figure."""
-    from fuzzynav.realdata.akit import AkitSource, run_all
+    from fuzzynav.realdata.akit import outcomes_table, run_outcomes
 
-    df, results = run_all(recs, filter_name, options)
+    outcomes = run_outcomes(recs, filter_name, options)
     # the guarantee every source keeps: non-finite metrics print nothing and exit 3 (the
     # attitude is not scored against the reference here: its RMS columns are NaN by design)
-    scored = list(AkitSource.required(df.columns))
-    check_finite_metrics(df.assign(scenario=[f"{spec} ({f})" for f in df["filter"]],
-                                   filter=filter_name), pd.DataFrame(True, df.index, scored),
-                         source="recording")
+    check_outcomes([replace(o, filter=filter_name, scenario=f"{spec} (traj {r.trajectory})",
+                            seed=r.trajectory)
+                    for r, o in zip(recs, outcomes)], "recording")
+    df, results = outcomes_table(recs, outcomes)
     if (df["completed"] < 1).any():
         raise FuzzynavError(f"{spec}: the filter stopped early on some trajectory "
                             "(covariance lost)")

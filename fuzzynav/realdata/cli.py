@@ -52,36 +52,26 @@ def add_arguments(p) -> None:
                    help="use only this stretch, seconds after the first IMU sample")
 
 
-#: option dest -> flag of the options only a recording uses
-_RECORDING_ONLY = {**{d: "--" + d.replace("_", "-") for d in _SETTINGS},
-                   "imu_delay": "--imu-delay", "span": "--span", "mounting": "--mounting"}
+#: option dest -> flag of the run settings (:data:`fuzzynav.runpath.RUN_SETTINGS`) a source
+#: may refuse
+_FLAGS = {**{d: "--" + d.replace("_", "-") for d in _SETTINGS}, "imu_delay": "--imu-delay",
+          "span": "--span", "mounting": "--mounting", "t_start": "--t-start", "mc": "--mc"}
 
 
-def unused_recording_options(args) -> list:
-    """Recording options given without ``--data`` (flags), to refuse them clearly."""
-    return [flag for dest, flag in _RECORDING_ONLY.items()
-            if getattr(args, dest, None) not in (None, "auto")]
+def given_settings(args) -> dict:
+    """The run settings given on the command line (name -> flag), defaults left out."""
+    defaults = {"mounting": "auto", "t_start": 0.0, "mc": 1}
+    return {dest: flag for dest, flag in _FLAGS.items()
+            if getattr(args, dest, None) not in (None, defaults.get(dest))}
 
 
 def refuse_unused_options(spec, args) -> None:
-    """Options of the validation protocol (simulated outages, fed noise, seeds, ``--t-start``)
-    given for a source whose run does not use them: one error naming them (they used to
-    change nothing, silently)."""
+    """The run settings of ``args`` that the source ``spec`` names does not use: one error
+    naming them (:func:`fuzzynav.runpath.refuse_settings`)."""
     from fuzzynav.realdata.sources import parse_data_spec
+    from fuzzynav.runpath import refuse_settings
 
-    source = parse_data_spec(spec)[0]
-    if source.protocol:
-        return
-    given = [flag for dest, flag in _RECORDING_ONLY.items()
-             if dest in _SETTINGS and getattr(args, dest, None) is not None]
-    given += ["--t-start"] * bool(getattr(args, "t_start", 0.0))
-    given += ["--mc"] * (getattr(args, "mc", 1) != 1)
-    if given:
-        verb = "do" if len(given) > 1 else "does"
-        raise FuzzynavError(f"{', '.join(given)}: {verb} not apply to {source.kind} recordings "
-                            "(the filter starts from the reference, is fed the recorded sensors "
-                            "without simulated outages or noise, and is scored over the whole "
-                            "run: nothing depends on a seed)")
+    refuse_settings(parse_data_spec(spec)[0].source_type(), given_settings(args))
 
 
 def settings_from(args):
@@ -141,8 +131,8 @@ def run_recording(spec, filter_name, options, args) -> int:
         return run_akit(spec, rec, filter_name, options, args)
     seeds = list(range(args.seed, args.seed + args.mc))
     vals = [validate(rec, filter_name, settings, s, options) for s in seeds]
+    check_finite(vals, spec)  # a diverged run: no table at all, exit 3
     df = metrics_table(vals)
-    check_finite(df, rec, spec)  # a diverged run: no table at all, exit 3
     if args.json:
         print(json.dumps(json_summary(spec, rec, vals, df), indent=2))
     else:
@@ -203,20 +193,11 @@ def text_summary(spec, rec, vals, df) -> str:
     return "\n".join(lines)
 
 
-def _clean(x):
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    if isinstance(x, dict):
-        return {k: _clean(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_clean(v) for v in x]
-    return x
-
-
 def json_summary(spec, rec, vals, df) -> dict:
     """Everything of the run as JSON-ready data (NaN -> null: only the metrics that may be
-    NaN, :func:`~fuzzynav.realdata.validate.required_metrics`, reach it)."""
-    from fuzzynav.metrics import mean_ci
+    NaN, :func:`~fuzzynav.realdata.validate.required_names`, reach it)."""
+    from fuzzynav.fileio import json_ready
+    from fuzzynav.metrics import summary_json
     from fuzzynav.realdata.mems import CONSUMER_MEMS
     from fuzzynav.realdata.validate import FEEDS
 
@@ -227,15 +208,13 @@ def json_summary(spec, rec, vals, df) -> dict:
     feeds = {}
     for label in FEEDS.values():
         sub = df[df["filter"] == label]
-        feeds[label] = {m: {"mean": mean_ci(sub[m]).mean,
-                            "ci95": [mean_ci(sub[m]).lo, mean_ci(sub[m]).hi],
-                            "values": [float(x) for x in sub[m]]} for m in metric_cols}
+        feeds[label] = {m: summary_json(sub[m]) for m in metric_cols}
     outages = [{"start_s": d.start_s, "end_s": d.end_s, "complete": d.complete,
                 "drift_h_m": {FEEDS[f]: [v.runs[f].drifts[i].drift_h_m for v in vals]
                               for f in FEEDS},
                 "max_h_m": [v.runs["outages"].drifts[i].max_h_m for v in vals]}
                for i, d in enumerate(v0.runs["outages"].drifts)]
-    return _clean({
+    return json_ready({
         "data": str(spec), "directory": str(rec.directory), "filter": v0.filter,
         "seeds": [v.seed for v in vals], "settings": v0.settings.as_dict(),
         "imu_model": asdict(CONSUMER_MEMS),

@@ -20,7 +20,7 @@ from fuzzynav.filters.named import FilterContext
 from fuzzynav.filters.runner import InitialState
 from fuzzynav.nav import attitude, earth
 from fuzzynav.realdata.mems import CONSUMER_MEMS, MemsModel
-from fuzzynav.runpath import RunInputs
+from fuzzynav.runpath import RUN_SETTINGS, RunInputs
 from fuzzynav.realdata import coarse_align
 from fuzzynav.sim.imu import ImuData
 
@@ -115,6 +115,11 @@ class GnssSource:
     scorer: Callable
     needed: Callable
     use_velocity: bool = True
+
+    # every run setting applies: the validation protocol degrades what the receiver logged
+    SETTINGS = frozenset(RUN_SETTINGS)
+    KIND = "rtklib recordings"
+    SETTINGS_NOTE = ""
 
     def context(self, options=None) -> FilterContext:
         return self.make_context(options)

@@ -12,6 +12,7 @@ Add a kind with :func:`register_source`.
 """
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -47,21 +48,26 @@ class DataSource:
     description: str
     load: Callable
     split: Callable | None = None
-    #: whether ``run --data`` runs the validation protocol on it (simulated outages, fed
-    #: noise, seeds, ``--t-start``); a source without it refuses those options by name
-    protocol: bool = True
+    #: ``module:Class`` of the run source its recordings are run as
+    #: (:mod:`fuzzynav.runpath`); its ``SETTINGS`` say which run settings apply
+    run_source: str = "fuzzynav.realdata.session:GnssSource"
+
+    def source_type(self) -> type:
+        """The run source class of this kind (imported on demand: it pulls the filters)."""
+        module, name = self.run_source.split(":")
+        return getattr(importlib.import_module(module), name)
 
 
 SOURCES: dict[str, DataSource] = {}
 
 
 def register_source(kind: str, description: str, split: Callable | None = None,
-                    protocol: bool = True):
-    """Decorator registering a loader function under ``kind`` (``split``, ``protocol``: see
-    :class:`DataSource`)."""
+                    run_source: str = DataSource.run_source):
+    """Decorator registering a loader function under ``kind`` (``split``, ``run_source``:
+    see :class:`DataSource`)."""
 
     def deco(fn):
-        SOURCES[kind] = DataSource(kind, description, fn, split, protocol)
+        SOURCES[kind] = DataSource(kind, description, fn, split, run_source)
         return fn
 
     return deco
@@ -88,14 +94,16 @@ def _akit_split(session):
 @register_source("akit", "A-KIT AUV recordings: IMU/DVL/GT_trajectoryN.csv + corrected/ "
                          "(akit:DIR:N, N = 3, 1-8 or 1,4; e.g. --data akit:3 after "
                          "fuzzynav data fetch akit)",
-                 split=_akit_split, protocol=False)
+                 split=_akit_split, run_source="fuzzynav.realdata.akit:AkitSource")
 def _load_akit(directory, mounting="auto", imu_delay_s=None, span_s=None, session=None,
                options=None):
+    from fuzzynav.realdata.akit import AkitSource
+    from fuzzynav.runpath import refuse_settings
     from fuzzynav.realdata.loaders.akit_recording import load_akit
 
-    if mounting not in ("auto", None) or imu_delay_s is not None or span_s is not None:
-        raise FuzzynavError("--data akit: --mounting, --imu-delay and --span do not apply "
-                            "(the loader establishes the frames and lags from the data)")
+    given = {"mounting": "--mounting"} if mounting not in ("auto", None) else {}
+    given.update({"imu_delay": "--imu-delay"} if imu_delay_s is not None else {})
+    refuse_settings(AkitSource, {**given, **({"span": "--span"} if span_s is not None else {})})
     if options is not None:
         raise FuzzynavError("--data akit: ?options do not apply (the filter starts from the "
                             "reference, not from a rest and a GNSS course)")

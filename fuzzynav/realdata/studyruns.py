@@ -66,6 +66,12 @@ class RecordingRun:
     duration_s: float
     inner: object
 
+    # the study's window sets start and length; the kind's protocol defaults the rest
+    SETTINGS = frozenset({"mc"})
+    KIND = "study runs on recordings"
+    SETTINGS_NOTE = ("a run's start and length are its recording window "
+                     "(akit:DIR:N@START-END), scored from the window's start")
+
     def context(self, options=None):
         """The :class:`~fuzzynav.filters.named.FilterContext` of this run."""
         return self.inner.context(options)

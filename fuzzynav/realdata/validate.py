@@ -17,7 +17,7 @@ from fuzzynav.realdata.protocol import ProtocolSettings
 from fuzzynav.realdata.score import errors_against, outage_drifts, score
 from fuzzynav.realdata.session import (GnssSource, Start, constraints_for, context_for,
                                        start_from)
-from fuzzynav.runpath import run
+from fuzzynav.runpath import RunOutcome, check_outcomes, run
 from fuzzynav.sim.sensor_log import check_seed
 
 #: feed name -> label in tables and figures
@@ -33,6 +33,8 @@ class FeedRun:
     errors: object
     metrics: dict
     drifts: list
+    #: the required metrics that are not finite (:attr:`fuzzynav.runpath.RunOutcome.diverged`)
+    diverged: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -125,7 +127,7 @@ def validate(rec, filter_name: str, settings: ProtocolSettings = ProtocolSetting
         out = run(source, filter_name, options)
         err = errors(out.result)
         runs[name] = FeedRun(fixes, out.result, err, out.metrics,
-                             outage_drifts(err, out.result.time_s, windows))
+                             outage_drifts(err, out.result.time_s, windows), out.diverged)
     return Validation(filter_name, int(seed), settings, start, windows, runs)
 
 
@@ -180,7 +182,15 @@ DRIFT_METRICS = ("drift_h_rms_m", "drift_h_max_m", "outage_max_h_m")
 
 
 def required_names(metrics: dict, vel_scored: bool) -> tuple:
-    """The metrics of one run that must be finite (:func:`required_metrics`'s rule)."""
+    """The metrics of one run that must be finite.
+
+    Legitimately NaN, so not required: the attitude RMS (a recording has no attitude
+    truth); the velocity RMS when the reference lacks velocities (``vel_scored``); the
+    drift of an outage that is not complete (:mod:`~fuzzynav.realdata.score`), and the
+    drift summaries of a run without complete outages; ``rms_pos_h_aided_m``, whose epochs
+    are a subset of ``rms_pos_h_m``'s -- it is NaN only when every scored epoch is inside
+    an outage.
+    """
     n_done = float(metrics.get("n_outages", 0.0))
     names = list(POSITION_METRICS) + (list(VELOCITY_METRICS) if vel_scored else [])
     if n_done >= 1:
@@ -190,28 +200,10 @@ def required_names(metrics: dict, vel_scored: bool) -> tuple:
     return tuple(names)
 
 
-def required_metrics(df: pd.DataFrame, rec) -> pd.DataFrame:
-    """Which metrics of :func:`metrics_table` must be finite (bool, one row per run).
-
-    Legitimately NaN, so not required: the attitude RMS (a recording has no attitude
-    truth); the velocity RMS when the reference lacks velocities; the drift of an outage
-    that is not complete (:mod:`~fuzzynav.realdata.score`), and the drift summaries of a
-    run without complete outages; ``rms_pos_h_aided_m``, whose epochs are a subset of
-    ``rms_pos_h_m``'s -- it is NaN only when every scored epoch is inside an outage.
-    """
-    vel = bool(np.isfinite(rec.reference.z[:, 3:6]).all())
-    names = [set(required_names(m, vel)) for m in df.to_dict("records")]
-    cols = [*POSITION_METRICS, *VELOCITY_METRICS, *DRIFT_METRICS,
-            *(c for c in df.columns if c.startswith("drift_h_m_"))]
-    req = {c: np.array([c in n for n in names], bool) for c in cols}
-    return pd.DataFrame(req, index=df.index)
-
-
-def check_finite(df: pd.DataFrame, rec, spec) -> None:
-    """Refuse (:class:`~fuzzynav.errors.RunDivergedError`) a table of runs in which a
-    metric that must be finite (:func:`required_metrics`) is not: a diverged filter."""
-    from fuzzynav.metrics import check_finite_metrics
-
-    runs = df.assign(filter=df["filter_name"],
-                     scenario=[f"{spec} ({feed})" for feed in df["filter"]])
-    check_finite_metrics(runs, required_metrics(df, rec), source="recording")
+def check_finite(validations, spec) -> None:
+    """Refuse (:class:`~fuzzynav.errors.RunDivergedError`) the runs of ``validations`` if a
+    metric that must be finite (:func:`required_names`) is not in any: a diverged filter
+    (:func:`fuzzynav.runpath.check_outcomes`, the check every source's table passes)."""
+    check_outcomes([RunOutcome(v.filter, f"{spec} ({FEEDS[name]})", v.seed, r.result,
+                               r.metrics, r.diverged)
+                    for v in validations for name, r in v.runs.items()], "recording")

@@ -11,7 +11,8 @@ import pandas as pd
 
 from fuzzynav.experiment import run_on_log
 from fuzzynav.filters.named import parse_filter_spec
-from fuzzynav.metrics import check_finite_metrics, mean_ci
+from fuzzynav.metrics import mean_ci
+from fuzzynav.runpath import RunOutcome, check_outcomes, nonfinite
 from fuzzynav.tuning.study_config import GROUP_METRICS
 from fuzzynav.tuning.objective import CANDIDATE
 
@@ -33,12 +34,10 @@ def run_table(evaluator, systems: dict, runs, compare=()) -> pd.DataFrame:
         a run: the ratios would turn it into a plain number (``FAILED_RATIO``) and the table
         would read as a result.
     """
-    rows, baselines = [], []
+    rows, checked = [], []
     for scenario, seed in runs:
         log = evaluator.log(scenario, seed)
         base = evaluator.baseline(scenario, seed)
-        baselines.append({"scenario": scenario, "seed": seed,
-                          "filter": evaluator.config.baseline, **base})
         outcomes = {}
         if systems:
             outcomes[CANDIDATE] = evaluator.run_systems(systems, scenario, seed).metrics
@@ -50,19 +49,13 @@ def run_table(evaluator, systems: dict, runs, compare=()) -> pd.DataFrame:
                                             **kw).metrics
             except Exception as exc:  # a baseline that cannot run here is reported, not fatal
                 outcomes[name] = {"error": str(exc)}
+        source = evaluator.source(scenario, seed)
+        checked += [RunOutcome(name, scenario, seed, None, m, nonfinite(source, m))
+                    for name, m in [(evaluator.config.baseline, base), *outcomes.items()]
+                    if "error" not in m]
         rows += [_row(evaluator, scenario, seed, name, m) for name, m in outcomes.items()]
-    _check_finite(baselines + rows)
+    check_outcomes(checked)  # the baseline's runs too: every ratio divides by them
     return pd.DataFrame(rows)
-
-
-def _check_finite(rows: list) -> None:
-    """Refuse a diverged run (naming filter, scenario and seed); a metric a run does not
-    give (a recording's attitude, beside simulated runs that do) is not required."""
-    df = pd.DataFrame(rows)
-    metrics = [c for c in df.columns if c.startswith(("rms_", "max_"))]
-    required = pd.DataFrame([{m: m in r for m in metrics} for r in rows], columns=metrics,
-                            index=df.index)
-    check_finite_metrics(df, required)
 
 
 def _row(evaluator, scenario, seed, name, metrics) -> dict:

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.experiment import run_on_log, setup_for
+from fuzzynav.experiment import as_source, run_on_log, setup_for
 from fuzzynav.filters.catalog import bind_systems
 from fuzzynav.filters.named import FilterSetup
 from fuzzynav.realdata.dataspec import is_recording_name
@@ -134,6 +134,11 @@ class Evaluator:
         self._ekf = {}  # the EKF setup of a run, which every candidate starts from
 
     # -- data -------------------------------------------------------------------------------
+    def source(self, scenario: str, seed: int):
+        """The run source (:mod:`fuzzynav.runpath`) of a run: its log scored from the
+        study's ``t_start_s``, or its recording window."""
+        return as_source(self.log(scenario, seed), self.config.t_start_s)
+
     def log(self, scenario: str, seed: int):
         """The sensor log of a run (simulated once, cached on disk and in memory), or the
         :class:`~fuzzynav.realdata.studyruns.RecordingRun` of a recording."""

@@ -13,15 +13,12 @@ from pathlib import Path
 
 import matplotlib.figure
 import numpy as np
-import pandas as pd
 import pytest
 
 import fuzzynav.experiment
 import fuzzynav.runpath
 import fuzzynav.sim.sensor_log
 from fuzzynav.cli import main
-from fuzzynav.metrics import check_finite_metrics
-from fuzzynav.errors import RunDivergedError
 
 ROOT = Path(__file__).resolve().parents[2]
 TINY = ROOT / "tests" / "tuning" / "data" / "tiny.toml"
@@ -175,18 +172,6 @@ def test_a_diverged_run_exits_3_without_a_table(capsys, monkeypatch, sim_cache, 
                           "--cache", sim_cache, *json_flag)
     assert code == 3 and _one_line(err) and out == ""
     assert "filter ekf diverged on scenario tiny seed 4" in err and "= nan" in err
-
-
-def test_finite_metrics_pass_and_the_first_bad_run_is_named():
-    rows = [{"scenario": "s", "filter": f, "seed": k, "completed": 1.0,
-             "rms_pos_m": 1.0, "max_pos_h_m": 2.0} for f in ("ekf", "fakf") for k in (7, 8)]
-    check_finite_metrics(pd.DataFrame(rows))  # nothing to report
-    rows[3]["max_pos_h_m"] = float("inf")
-    rows[3]["completed"] = 0.0
-    with pytest.raises(RunDivergedError, match="filter fakf diverged on scenario s seed 8 "
-                                               r"\(it stopped early.*max_pos_h_m = inf; 1 of 4"):
-        check_finite_metrics(pd.DataFrame(rows))
-    assert RunDivergedError.exit_code == 3
 
 
 def test_the_sane_run_still_works_and_prints_finite_json(capsys, sim_cache):

@@ -33,7 +33,7 @@ def test_text_table_and_bad_options(two_trajectories):
     code, out, _ = _run("run", "--data", f"akit:{two_trajectories}:2")
     assert code == 0 and "as % of the distance travelled" in out and "traj 2" in out
     code, _, err = _run("run", "--data", f"akit:{two_trajectories}:2", "--span", "0,10")
-    assert code == 2 and "do not apply" in err
+    assert code == 2 and "--span: does not apply to akit recordings" in err
     code, _, err = _run("run", "--data", f"akit:{two_trajectories}:5")
     assert code == 2 and "IMU_trajectory5.csv" in err and len(err.strip().splitlines()) == 1
 

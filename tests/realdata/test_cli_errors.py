@@ -64,7 +64,8 @@ def test_scenarios_lists_the_recording_kinds():
 
 def test_recording_options_are_refused_for_a_scenario():
     code, _, err = _run("run", "paper000", "--noise", "3", "--span", "0,10")
-    assert code == 2 and "--noise, --span: only with --data" in err
+    assert code == 2 and "--noise, --span: do not apply to simulated scenarios" in err
+    assert "the recording options need --data" in err
 
 
 @pytest.mark.parametrize("extra, flags", [
@@ -74,6 +75,8 @@ def test_recording_options_are_refused_for_a_scenario():
     (["--t-start", "100"], "--t-start: does not apply"),
     (["--outage-duration", "0", "--first-outage", "10", "--vel-noise", "0.1"],
      "do not apply"),
+    (["--span", "0,10", "--imu-delay", "0.01"], "--imu-delay, --span: do not apply"),
+    (["--mounting", "rtklib-drive"], "--mounting: does not apply"),
 ])
 def test_options_an_akit_run_would_ignore_are_refused_by_name(tmp_path, extra, flags):
     """They used to give output identical to a plain A-KIT run; refused before any file is
@@ -97,10 +100,10 @@ def test_an_akit_run_with_non_finite_metrics_prints_nothing_and_exits_3(monkeypa
     (JSON ``rms_pos_h_m: null``) and exit 0."""
     import math
 
-    import pandas as pd
-
+    
     import fuzzynav.realdata.akit as akit
     import fuzzynav.realdata.cli as rcli
+    from fuzzynav.runpath import RunOutcome
 
     class _Rec:
         trajectory = 3
@@ -108,9 +111,11 @@ def test_an_akit_run_with_non_finite_metrics_prints_nothing_and_exits_3(monkeypa
 
     monkeypatch.setattr(rcli, "load_recording", lambda spec, args: [_Rec()])
     monkeypatch.setattr(rcli, "refuse_unused_options", lambda spec, args: None)
-    df = pd.DataFrame([{"filter": "traj 3", "seed": 3, "trajectory": 3, "rms_pos_h_m": math.nan,
-                        "rms_vel_h_mps": 0.1, "distance_m": 600.0, "completed": 1.0}])
-    monkeypatch.setattr(akit, "run_all", lambda recs, name, options: (df, {}))
+    metrics = {"rms_pos_h_m": math.nan, "rms_vel_h_mps": 0.1, "distance_m": 600.0,
+               "completed": 1.0}
+    out = RunOutcome("ekf", "akit trajectory 3", 0, None, metrics,
+                                      ("rms_pos_h_m",))
+    monkeypatch.setattr(akit, "run_outcomes", lambda recs, name, options: [out])
     code, out, err = _run("run", "--data", "akit:x:3", "--filter", "ekf",
                           *(["--json"] if as_json else []))
     assert code == 3 and out == "" and "diverged" in err and "rms_pos_h_m" in err, err

@@ -37,6 +37,10 @@ class FakeEvaluator:
     def log(self, scenario, seed):
         return seed
 
+    def source(self, scenario, seed):  # a simulated run's rule: every RMS and maximum
+        return SimpleNamespace(required=lambda m: [k for k in m if k.startswith(("rms_",
+                                                                                 "max_"))])
+
     def baseline(self, scenario, seed):
         return self._metrics("ekf", seed)
 
