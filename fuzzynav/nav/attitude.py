@@ -55,7 +55,10 @@ def wrap_pi(angle_rad):
     A numba ufunc: called from Python on a value or an array of any shape, and from numba
     kernels on a scalar.  Bit for bit ``(angle_rad + pi) % (2 pi) - pi``.
     """
-    return mod_pos(angle_rad + math.pi, TWO_PI) - math.pi
+    shifted = angle_rad + math.pi
+    if shifted != shifted:  # NaN as numpy gives it, without the invalid-operation warning
+        return shifted      # that the ordered comparison of mod_pos would raise
+    return mod_pos(shifted, TWO_PI) - math.pi
 
 
 def wrap_2pi(angle_rad):

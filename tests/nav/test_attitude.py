@@ -80,3 +80,12 @@ def test_wrap_pi_one_function_for_python_and_numba():
         return out
 
     assert np.array_equal(wrap_each(a), ref)
+
+
+def test_wrap_pi_passes_nan_through_quietly():
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # numpy gives NaN for NaN without a warning: so do we
+        assert np.isnan(att.wrap_pi(np.array([np.nan, 1.0]))[0])
+        assert np.isnan(att.wrap_pi(np.nan))
