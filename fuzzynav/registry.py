@@ -18,7 +18,7 @@ import importlib
 import importlib.util
 from importlib import resources
 
-from fuzzynav.errors import UnknownNameError
+from fuzzynav.errors import FuzzynavError, UnknownNameError
 
 
 class Registry(dict):
@@ -49,18 +49,18 @@ class Registry(dict):
         RuntimeError
             If two built-in registrations used the same name.
         """
+        if not self._loaded:
+            for mod in self.builtin_modules:
+                importlib.import_module(f"{self.package}.{mod}")
         if self.paper_module and self._papers != paper_packages():
-            self._papers = paper_packages()  # a paper folder named later loads on next use
-            for name in paper_modules(self.paper_module):
+            for name in paper_modules(self.paper_module):  # a folder named later: next use
                 importlib.import_module(name)
-        if self._loaded:
-            return self
-        for mod in self.builtin_modules:
-            importlib.import_module(f"{self.package}.{mod}")
-        self._loaded = True
-        if self._twice:
-            raise RuntimeError(f"{self.what} names registered twice by the built-in modules "
-                               f"of {self.package}: {sorted(set(self._twice))}")
+            self._papers = paper_packages()
+        if not self._loaded:
+            self._loaded = True
+            if self._twice:
+                raise RuntimeError(f"{self.what} names registered twice by the built-in "
+                                   f"modules of {self.package}: {sorted(set(self._twice))}")
         return self
 
     def lookup(self, name: str):
@@ -120,7 +120,7 @@ def paper_files(subdir: str, suffix: str) -> dict:
                 continue
             stem = f.name[:-len(suffix)]
             if stem in out:
-                raise RuntimeError(f"{subdir}/{f.name} is in two paper folders: "
-                                   f"{out[stem]} and {f}")
+                raise FuzzynavError(f"{subdir}/{f.name} is in two paper folders: "
+                                    f"{out[stem]} and {f}")
             out[stem] = f
     return out
