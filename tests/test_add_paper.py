@@ -33,7 +33,7 @@ def _ekf_p005(ctx):
     return every_sensor(ctx, lambda: ConstantScale({}, 9.0))
 '''
 
-# a one-minute paper-000 flight at 50 Hz (as tests/tuning/data/tiny.toml), clean GPS
+# a one-minute paper-000 flight at 50 Hz (as tests/tuning/data/tiny.toml)
 SCENARIO_TOML = '''
 base = "paper000"
 description = "paper 005's test flight (a temporary paper folder)"
@@ -59,6 +59,9 @@ bank = true
 [[segments]]
 kind = "cruise"
 duration_s = 25.0
+
+[sensors.gps]
+noise_windows = [{ start_s = 20.0, end_s = 40.0, scale = 5.0 }]
 '''
 
 
@@ -88,8 +91,8 @@ def _run(capsys, *argv):
 
 
 def test_a_new_paper_folder_is_listed_run_and_compared(paper005, capsys, sim_cache):
-    code, out, _ = _run(capsys, "scenarios")
-    assert code == 0
+    code, out, err = _run(capsys, "scenarios")
+    assert code == 0, err
     assert "paper005 " in out and "paper 005's test flight" in out
     assert "ekf-p005" in out and "inflated x9" in out
     assert "paper000-nominal" in out and "federated-p001" in out  # the built-ins still there
