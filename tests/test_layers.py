@@ -31,10 +31,10 @@ ALLOWED = {
     "realdata": {"runpath", "filters", "sim", "metrics", "report", "nav", "plots"},
     "tuning": {"runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "report", "nav", "plots",
                "realdata", "align"},
-    "claims": {"runpath", "experiment", "filters", "sim", "metrics", "nav"},
+    "papers": {"runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "nav"},
     "plots": {"fuzzy", "nav", "metrics"},
     "cli": {"runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "report", "nav", "tuning",
-            "realdata", "claims", "plots", "align"},
+            "realdata", "papers", "plots", "align"},
     "__main__": {"cli"},
 }
 #: the engine is a library of its own: only the error classes of the package
