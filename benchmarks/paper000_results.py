@@ -18,7 +18,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _report import machine, write_results  # noqa: E402
 
-from fuzzynav.claims.paper000 import PAPER000_TABLE2  # noqa: E402
+from fuzzynav.papers.paper000.claims import PAPER000_TABLE2  # noqa: E402
 from fuzzynav.experiment import monte_carlo  # noqa: E402
 from fuzzynav.metrics import improvement_ci, mean_ci  # noqa: E402
 from fuzzynav.report import NAV_ROWS, render  # noqa: E402

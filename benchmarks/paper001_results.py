@@ -22,7 +22,7 @@ import pandas as pd
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _report import machine, write_results  # noqa: E402
 
-from fuzzynav.claims.paper001 import PAPER001_COMBINED  # noqa: E402
+from fuzzynav.papers.paper001.claims import PAPER001_COMBINED  # noqa: E402
 from fuzzynav.experiment import run_on_log  # noqa: E402
 from fuzzynav.filters.named import parse_filter_spec  # noqa: E402
 from fuzzynav.metrics import errors_vs_trajectory, mean_ci  # noqa: E402

@@ -23,7 +23,7 @@ from fuzzynav import units  # noqa: E402
 from fuzzynav.align import alignment_run as R  # noqa: E402
 from fuzzynav.align.monte_carlo import ALIGN_ROWS, monte_carlo_alignment  # noqa: E402
 from fuzzynav.align.scenario import load_alignment_scenario  # noqa: E402
-from fuzzynav.claims import claims_for  # noqa: E402
+from fuzzynav.papers.claims import claims_for  # noqa: E402
 from fuzzynav.fileio import publish  # noqa: E402
 from fuzzynav.report import comparison_rows, render  # noqa: E402
 

@@ -21,7 +21,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _report import machine, write_results  # noqa: E402
 
 from fuzzynav import plots  # noqa: E402
-from fuzzynav.claims.paper003 import PAPER003  # noqa: E402
+from fuzzynav.papers.paper003.claims import PAPER003  # noqa: E402
 from fuzzynav.experiment import monte_carlo, run_on_log  # noqa: E402
 from fuzzynav.filters.named import parse_filter_spec  # noqa: E402
 from fuzzynav.metrics import errors_vs_trajectory, mean_ci  # noqa: E402

@@ -24,7 +24,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _report import machine, write_results  # noqa: E402
 
 from fuzzynav import plots  # noqa: E402
-from fuzzynav.claims.paper004 import PAPER004_IMPROVEMENT, PAPER004_LAKE  # noqa: E402
+from fuzzynav.papers.paper004.claims import PAPER004_IMPROVEMENT, PAPER004_LAKE  # noqa: E402
 from fuzzynav.experiment import monte_carlo, run_on_log  # noqa: E402
 from fuzzynav.metrics import errors_vs_trajectory, improvement_ci, mean_ci  # noqa: E402
 from fuzzynav.report import render  # noqa: E402

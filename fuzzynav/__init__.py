@@ -18,10 +18,9 @@ align
     Initial alignment (paper 002): coarse, 10/12-state Kalman filters, fuzzy R-scaling.
 tuning
     Optuna / PSO studies that learn fuzzy rules or tune classical filters; export, reports.
-claims
-    The source papers' published figures, shown beside measured results (never asserted).
 papers
-    One folder per source paper (``papers/paperNNN/``): its claims, named filters, scenarios.
+    One folder per source paper (``papers/paperNNN/``): its published figures (shown beside
+    measured results, never asserted), paper-specific named filters, scenarios.
 cli
     The ``fuzzynav`` command.
 

@@ -7,26 +7,34 @@ looking up an unknown name is one clear error listing the known ones.
 Two built-in modules registering the same name is a programming error (the later entry would
 silently replace the earlier one), reported when the built-ins are loaded.  Registering a name
 again afterwards (a notebook cell run twice, a user overriding a built-in) is allowed.
+
+A registry may also read one module of every paper folder (``paper_module``, e.g.
+``"filters"`` loads ``fuzzynav/papers/paperNNN/filters.py`` where there is one): the folders
+are found by name (:func:`paper_packages`), so no generic layer imports ``fuzzynav.papers``.
 """
 from __future__ import annotations
 
 import importlib
+import importlib.util
+from importlib import resources
 
-from fuzzynav.errors import UnknownNameError
+from fuzzynav.errors import FuzzynavError, UnknownNameError
 
-__all__ = ["Registry"]
+__all__ = ["Registry", "paper_packages", "paper_modules", "paper_files"]
 
 
 class Registry(dict):
     """A registry of ``what`` (e.g. "filter"), with built-ins in ``package.<module>``."""
 
-    def __init__(self, what: str, package: str, builtin_modules=()):
+    def __init__(self, what: str, package: str, builtin_modules=(), paper_module: str = ""):
         super().__init__()
         self.what = what
         self.package = package
         self.builtin_modules = tuple(builtin_modules)
+        self.paper_module = paper_module
         self._loaded = False
         self._twice: list[str] = []
+        self._papers: tuple = ()
 
     def add(self, name: str, obj):
         """Register ``obj`` under ``name`` (re-registering keeps its place); returns it."""
@@ -43,14 +51,18 @@ class Registry(dict):
         RuntimeError
             If two built-in registrations used the same name.
         """
-        if self._loaded:
-            return self
-        for mod in self.builtin_modules:
-            importlib.import_module(f"{self.package}.{mod}")
-        self._loaded = True
-        if self._twice:
-            raise RuntimeError(f"{self.what} names registered twice by the built-in modules "
-                               f"of {self.package}: {sorted(set(self._twice))}")
+        if not self._loaded:
+            for mod in self.builtin_modules:
+                importlib.import_module(f"{self.package}.{mod}")
+        if self.paper_module and self._papers != paper_packages():
+            for name in paper_modules(self.paper_module):  # a folder named later: next use
+                importlib.import_module(name)
+            self._papers = paper_packages()
+        if not self._loaded:
+            self._loaded = True
+            if self._twice:
+                raise RuntimeError(f"{self.what} names registered twice by the built-in "
+                                   f"modules of {self.package}: {sorted(set(self._twice))}")
         return self
 
     def lookup(self, name: str):
@@ -65,3 +77,52 @@ class Registry(dict):
         """``{name: position}`` in registration order (kernel ids)."""
         self.load()
         return {k: i for i, k in enumerate(self)}
+
+
+def paper_packages() -> tuple:
+    """Dotted names of the paper folders (:func:`fuzzynav.papers.paper_packages`)."""
+    return importlib.import_module("fuzzynav.papers").paper_packages()
+
+
+def paper_modules(module: str = "") -> list:
+    """``<folder>.<module>`` of every paper folder that has that module, in folder order
+    (no ``module``: the folders themselves).
+
+    Raises
+    ------
+    UnknownNameError
+        A paper folder (``FUZZYNAV_PAPERS``) that is not an importable package.
+    """
+    out = []
+    for pkg in paper_packages():
+        try:
+            found = importlib.util.find_spec(pkg) is not None
+        except (ImportError, ValueError):
+            found = False
+        if not found:
+            raise UnknownNameError("paper folder (FUZZYNAV_PAPERS: an importable package)",
+                                   pkg, paper_packages()[:5])
+        if not module or importlib.util.find_spec(f"{pkg}.{module}") is not None:
+            out.append(f"{pkg}.{module}" if module else pkg)
+    return out
+
+
+def paper_files(subdir: str, suffix: str) -> dict:
+    """``{stem: file}`` of the files ``<folder>/<subdir>/*<suffix>`` of every paper folder.
+
+    A name in two folders is an error (which of the two a script meant would be a guess).
+    """
+    out: dict = {}
+    for pkg in paper_modules():
+        folder = resources.files(pkg) / subdir
+        if not folder.is_dir():
+            continue
+        for f in sorted(folder.iterdir(), key=lambda f: f.name):
+            if not f.name.endswith(suffix):
+                continue
+            stem = f.name[:-len(suffix)]
+            if stem in out:
+                raise FuzzynavError(f"{subdir}/{f.name} is in two paper folders: "
+                                    f"{out[stem]} and {f}")
+            out[stem] = f
+    return out

@@ -48,7 +48,7 @@ def test_reregistering_after_load_is_allowed_and_keeps_place(monkeypatch):
     "fuzzynav.filters.measurements:MODELS",
     "fuzzynav.sim.sensors:SENSOR_KINDS",
     "fuzzynav.filters.layout:BLOCK_KINDS",
-    "fuzzynav.claims:CLAIMS",
+    "fuzzynav.papers.claims:CLAIMS",
     "fuzzynav.tuning.samplers:OPTIMISERS",
 ])
 def test_shipped_registries_have_no_duplicate_builtins(path):

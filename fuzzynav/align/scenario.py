@@ -1,13 +1,12 @@
 """Alignment scenarios (``kind = "alignment"`` TOML): a base at a fixed place, an IMU,
 sway, the true noise of the zero-velocity reference and the filter's assumptions.
 
-Built-ins live in ``fuzzynav/align/scenarios`` (``paper002`` and its variants); a file may
+Built-ins live in ``fuzzynav/papers/paper002/scenarios`` (``paper002`` and its variants); a file may
 start from a built-in with ``base = "paper002"`` (tables merge key by key).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
-from importlib import resources
 from pathlib import Path
 
 from fuzzynav import units
@@ -15,7 +14,7 @@ from fuzzynav.align.model import AlignNoise
 from fuzzynav.align.simulate import Sway
 from fuzzynav.errors import InputFileError, UnknownNameError
 from fuzzynav.sim.imu import ImuSpec
-from fuzzynav.sim.scenario import merge_tables
+from fuzzynav.sim.scenario import builtin_files, merge_tables
 from fuzzynav.sim.tomltable import Table, parse_toml, read_toml, with_path
 
 #: [filter] keys in datasheet units -> (AlignNoise field, SI factor)
@@ -49,14 +48,9 @@ class AlignScenario:
     noise: AlignNoise = field(default_factory=AlignNoise)
 
 
-def builtin_dir():
-    """The directory of the built-in alignment scenarios."""
-    return resources.files("fuzzynav.align") / "scenarios"
-
-
 def list_alignment_scenarios() -> list[str]:
-    """Names of the built-in alignment scenarios."""
-    return sorted(p.name[:-5] for p in builtin_dir().iterdir() if p.name.endswith(".toml"))
+    """Names of the built-in alignment scenarios (paper folders' ``kind = "alignment"``)."""
+    return sorted(builtin_files(alignment=True))
 
 
 def _read(name_or_path):
@@ -67,7 +61,7 @@ def _read(name_or_path):
         raise UnknownNameError("alignment scenario", s[:100], list_alignment_scenarios())
     label = f"<built-in {s}.toml>"
     with with_path(label):
-        return parse_toml((builtin_dir() / f"{s}.toml").read_bytes()), s, label
+        return parse_toml(builtin_files(alignment=True)[s].read_bytes()), s, label
 
 
 def is_alignment_scenario(name_or_path) -> bool:

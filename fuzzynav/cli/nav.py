@@ -178,7 +178,7 @@ def _cmd_run(args) -> int:
 
 
 def _cmd_compare(args) -> int:
-    from fuzzynav.claims import claims_for, rows_for
+    from fuzzynav.papers.claims import claims_for, rows_for
 
     filters = [f.strip() for f in args.filters.split(",") if f.strip()]
     if len(filters) < 2:

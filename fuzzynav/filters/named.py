@@ -87,9 +87,9 @@ class NamedFilter:
     takes_params: bool = False  # ``NAME@FILE`` names a tuned-parameter file (``params``)
 
 
-FILTERS = Registry("filter", "fuzzynav.filters", ("catalog", "subsets", "bank_named",
-                                                   "baselines", "catalog_paper003", "tuned_qr",
-                                                   "paper001_banks"))
+#: the one catalog: the generic families here, then every paper folder's ``filters.py``
+FILTERS = Registry("filter", "fuzzynav.filters", ("catalog", "bank_named", "baselines"),
+                   paper_module="filters")
 
 
 def register_filter(name: str, description: str, takes_rules: bool = False,

@@ -16,16 +16,17 @@ path (``segments[3].turn_deg``, ``sensors.gps.rate_hz``) and what was wrong.
 from __future__ import annotations
 
 import datetime as _dt
+import functools
 import json
 import re
 import types
 from dataclasses import asdict, dataclass
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
 from fuzzynav.errors import DataMissingError, InputFileError, UnknownNameError
+from fuzzynav.registry import paper_files
 from fuzzynav.sim.imu import ImuSpec
 from fuzzynav.sim.scenario_checks import check_scenario
 from fuzzynav.sim.sea import SeaState
@@ -203,13 +204,24 @@ def scenario_from_dict(d: dict, default_name: str = "scenario") -> Scenario:
 
 
 # -- built-ins and loading -------------------------------------------------------------------
-def _builtin_dir():
-    return resources.files("fuzzynav.sim") / "scenarios"
+@functools.lru_cache(maxsize=None)
+def _is_alignment(label: str, data: bytes) -> bool:
+    with with_path(label):
+        return parse_toml(data).get("kind") == "alignment"
+
+
+def builtin_files(alignment: bool = False) -> dict:
+    """``{name: file}`` of the built-in scenarios: every paper folder's ``scenarios/*.toml``
+    (:func:`fuzzynav.registry.paper_files`), navigation ones or (``alignment``) those of
+    ``kind = "alignment"``."""
+    files = paper_files("scenarios", ".toml")
+    return {n: f for n, f in files.items()
+            if _is_alignment(f"<built-in {n}.toml>", f.read_bytes()) == alignment}
 
 
 def list_scenarios() -> list[str]:
     """Names of the built-in scenarios."""
-    return sorted(p.name[:-5] for p in _builtin_dir().iterdir() if p.name.endswith(".toml"))
+    return sorted(builtin_files())
 
 
 def _looks_like_path(name_or_path) -> bool:
@@ -246,7 +258,7 @@ def _read(name_or_path):
         raise UnknownNameError("scenario", name, list_scenarios())
     label = f"<built-in {name}.toml>"
     with with_path(label):
-        doc = parse_toml((_builtin_dir() / f"{name}.toml").read_bytes())
+        doc = parse_toml(builtin_files()[name].read_bytes())
     return doc, name, label, None
 
 

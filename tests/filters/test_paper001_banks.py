@@ -1,4 +1,4 @@
-"""Paper 001's federated filters (:mod:`fuzzynav.filters.paper001_banks`) on the paper001 run."""
+"""Paper 001's federated filters (:mod:`fuzzynav.papers.paper001.filters`) on the paper001 run."""
 import numpy as np
 import pytest
 

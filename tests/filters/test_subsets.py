@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from fuzzynav.claims import claims_for
+from fuzzynav.papers.claims import claims_for
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.experiment import run_on_log, setup_for
 from fuzzynav.filters.named import select_sensors

@@ -3,7 +3,7 @@ their files say; the claims are registered for the family."""
 import numpy as np
 import pytest
 
-from fuzzynav.claims import find_claims
+from fuzzynav.papers.claims import find_claims
 from fuzzynav.sim.scenario import list_scenarios, load_scenario, scenario_from_dict
 
 VARIANTS = ("paper003", "paper003-current", "paper003-clouds", "paper003-noon", "paper003-storm")

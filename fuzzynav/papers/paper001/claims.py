@@ -9,7 +9,7 @@ references, not targets.
 """
 from __future__ import annotations
 
-from fuzzynav.claims import PaperClaims, register
+from fuzzynav.papers.claims import PaperClaims, register
 
 #: the combined solution's errors [m]
 PAPER001_COMBINED = {"rms_pos_e_m": 3.2305, "rms_pos_n_m": 3.7419}

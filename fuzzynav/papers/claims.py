@@ -1,6 +1,6 @@
 """Published results of the source papers, printed beside ours — never asserted in tests.
 
-Each paper's claims live in their own module (``fuzzynav/claims/paperNNN.py``) that registers a
+Each paper's claims live in its folder (``fuzzynav/papers/paperNNN/claims.py``), which registers a
 :class:`PaperClaims` for the scenario-name prefix it covers; ``compare`` prints them beside our
 Monte-Carlo results.  They come from the authors' own simulations, whose trajectories, noise and
 tuning are mostly unpublished: they are references, not targets (see ../shared/seeds/DIGEST.md).
@@ -35,9 +35,8 @@ class PaperClaims:
     rows: tuple = field(default=())
 
 
-#: prefix -> PaperClaims; one built-in module per paper
-CLAIMS = Registry("paper claims", "fuzzynav.claims", ("paper000", "paper001", "paper002",
-                                                    "paper003", "paper004"))
+#: prefix -> PaperClaims; every paper folder's ``claims.py``
+CLAIMS = Registry("paper claims", "fuzzynav.papers", paper_module="claims")
 
 
 def register(claims: PaperClaims) -> PaperClaims:

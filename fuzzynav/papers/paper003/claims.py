@@ -8,7 +8,7 @@ and final values are the closest comparable numbers.
 """
 from __future__ import annotations
 
-from fuzzynav.claims import PaperClaims, register
+from fuzzynav.papers.claims import PaperClaims, register
 
 PAPER003 = {
     "rms_heading_deg": "0.6 (settled)",

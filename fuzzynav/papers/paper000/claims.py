@@ -6,7 +6,7 @@ trajectory, noise and tuning are not published; they are references, not targets
 """
 from __future__ import annotations
 
-from fuzzynav.claims import PaperClaims, register
+from fuzzynav.papers.claims import PaperClaims, register
 
 #: Paper 000, Table 2 (RMS, EKF -> FAKF).  Roll is not simulated there.
 PAPER000_TABLE2 = {

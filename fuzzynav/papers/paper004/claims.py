@@ -8,7 +8,7 @@ gives APSO's improvement over KF (-49.39 %) and over Huber (-36.98 %) on the mea
 """
 from __future__ import annotations
 
-from fuzzynav.claims import PaperClaims, register
+from fuzzynav.papers.claims import PaperClaims, register
 
 #: lake test: (KF, Huber, APSO) horizontal error [m]
 PAPER004_LAKE = {

@@ -1,9 +1,17 @@
-"""Paper 001's federated filters: three local filters SINS/BDS, SINS/polarization, SINS/magnetometer.
+"""Paper 001's named filters: its sensor pairs and its federated banks.
 
-The paper's master does no filtering and keeps no information share (beta_m = 0, no-reset
-mode) and the shares of the locals sum to 1; the paper does not state the three shares, so
-they are equal here (1/3 each).  ``federated-p001-reset`` is the same bank in Carlson's reset
-mode (with equal shares and fusion after every update it equals ``centralized``), and
+Subsets: paper 001 compares SINS/BDS + polarization, SINS/BDS + magnetometer and
+polarization + magnetometer against the full combination; as single filters these are the
+``ekf-*`` names below (another named filter run with the generic ``sensors`` option, sensor
+names or kinds, :func:`fuzzynav.filters.named.select_sensors`, so the same groups serve the
+local filters of a bank), and ``fuzzy-*`` adds the magnetometer's fuzzy R-scaling
+(``rules/paper001_mag.json`` unless ``--rules``).
+
+Banks: three local filters SINS/BDS, SINS/polarization, SINS/magnetometer.  The paper's
+master does no filtering and keeps no information share (beta_m = 0, no-reset mode) and the
+shares of the locals sum to 1; the paper does not state the three shares, so they are equal
+here (1/3 each).  ``federated-p001-reset`` is the same bank in Carlson's reset mode (with
+equal shares and fusion after every update it equals ``centralized``), and
 ``federated-fuzzy`` gives the magnetometer's local filter the fuzzy R-scaling of
 ``rules/paper001_mag.json`` (or the ``--rules`` given), the defence against the disturbance.
 ``federated-fuzzy-beta`` sets the shares at run time instead, from each local's innovations
@@ -11,13 +19,53 @@ mode (with equal shares and fusion after every update it equals ``centralized``)
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.filters.bank_named import bank_rule_files, bank_setup
 from fuzzynav.filters.catalog import bind_rule_files
-from fuzzynav.filters.named import FilterContext, FilterSetup, register_filter
-from fuzzynav.filters.subsets import LOCAL_GROUPS, PAPER001_MAG_RULES
+from fuzzynav.filters.named import FilterContext, FilterSetup, get_filter, register_filter
+
+#: the magnetometer controller the ``fuzzy-*`` subsets use without ``--rules``
+PAPER001_MAG_RULES = "paper001_mag.json"
+
+#: paper 001's local filters (each with the SINS as common reference), by sensor kind
+LOCAL_GROUPS = (("bds",), ("polarization",), ("magnetometer",))
+#: paper 001's pairs, by kind
+PAIRS = {"bds-pol": ("bds", "polarization"), "bds-mag": ("bds", "magnetometer"),
+         "pol-mag": ("polarization", "magnetometer")}
+_WORDS = {"bds": "BDS", "polarization": "polarization", "magnetometer": "magnetometer"}
+
+
+def register_subset(name: str, base: str, sensors, description: str,
+                    default_options=None, takes_rules: bool = False) -> None:
+    """Register ``name``: the named filter ``base`` on the sensors ``sensors`` only.
+
+    ``default_options`` apply unless the user gives the same option (e.g. ``rules``).
+    """
+    defaults = dict(default_options or {})
+
+    def make(ctx: FilterContext):
+        options = {**defaults, **ctx.options, "sensors": tuple(sensors)}
+        return get_filter(base).make(replace(ctx, options=options))
+
+    register_filter(name, description, takes_rules=takes_rules)(make)
+
+
+for _key, _group in PAIRS.items():
+    _what = " + ".join(_WORDS[k] for k in _group)
+    register_subset(f"ekf-{_key}", "ekf", _group, f"EKF with SINS/{_what} only (paper 001 pair)")
+    if "magnetometer" in _group:
+        register_subset(f"fuzzy-{_key}", "fuzzy", _group,
+                        f"SINS/{_what} only, fuzzy R-scaling on the magnetometer "
+                        f"(default rules/{PAPER001_MAG_RULES})",
+                        {"rules": [PAPER001_MAG_RULES]}, takes_rules=True)
+
+register_subset("fuzzy-mag", "fuzzy", (), "every sensor, fuzzy R-scaling on the magnetometer "
+                f"(default rules/{PAPER001_MAG_RULES})", {"rules": [PAPER001_MAG_RULES]},
+                takes_rules=True)
+
 
 #: the paper's shares are not stated (only beta_m = 0 and sum beta_i = 1): equal
 PAPER001_BETA = (1 / 3, 1 / 3, 1 / 3)

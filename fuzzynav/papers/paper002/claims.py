@@ -7,7 +7,7 @@ accuracy of the plain KF and cuts the azimuth alignment time from over 300 s to 
 """
 from __future__ import annotations
 
-from fuzzynav.claims import PaperClaims, register
+from fuzzynav.papers.claims import PaperClaims, register
 
 register(PaperClaims(
     prefix="paper002",
