@@ -65,7 +65,7 @@ PAGES = {p.name: p for p in (
           dict(mc=50, mc_variants=20), dict(mc=2, mc_variants=2),
           "paper 001's federated filters and their variants"),
     _page("paper002", f"{_PAPERS}.paper002.page", "docs/paper002.md", None,
-          dict(mc=50, mc_variants=20), dict(mc=2, mc_variants=2),
+          dict(mc=50, mc_variants=15), dict(mc=2, mc_variants=2),
           "paper 002's alignment (the whole page)"),
     _page("paper003", f"{_PAPERS}.paper003.page", "docs/paper003.md", "results",
           dict(mc=50, mc_variants=10), dict(mc=2, mc_variants=2),
@@ -74,7 +74,7 @@ PAGES = {p.name: p for p in (
           dict(mc=10), dict(mc=2, real=False),
           "paper 004 simulated and on the A-KIT recordings"),
     _page("science", "fuzzynav.pages.science", "docs/science.md", None,
-          dict(trials=40, workers=2), dict(trials=2, workers=1, seeds=2, mc_recordings=1,
+          dict(trials=30, workers=2), dict(trials=2, workers=1, seeds=2, mc_recordings=1,
                                            recordings=False),
           "the fuzzy controller against equally tuned baselines (the whole page)"),
 )}

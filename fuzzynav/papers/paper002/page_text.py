@@ -52,7 +52,7 @@ fuzzynav compare paper002 --filters align-kf,align-fuzzy,align-fuzzy-fast --mc 5
 fuzzynav run paper000-nominal --filter ekf --align align-kf      # align, then navigate
 fuzzynav study run studies/align/paper002_tune.toml             # tune ROR -> t
 fuzzynav study export studies/align/paper002_tune.toml --out rules/paper002_ror_tuned.json
-python benchmarks/paper002_results.py                             # this page
+fuzzynav docs regenerate paper002                                 # this page
 ```
 
 The notebook `notebooks/05_paper002.ipynb` draws the azimuth error over the alignment
