@@ -13,12 +13,12 @@ classical baseline, with 95 % CIs (never pooled).  It reuses the scoring of
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from dataclasses import replace
 from pathlib import Path
 
-from fuzzynav.cli.nav import default_cache_dir
 from fuzzynav.pages import science as sr
 from fuzzynav.pages.common import REPO_ROOT as ROOT
 
@@ -45,7 +45,7 @@ def main(argv=None) -> int:
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--work", required=True, help="directory for the journal and the runs")
     p.add_argument("--seeds", type=int, help="held-out seeds per scenario (default: all)")
-    p.add_argument("--cache", default=str(default_cache_dir()), help="simulation cache")
+    p.add_argument("--cache", default=os.environ.get("FUZZYNAV_CACHE", str(Path.home() / ".cache" / "fuzzynav")), help="simulation cache")
     args = p.parse_args(argv)
     work = Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
