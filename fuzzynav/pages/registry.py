@@ -11,9 +11,9 @@ import contextlib
 import importlib
 import os
 import tempfile
-from dataclasses import dataclass, field
+from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
-from types import MappingProxyType
 
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.pages.common import REPO_ROOT, PageContext, write_section
@@ -46,37 +46,32 @@ class Page:
     module: str
     doc: str
     marker: str | None
-    full: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
-    small: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
-    summary: str = ""
-
-
-def _page(name, module, doc, marker, full, small, summary) -> Page:
-    return Page(name, module, doc, marker, MappingProxyType(full), MappingProxyType(small),
-                summary)
+    full: Mapping
+    small: Mapping
+    summary: str
 
 
 _PAPERS = "fuzzynav.papers"
 PAGES = {p.name: p for p in (
-    _page("paper000", f"{_PAPERS}.paper000.page", "docs/paper000.md", "results",
-          dict(mc=50, mc_variants=20), dict(mc=2, mc_variants=2),
-          "paper 000 reproduced, with baselines and tuned rules"),
-    _page("paper001", f"{_PAPERS}.paper001.page", "docs/paper001.md", "results",
-          dict(mc=50, mc_variants=20), dict(mc=2, mc_variants=2),
-          "paper 001's federated filters and their variants"),
-    _page("paper002", f"{_PAPERS}.paper002.page", "docs/paper002.md", None,
-          dict(mc=50, mc_variants=15), dict(mc=2, mc_variants=2),
-          "paper 002's alignment (the whole page)"),
-    _page("paper003", f"{_PAPERS}.paper003.page", "docs/paper003.md", "results",
-          dict(mc=50, mc_variants=10), dict(mc=2, mc_variants=2),
-          "paper 003's polarization-aided filters and their variants"),
-    _page("paper004", f"{_PAPERS}.paper004.page", "docs/paper004.md", "results",
-          dict(mc=10), dict(mc=2, real=False),
-          "paper 004 simulated and on the A-KIT recordings"),
-    _page("science", "fuzzynav.pages.science", "docs/science.md", None,
-          dict(trials=30, workers=2), dict(trials=2, workers=1, seeds=2, mc_recordings=1,
-                                           recordings=False),
-          "the fuzzy controller against equally tuned baselines (the whole page)"),
+    Page("paper000", f"{_PAPERS}.paper000.page", "docs/paper000.md", "results",
+         {"mc": 50, "mc_variants": 20}, {"mc": 2, "mc_variants": 2},
+         "paper 000 reproduced, with baselines and tuned rules"),
+    Page("paper001", f"{_PAPERS}.paper001.page", "docs/paper001.md", "results",
+         {"mc": 50, "mc_variants": 20}, {"mc": 2, "mc_variants": 2},
+         "paper 001's federated filters and their variants"),
+    Page("paper002", f"{_PAPERS}.paper002.page", "docs/paper002.md", None,
+         {"mc": 50, "mc_variants": 15}, {"mc": 2, "mc_variants": 2},
+         "paper 002's alignment (the whole page)"),
+    Page("paper003", f"{_PAPERS}.paper003.page", "docs/paper003.md", "results",
+         {"mc": 50, "mc_variants": 10}, {"mc": 2, "mc_variants": 2},
+         "paper 003's polarization-aided filters and their variants"),
+    Page("paper004", f"{_PAPERS}.paper004.page", "docs/paper004.md", "results",
+         {"mc": 10}, {"mc": 2, "real": False},
+         "paper 004 simulated and on the A-KIT recordings"),
+    Page("science", "fuzzynav.pages.science", "docs/science.md", None,
+         {"trials": 30, "workers": 2},
+         {"trials": 2, "workers": 1, "seeds": 2, "mc_recordings": 1, "recordings": False},
+         "the fuzzy controller against equally tuned baselines (the whole page)"),
 )}
 
 

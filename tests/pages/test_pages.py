@@ -1,4 +1,5 @@
 """The docs results pages: the registry against docs/, the CLI, the one mean ± CI cell."""
+import dataclasses
 import importlib
 import math
 
@@ -66,6 +67,14 @@ def test_small_budget_needs_out_and_leaves_docs_alone(capsys):
     assert "--out" in capsys.readouterr().err
 
 
+def test_missing_recordings_name_the_dataset_before_any_run(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("FUZZYNAV_DATA", str(tmp_path))
+    assert main(["docs", "regenerate", "paper004", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "'akit'" in err and str(tmp_path) in err and "fuzzynav data fetch akit" in err
+    assert not (tmp_path / "out" / "paper004.md").exists()
+
+
 def test_docs_list_names_every_page(capsys):
     assert main(["docs", "list"]) == 0
     out = capsys.readouterr().out
@@ -78,8 +87,8 @@ def test_paper000_regenerates_to_out_through_the_cli(tmp_path, monkeypatch, sim_
     from fuzzynav.papers.paper000 import page
 
     monkeypatch.setattr(page, "FILTERS", {"EKF": "ekf", "FAKF, paper rules": "fakf"})
-    monkeypatch.setitem(PAGES, "paper000", PAGES["paper000"].__class__(
-        **{**PAGES["paper000"].__dict__, "small": {"mc": 1, "mc_variants": 1}}))
+    monkeypatch.setitem(PAGES, "paper000", dataclasses.replace(
+        PAGES["paper000"], small={"mc": 1, "mc_variants": 1}))
     monkeypatch.setenv("FUZZYNAV_CACHE", str(sim_cache))
     doc = ROOT / "docs" / "paper000.md"
     before = doc.read_bytes()

@@ -205,14 +205,17 @@ def kept_sim_part(fig_dir: Path) -> tuple[list, list]:
     return kept, [fig_dir / "paper004_apso_convergence.png", fig_dir / "paper004_sim_error.png"]
 
 
-def real_part(data, fig_dir: Path, required: bool) -> tuple[list, list]:
-    """The A-KIT tables' lines (untuned filters, held-out studies) and figures; without the
-    recordings an error if ``required``, else a sentence saying they were skipped."""
+def require_recordings(data: Path) -> None:
+    """Raise :class:`FuzzynavError` naming the dataset when A-KIT is not at ``data``."""
     if not (data / "IMU_trajectory1.csv").is_file():
-        if required:
-            raise FuzzynavError(f"{data}: the A-KIT recordings (dataset 'akit') are missing; "
-                                "fetch them with `fuzzynav data fetch akit` or set "
-                                "$FUZZYNAV_DATA")
+        raise FuzzynavError(f"{data}: the A-KIT recordings (dataset 'akit') are missing; "
+                            "fetch them with `fuzzynav data fetch akit` or set $FUZZYNAV_DATA")
+
+
+def real_part(data, fig_dir: Path) -> tuple[list, list]:
+    """The A-KIT tables' lines (untuned filters, held-out studies) and figures, or a
+    sentence saying they were skipped when the recordings are absent."""
+    if not (data / "IMU_trajectory1.csv").is_file():
         return [f"(A-KIT recordings not found at {data}: real-data tables skipped.)", ""], []
     from fuzzynav.papers.paper004.page_heldout import heldout_frame, section
 
@@ -231,8 +234,10 @@ def real_part(data, fig_dir: Path, required: bool) -> tuple[list, list]:
 def build(ctx, mc: int = 10, real: bool = True, real_only: bool = False) -> str:
     """The results section and figures: seeds 200.. (``mc``) of every simulated scenario and
     A-KIT 1-8 (``real``: the recordings are required; False: skipped if absent)."""
+    if real:
+        require_recordings(ctx.data_dir / "akit")  # before the simulations, not after
     parts, figs = kept_sim_part(ctx.fig_dir) if real_only else sim_part(ctx, mc)
-    real_lines, real_figs = real_part(ctx.data_dir / "akit", ctx.fig_dir, real)
+    real_lines, real_figs = real_part(ctx.data_dir / "akit", ctx.fig_dir)
     parts, figs = parts + real_lines, figs + real_figs
     parts += ["Figures: " + ", ".join(f"[{p.name}](figures/{p.name})" for p in figs), ""]
     parts += [f"![{p.stem}](figures/{p.name})" for p in figs]
