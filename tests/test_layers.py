@@ -45,11 +45,7 @@ ALLOWED = {
 #: the engine is a library of its own: only the error classes of the package
 FUZZY_MAY_IMPORT = {"fuzzynav.errors"}
 #: known import cycles outside fuzzy/, each with the reason it is tolerated for now
-CYCLE_ALLOWLIST = [
-    # moved as they were from benchmarks/ (issue 23 §5): the recordings section scores with
-    # the science page's helpers, the page calls the section; split the scoring out next
-    {"fuzzynav.pages.science", "fuzzynav.pages.science_recordings"},
-]
+CYCLE_ALLOWLIST = []
 
 
 def _module_name(path: Path) -> str:

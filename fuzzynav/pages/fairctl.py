@@ -20,6 +20,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from fuzzynav.pages import science as sr
+from fuzzynav.pages import scores as sc
 from fuzzynav.pages.common import REPO_ROOT as ROOT
 
 STUDY = ROOT / "studies" / "paper000_fair_ctl.toml"
@@ -57,10 +58,10 @@ def main(argv=None) -> int:
     df = sr.held_out_table(cfg, systems, PARAMS, args.cache)
     df.to_csv(work / "fair_ctl_runs.csv", index=False)
     scenarios = list(dict.fromkeys(s for s, _ in cfg.test))
-    scores = sr.scores_to(df, sr.REF)
-    rows, text, tally = sr.comparison_lines(scores, scenarios)
+    scores = sc.scores_to(df, sc.REF)
+    rows, text, tally = sc.comparison_lines(scores, scenarios)
     print(f"trial {trial.number}: training value {trial.value:.4f}; params {trial.params}")
-    print("\n".join(sr.ratio_table(scores, list(dict.fromkeys(df["filter"])), scenarios)))
+    print("\n".join(sc.ratio_table(scores, list(dict.fromkeys(df["filter"])), scenarios)))
     print("\n".join(rows + [""] + text + [""]))
     print(sr.summary_text(tally, len(scenarios)))
     print(f"{(time.time() - t0) / 60:.1f} min wall, {sr.cpu_minutes():.1f} min CPU")

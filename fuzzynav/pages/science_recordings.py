@@ -90,7 +90,7 @@ def _save_systems(systems: dict, directory: Path) -> Path:
 
 
 def _drift_lines(df: pd.DataFrame, order) -> list:
-    from fuzzynav.pages import science as sr
+    from fuzzynav.pages import scores as sr
 
     lines = ["| filter | horizontal RMS, GNSS throughout (m) | velocity RMS (m/s) | "
              "drift RMS over the outages (m) | runs completed |", "|---|---|---|---|---|"]
@@ -104,7 +104,7 @@ def _drift_lines(df: pd.DataFrame, order) -> list:
 
 def _paired_lines(scores, scenario, fuzzies, ref) -> list:
     """A sentence per fuzzy controller against the best classical filter and ``ref``."""
-    from fuzzynav.pages import science as sr
+    from fuzzynav.pages import scores as sr
 
     pool = scores[~scores["filter"].isin([*fuzzies, *sr.NOT_CLASSICAL])]
     best = pool.groupby("filter")["score"].mean().idxmin()
@@ -118,7 +118,7 @@ def _paired_lines(scores, scenario, fuzzies, ref) -> list:
 
 def car_section(directory: Path, params: Path, systems: dict, car_rules, seeds) -> tuple:
     """Markdown lines of the car drive and its rows."""
-    from fuzzynav.pages import science as sr
+    from fuzzynav.pages import scores as sr
 
     rules = Path(car_rules) if car_rules else CAR_RULES
     note = [] if rules.is_file() else [
@@ -158,7 +158,7 @@ def _held_out_trajectories(rules: Path) -> list:
 
 def auv_section(directory: Path, auv_rules) -> tuple:
     """Markdown lines of the AUV runs (or the note why they are skipped), and their rows."""
-    from fuzzynav.pages import science as sr
+    from fuzzynav.pages import scores as sr
 
     rules = Path(auv_rules) if auv_rules else AUV_RULES
     if not directory.is_dir():
