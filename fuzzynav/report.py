@@ -75,6 +75,23 @@ def comparison_rows(df: pd.DataFrame, filters, baseline=None, rows=NAV_ROWS, cla
     return out
 
 
+def ratio_table(dfs: dict, filters: dict, keys, names: str, ref: str = "ekf") -> str:
+    """Markdown table: per filter (label -> spec) and scenario (``dfs``: name -> runs), the
+    mean over seeds of each metric's ratio to ``ref`` on the same seed, as ``"a / b / c"``
+    in the order of ``keys`` (``names`` heads the columns, e.g. ``"pos / vel / att"``)."""
+    rows = []
+    for label, spec in filters.items():
+        cells = []
+        for df in dfs.values():
+            parts = []
+            for key in keys:
+                piv = df.pivot_table(index="seed", columns="filter", values=key)
+                parts.append(f"{mean_ci((piv[spec] / piv[ref]).to_numpy()).mean:.2f}")
+            cells.append(" / ".join(parts))
+        rows.append([label, *cells])
+    return render(["filter"] + [f"{s}: {names}" for s in dfs], rows, markdown=True)
+
+
 def render(header, rows, markdown=False) -> str:
     """Render rows as an aligned text table or a Markdown table (short rows padded)."""
     rows = [list(r) + ["—"] * (len(header) - len(r)) for r in rows]
