@@ -65,7 +65,7 @@ def figures(filters, cache, fig_dir: Path) -> list:
     return out
 
 
-def build(ctx, mc: int = 50, mc_variants: int = 10) -> str:
+def build(ctx, mc: int = 50, mc_variants: int = 5) -> str:
     """The results section and figures: ``mc`` seeds of paper003, ``mc_variants`` of each
     variant."""
     cache = ctx.cache

@@ -1,7 +1,7 @@
 """The result tables and figures of docs/paper004.md: paper 004 (SINS/DVL, Huber, APSO) in
 simulation and on the eight A-KIT AUV recordings.
 
-Runs every filter on the same seeds of the ``paper004`` family (seeds 200-209 by default,
+Runs every filter on the same seeds of the ``paper004`` family (seeds 200-207 at the full budget,
 none used in training) and on trajectories 1-8 of ``$FUZZYNAV_DATA/akit`` (skipped with a
 note when absent), writes the figures into docs/figures/ and rewrites the section between
 ``<!-- results:begin -->`` and ``<!-- results:end -->`` of docs/paper004.md.  About ten
@@ -41,7 +41,7 @@ FILTERS = {  # label -> filter spec (options below)
 SCENARIOS = ("paper004", "paper004-clean", "paper004-heavy", "paper004-dropouts")
 APSO = "apso@studies/paper004_apso.json"
 #: on A-KIT every filter here is untrained; the tuned ones (APSO, fuzzy) are judged on the
-#: trajectories they were not trained on, in the held-out section (paper004_heldout.py)
+#: trajectories they were not trained on, in the held-out section (page_heldout.py)
 REAL_FILTERS = ("ekf", "ekf-st", "huber", "sage-husa", "vb")
 
 
@@ -231,7 +231,7 @@ def real_part(data, fig_dir: Path) -> tuple[list, list]:
         akit_figures(recs, ekf_results, fig_dir)
 
 
-def build(ctx, mc: int = 10, real: bool = True, real_only: bool = False) -> str:
+def build(ctx, mc: int = 8, real: bool = True, real_only: bool = False) -> str:
     """The results section and figures: seeds 200.. (``mc``) of every simulated scenario and
     A-KIT 1-8 (``real``: the recordings are required; False: skipped if absent)."""
     if real:
