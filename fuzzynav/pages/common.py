@@ -91,9 +91,10 @@ def replace_section(text: str, marker: str | None, body: str, where: str = "page
     return head + begin + "\n" + body + "\n" + end + rest.split(end, 1)[1]
 
 
-def write_section(doc: Path, marker: str | None, body: str) -> None:
-    """Rewrite the section ``marker`` of the docs page ``doc`` (None: the whole page)
-    atomically; a page without the section is an error and stays unchanged."""
-    doc = Path(doc)
-    old = doc.read_text(encoding="utf-8") if marker is not None else ""
-    write_text_atomic(doc, replace_section(old, marker, body, where=str(doc)))
+def write_section(doc: Path, marker: str | None, body: str, source: Path | None = None) -> None:
+    """Rewrite the section ``marker`` of the page ``source`` (default ``doc``) into ``doc``
+    atomically (``marker`` None: ``body`` is the whole page); a page without the section is
+    an error and nothing is written."""
+    source = Path(source or doc)
+    old = source.read_text(encoding="utf-8") if marker is not None else ""
+    write_text_atomic(Path(doc), replace_section(old, marker, body, where=str(source)))

@@ -131,9 +131,6 @@ def regenerate(page: Page, budget: str = "full", out: Path | None = None,
     build = importlib.import_module(page.module).build
     with contextlib.chdir(root):  # the generators name rules/ and studies/ files relatively
         body = build(ctx, **kwargs)
-    if target != doc and page.marker is not None:
-        target.parent.mkdir(parents=True, exist_ok=True)
-        target.write_bytes(doc.read_bytes())  # the copy is then rewritten atomically
-    write_section(target, page.marker, body)
+    write_section(target, page.marker, body, source=doc)
     return target
 
