@@ -50,6 +50,8 @@ alignment time cut from over 300 s to under 150 s.
 ```
 fuzzynav compare paper002 --filters align-kf,align-fuzzy,align-fuzzy-fast --mc 50
 fuzzynav run paper000-nominal --filter ekf --align align-kf      # align, then navigate
+fuzzynav run paper000-nominal --filter fakf --align align-fuzzy@rules/paper002_ror_tuned.json
+                                  # the aligner's rule file after @; --rules is fakf's
 fuzzynav study run studies/align/paper002_tune.toml             # tune ROR -> t
 fuzzynav study export studies/align/paper002_tune.toml --out rules/paper002_ror_tuned.json
 fuzzynav docs regenerate paper002                                 # this page
@@ -63,7 +65,7 @@ against the filter's 3σ, with a three-seed Monte-Carlo beside the paper's claim
 | paper | fuzzynav |
 |---|---|
 | 10 states `[δvE δvN, φE φN φU, ∇E ∇N, εE εN εU]`, A from earth rate and g, T from C_bⁿ | `fuzzynav.align.model` (`LAYOUT_10`, named blocks), `expm(A T)` by a 6-term series |
-| zero-velocity measurement, H = [I₂ 0] | `fuzzynav.align.fine.run_fine` |
+| zero-velocity measurement, H = [I₂ 0] | `fuzzynav.align.fine.run_fine` (predict and update: the package's plain numpy ones, `fuzzynav.filters.reference`) |
 | P0, Q0, R0, T = 1 s | `AlignNoise()` defaults, exactly the paper's numbers |
 | ROR = tr(C_r)/tr(D_r), R(k) = t(k) R(k−1), three rules | `fuzzynav.align.fuzzy_r` with `rules/paper002_ror.json` |
 | δφ_U = (ω_U δφ_N − δφ̇_E)/ω_N after 30 s | `fuzzynav.align.fast` |
