@@ -18,11 +18,39 @@ NAV_ROWS = (
 )
 
 
-def _cell(values) -> str:
-    est = mean_ci(values)
+def ci_cell(values, fmt: str = ".4f", half_fmt: str | None = None) -> str:
+    """One table cell ``mean ± half width`` of the Student-t 95 % interval over runs.
+
+    Parameters
+    ----------
+    values : array_like
+        Per-run values (non-finite ones are dropped, as :func:`~fuzzynav.metrics.mean_ci`).
+    fmt : str
+        Format spec of the mean (``".4f"``, ``".3g"``, ...).
+    half_fmt : str, optional
+        Format spec of the half width (default ``fmt``).
+
+    Returns
+    -------
+    str
+        ``"—"`` without a finite value, the bare mean from one value, else ``"m ± h"``.
+    """
+    est = mean_ci(np.asarray(values, float))
     if not np.isfinite(est.mean):
         return "—"
-    return f"{est.mean:.4f}" if est.n < 2 else f"{est.mean:.4f} ± {est.half_width:.4f}"
+    if est.n < 2:
+        return f"{est.mean:{fmt}}"
+    return f"{est.mean:{fmt}} ± {est.half_width:{half_fmt or fmt}}"
+
+
+def improvement_cell(base, cand) -> str:
+    """The paired change of ``cand`` against ``base`` (same runs), ``"+m % [lo, hi]"``:
+    :func:`~fuzzynav.metrics.improvement_ci` (positive = ``cand`` smaller); from one pair
+    the bare ``"+m %"``."""
+    imp = improvement_ci(np.asarray(base, float), np.asarray(cand, float))
+    if imp.n < 2:
+        return f"{imp.mean:+.1f} %"
+    return f"{imp.mean:+.1f} % [{imp.lo:+.1f}, {imp.hi:+.1f}]"
 
 
 def comparison_rows(df: pd.DataFrame, filters, baseline=None, rows=NAV_ROWS, claims=None):
@@ -37,18 +65,33 @@ def comparison_rows(df: pd.DataFrame, filters, baseline=None, rows=NAV_ROWS, cla
         if key not in df or df[key].isna().all():
             continue
         piv = df.pivot_table(index="seed", columns="filter", values=key)
-        cells = [_cell(piv[f].to_numpy()) if f in piv else "—" for f in filters]
+        cells = [ci_cell(piv[f].to_numpy()) if f in piv else "—" for f in filters]
         imps = []
         if baseline is not None:
             for f in filters:
                 if f == baseline or f not in piv:
                     continue
-                imp = improvement_ci(piv[baseline].to_numpy(), piv[f].to_numpy())
-                imps.append(f"{imp.mean:+.1f} %" if imp.n < 2
-                            else f"{imp.mean:+.1f} % [{imp.lo:+.1f}, {imp.hi:+.1f}]")
+                imps.append(improvement_cell(piv[baseline].to_numpy(), piv[f].to_numpy()))
         claim = list((claims or {}).get(key, ()))
         out.append([label, *cells, *imps, *claim])
     return out
+
+
+def ratio_table(dfs: dict, filters: dict, keys, names: str, ref: str = "ekf") -> str:
+    """Markdown table: per filter (label -> spec) and scenario (``dfs``: name -> runs), the
+    mean over seeds of each metric's ratio to ``ref`` on the same seed, as ``"a / b / c"``
+    in the order of ``keys`` (``names`` heads the columns, e.g. ``"pos / vel / att"``)."""
+    rows = []
+    for label, spec in filters.items():
+        cells = []
+        for df in dfs.values():
+            parts = []
+            for key in keys:
+                piv = df.pivot_table(index="seed", columns="filter", values=key)
+                parts.append(f"{mean_ci((piv[spec] / piv[ref]).to_numpy()).mean:.2f}")
+            cells.append(" / ".join(parts))
+        rows.append([label, *cells])
+    return render(["filter"] + [f"{s}: {names}" for s in dfs], rows, markdown=True)
 
 
 def render(header, rows, markdown=False) -> str:

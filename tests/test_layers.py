@@ -31,10 +31,15 @@ ALLOWED = {
     "realdata": {"runpath", "filters", "sim", "metrics", "report", "nav", "plots"},
     "tuning": {"runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "report", "nav", "plots",
                "realdata", "align"},
-    "papers": {"runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "nav"},
+    # a paper folder: its claims, filters and scenarios, and its results page (which runs
+    # everything: studies, recordings, figures)
+    "papers": {"pages", "runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "report",
+               "nav", "tuning", "realdata", "plots", "align"},
     "plots": {"fuzzy", "nav", "metrics"},
     "cli": {"runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "report", "nav", "tuning",
-            "realdata", "papers", "plots", "align"},
+            "realdata", "papers", "plots", "align", "pages"},
+    "pages": {"papers", "runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "report",
+              "nav", "tuning", "realdata", "plots", "align"},
     "__main__": {"cli"},
 }
 #: the engine is a library of its own: only the error classes of the package

@@ -19,7 +19,7 @@ import sys
 from fuzzynav.errors import MAX_MESSAGE, FuzzynavError, OutputError, bounded
 
 #: modules under ``fuzzynav.cli`` that contribute sub-commands, in help order
-COMMAND_MODULES = ("fis", "nav", "study", "data")
+COMMAND_MODULES = ("fis", "nav", "study", "data", "docs")
 
 
 #: exit code when the reader of stdout went away (128 + SIGPIPE, as the shell reports it)

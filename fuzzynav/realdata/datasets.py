@@ -1,7 +1,7 @@
 """The public recordings fuzzynav knows by name, and where their copies are looked for.
 
 :data:`DATASETS` is read from ``datasets.json`` beside this module (built by
-``benchmarks/data_registry.py``): each dataset's recording kind and its files, with the
+``tools/data_registry.py``): each dataset's recording kind and its files, with the
 URL path of each at a fixed upstream commit and its SHA-256.  ``fuzzynav data fetch NAME``
 (:mod:`fuzzynav.realdata.fetch`) downloads them; ``--data NAME`` (``--data akit:N``,
 ``--data rtklib-drive``) and the study specs then find them.

@@ -2,7 +2,7 @@
 post-processed reference; ``../shared/datasets/akit``, trajectories 1-8).
 
 Conventions, established from the data (``docs/data.md``; the numbers come from
-``benchmarks/akit_conventions.py``):
+``tools/akit_conventions.py``):
 
 * the IMU (``IMU_trajectoryN.csv``, top level only) gives specific force [m/s^2] and rates
   [rad/s] in a forward-right-down body frame: the accelerometer z axis reads -9.79 m/s^2;

@@ -2,7 +2,7 @@
 
 Run from the repository root (``[studies]`` extras installed)::
 
-    python benchmarks/science_results.py --trials 40 --workers 2
+    fuzzynav docs regenerate science
 
 1. tunes the classical baselines of ``studies/paper000_baselines.toml`` (each its own
    Optuna study, ``--trials`` trials; ALS estimated) and writes their parameters to
@@ -14,58 +14,56 @@ Run from the repository root (``[studies]`` extras installed)::
    (``ekf-tuned``) and to the oracle (``ekf-true``), and the paired difference of the tuned
    fuzzy controller against the best classical baseline of that scenario, with 95 % CIs.
 
-4. runs the held-out recordings (``benchmarks/science_recordings.py``): the real car drive
+4. runs the held-out recordings (:mod:`fuzzynav.pages.science_recordings`): the real car drive
    with every filter as tuned on simulation, and the AUV trajectories when DVL rules tuned
    on recordings exist; each part missing its data or rules is one sentence on the page.
 
-Journals go to ``--work`` (default: a temporary directory; an existing journal is resumed,
-not re-tuned), simulations to ``--cache``. ``--quick`` is a smoke run (4 trials, 2 seeds,
-1 noise seed on the drive); ``--mc N`` held-out seeds per scenario, ``--mc-recordings N``
-noise seeds on the drive, ``--data DIR`` where the recordings are.
+Journals go to ``work`` (default: a temporary directory; an existing journal is resumed,
+not re-tuned), simulations to the context's cache. :func:`build`'s ``quick`` is a smoke run
+(4 trials, 2 seeds, 1 noise seed on the drive); ``seeds`` held-out seeds per scenario,
+``mc_recordings`` noise seeds on the drive; the recordings are read from the context's
+data directory.
 """
 from __future__ import annotations
 
-import argparse
 import datetime as _dt
-import sys
 import tempfile
 import time
 from dataclasses import replace
 from pathlib import Path
+from types import SimpleNamespace
 
-import numpy as np
 import pandas as pd
 
-from fuzzynav.cli.nav import default_cache_dir
 from fuzzynav.fileio import write_atomic
 from fuzzynav.filters.baselines import TUNED
-from fuzzynav.metrics import mean_ci
-
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "benchmarks"))
-from _report import machine  # noqa: E402
-from science_recordings import AUV_RULES, CAR_RULES, recordings_section  # noqa: E402
+from fuzzynav.pages.common import REPO_ROOT as ROOT
+from fuzzynav.pages.common import machine
+from fuzzynav.pages.science_recordings import recordings_section
+from fuzzynav.pages.scores import (
+    FUZZY,
+    ORACLE,
+    REF,
+    best_classical,
+    comparison_lines,
+    paired,
+    ratio_table,
+    scores_to,
+    verdict,
+)
 
 FAIR = ROOT / "studies" / "paper000_fair.toml"
 BASELINES = ROOT / "studies" / "paper000_baselines.toml"
-DOC = ROOT / "docs" / "science.md"
-RUNS = ROOT / "docs" / "science_runs.csv"
-REC_RUNS = ROOT / "docs" / "science_recordings.csv"
-FUZZY = "fuzzy-tuned"
-REF, ORACLE = "ekf-tuned", "ekf-true"
-#: filters that are neither fuzzy nor told the truth: the "best classical baseline" pool
-NOT_CLASSICAL = (FUZZY, "fakf", "fuzzy", ORACLE)
-METRICS = ("rms_pos_m", "rms_vel_mps", "rms_att_deg")
 
 
 # -- tuning ------------------------------------------------------------------------------------
-def tune_baselines(trials: int, work: Path, cache: str):
+def tune_baselines(trials: int, work: Path, cache: str, out: Path | None = None):
     from fuzzynav.tuning.baseline_config import load_baseline_config
     from fuzzynav.tuning.kinds.baseline_studies import run_baselines
 
     bcfg = load_baseline_config(BASELINES)
     study = replace(bcfg.study, trials=trials, storage=f"journal:{work / 'baselines.journal'}")
-    bcfg = replace(bcfg, study=study)
+    bcfg = replace(bcfg, study=study, **({"out": out} if out is not None else {}))
     run_baselines(bcfg, cache_dir=cache, progress=True)
     return bcfg
 
@@ -91,80 +89,6 @@ def held_out_table(cfg, systems, params: Path, cache: str) -> pd.DataFrame:
     specs = {f"{n}@{params}" if n in TUNED else n: n for n in cfg.compare}
     df = run_table(Evaluator(cfg, cache), systems, cfg.test, tuple(specs))
     return df.replace({"filter": {**specs, "tuned": FUZZY}})
-
-
-def scores_to(df: pd.DataFrame, ref: str, metrics=METRICS) -> pd.DataFrame:
-    """Per run and filter: mean over ``metrics`` (pos/vel/att) of the RMS ratio to ``ref``."""
-    key = ["scenario", "seed"]
-    metrics = list(metrics)
-    base = df[df["filter"] == ref][[*key, *metrics]]
-    out = df[[*key, "filter", *metrics]].merge(base, on=key, suffixes=("", "_ref"))
-    ratios = [out[m] / out[m + "_ref"] for m in metrics]
-    out["score"] = sum(ratios) / len(ratios)
-    return out[["scenario", "seed", "filter", "score"]]
-
-
-def cell(values) -> str:
-    est = mean_ci(values)
-    return f"{est.mean:.2f} ± {est.half_width:.2f}" if est.n >= 2 else f"{est.mean:.2f}"
-
-
-def ratio_table(scores: pd.DataFrame, order, scenarios) -> list:
-    """Markdown rows: filter x scenario, mean score (95 % CI over seeds)."""
-    lines = ["| filter | " + " | ".join(f"`{s}`" for s in scenarios) + " |",
-             "|---|" + "---|" * len(scenarios)]
-    for f in order:
-        sub = scores[scores["filter"] == f]
-        cells = [cell(sub[sub["scenario"] == s]["score"]) for s in scenarios]
-        lines.append(f"| {f} | " + " | ".join(cells) + " |")
-    return lines
-
-
-def best_classical(scores: pd.DataFrame, scenario: str) -> str:
-    """The classical filter with the lowest mean score on ``scenario``."""
-    sub = scores[(scores["scenario"] == scenario) & ~scores["filter"].isin(NOT_CLASSICAL)]
-    return sub.groupby("filter")["score"].mean().idxmin()
-
-
-def paired(scores: pd.DataFrame, scenario: str, a: str, b: str):
-    """Mean and 95 % CI of ``score(a) - score(b)`` over the scenario's seeds."""
-    sub = scores[scores["scenario"] == scenario].pivot(index="seed", columns="filter",
-                                                       values="score")
-    return mean_ci((sub[a] - sub[b]).to_numpy())
-
-
-def verdict(est) -> str:
-    """``wins against`` / ``draws with`` / ``loses to`` by the 95 % CI of a paired difference
-    (negative favours the first filter); with one pair there is no CI to tell."""
-    if est.n < 2:
-        return "is not told apart (one seed) from"
-    if est.hi < 0:
-        return "wins against"
-    if est.lo > 0:
-        return "loses to"
-    return "draws with"
-
-
-def sentence(scenario: str, a: str, b: str, est) -> str:
-    return (f"On `{scenario}`, {a} **{verdict(est)}** {b}: score difference "
-            f"{est.mean:+.3f} (95 % CI {est.lo:+.3f} to {est.hi:+.3f}, {est.n} seeds).")
-
-
-def comparison_lines(scores: pd.DataFrame, scenarios) -> tuple:
-    """Table rows and one sentence per scenario: the fuzzy controller vs the best classical
-    baseline and vs the tuned constant-noise EKF."""
-    rows = ["| scenario | best classical | fuzzy − best (95 % CI) | verdict | "
-            "fuzzy − ekf-tuned (95 % CI) | verdict |", "|---|---|---|---|---|---|"]
-    text, tally = [], {"wins against": 0, "draws with": 0, "loses to": 0}
-    for s in scenarios:
-        best = best_classical(scores, s)
-        vs_best, vs_ref = paired(scores, s, FUZZY, best), paired(scores, s, FUZZY, REF)
-        tally[verdict(vs_best)] = tally.get(verdict(vs_best), 0) + 1
-        rows.append(f"| `{s}` | {best} | {vs_best.mean:+.3f} [{vs_best.lo:+.3f}, "
-                    f"{vs_best.hi:+.3f}] | {verdict(vs_best)} | {vs_ref.mean:+.3f} "
-                    f"[{vs_ref.lo:+.3f}, {vs_ref.hi:+.3f}] | {verdict(vs_ref)} |")
-        text.append("- " + sentence(s, "the tuned fuzzy controller", f"`{best}`", vs_best))
-    return rows, text, tally
 
 
 # -- the page ----------------------------------------------------------------------------------
@@ -193,12 +117,12 @@ def summary_text(tally: dict, n: int) -> str:
             "or not).")
 
 
-def write_page(ctx: dict, scores_ref, scores_oracle, scenarios) -> None:
+def page_text(ctx: dict, scores_ref, scores_oracle, scenarios) -> str:
     order = [FUZZY, *[f for f in ctx["filters"] if f != FUZZY]]
     rows, text, tally = comparison_lines(scores_ref, scenarios)
     lines = [
         "# Science: the fuzzy controller against equally tuned baselines", "",
-        f"Generated by `benchmarks/science_results.py` on {ctx['date']} ({ctx['machine']}); "
+        f"Generated by `{ctx['command']}` on {ctx['date']} ({ctx['machine']}); "
         f"{ctx['minutes']:.1f} min wall time, {ctx['cpu']:.1f} min CPU (the machine was "
         "shared)" + ("; the studies were resumed from finished journals, so this covers "
                      "the ALS estimate and the evaluation only, not the tuning"
@@ -240,8 +164,7 @@ def write_page(ctx: dict, scores_ref, scores_oracle, scenarios) -> None:
         + (", on the recordings [science_recordings.csv](science_recordings.csv)."
            if ctx["recording_rows"] else "."),
     ]
-    page = "\n".join(lines) + "\n"
-    write_atomic(DOC, lambda tmp: Path(tmp).write_text(page), what="page")
+    return "\n".join(lines) + "\n"
 
 
 def closing_lines(scores: pd.DataFrame, scenarios, params: Path) -> list:
@@ -290,58 +213,52 @@ def cpu_minutes() -> float:
     return sum(u.ru_utime + u.ru_stime for u in use) / 60.0
 
 
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--trials", type=int, default=40, help="trials per study (default 40)")
-    p.add_argument("--workers", type=int, default=2, help="fuzzy study workers")
-    p.add_argument("--work", help="directory for the study journals (default: temporary)")
-    p.add_argument("--mc", "--seeds", dest="seeds", type=int,
-                   help="held-out seeds per simulated scenario (default: all of the study)")
-    p.add_argument("--mc-recordings", type=int, default=5,
-                   help="noise seeds on the car drive (default 5)")
-    p.add_argument("--quick", action="store_true",
-                   help="a smoke run: 4 trials, 2 seeds per scenario, 1 seed on the drive "
-                        "(the page says so; do not publish it)")
-    p.add_argument("--data", help="directory of the recordings (default $FUZZYNAV_DATA, "
-                                  "else ../shared/datasets)")
-    p.add_argument("--car-rules", help=f"rules tuned on the drive (default "
-                                       f"{CAR_RULES.relative_to(ROOT)} if present)")
-    p.add_argument("--auv-rules", help=f"DVL rules tuned on recordings (default "
-                                       f"{AUV_RULES.relative_to(ROOT)} if present)")
-    p.add_argument("--no-recordings", action="store_true", help="skip the recordings section")
-    p.add_argument("--cache", default=str(default_cache_dir()), help="simulation cache")
-    args = p.parse_args(argv)
-    if args.quick:
-        args.trials, args.seeds, args.mc_recordings = min(args.trials, 4), 2, 1
+def build(page_ctx, trials: int = 40, workers: int = 2, work: str | None = None,
+          seeds: int | None = None, mc_recordings: int = 5, quick: bool = False,
+          recordings: bool = True, car_rules: str | None = None,
+          auv_rules: str | None = None) -> str:
+    """The whole of docs/science.md; writes ``science_runs.csv`` (and
+    ``science_recordings.csv``) beside the page, and the tuned baselines' parameters to
+    ``studies/paper000_baselines.json`` for the docs page, beside the page otherwise.
+
+    ``trials`` per study, ``workers`` of the fuzzy study, ``work`` the journals' directory,
+    ``seeds`` held-out seeds per simulated scenario (None: all of the study),
+    ``mc_recordings`` noise seeds on the drive, ``quick`` a smoke run, ``recordings`` False
+    skips the recordings section; ``car_rules`` / ``auv_rules`` rules tuned on recordings.
+    """
+    if quick:
+        trials, seeds, mc_recordings = min(trials, 4), 2, 1
+    page_dir = page_ctx.fig_dir.parent
+    to_docs = page_dir.resolve() == (page_ctx.root / "docs").resolve()
     t0 = time.time()
     with tempfile.TemporaryDirectory() as tmp:
-        work = Path(args.work or tmp)
+        work = Path(work or tmp)
         work.mkdir(parents=True, exist_ok=True)
         resumed = (work / "fair.journal").is_file()
-        bcfg = tune_baselines(args.trials, work, args.cache)
-        cfg, systems, n_fuzzy = tune_fuzzy(args.trials, args.workers, work, args.cache)
-        if args.seeds:
-            keep = sorted({d for _, d in cfg.test})[:args.seeds]
+        cache = str(page_ctx.cache)
+        bcfg = tune_baselines(trials, work, cache,
+                              None if to_docs else page_dir / "paper000_baselines.json")
+        cfg, systems, n_fuzzy = tune_fuzzy(trials, workers, work, cache)
+        if seeds:
+            keep = sorted({d for _, d in cfg.test})[:seeds]
             cfg = replace(cfg, test=tuple(r for r in cfg.test if r[1] in keep))
-        df = held_out_table(cfg, systems, bcfg.out, args.cache)
-    recordings, rec_rows = (["## Held-out recordings", "", "*Skipped (--no-recordings).*",
-                             ""], None) if args.no_recordings else \
-        recordings_section(args, bcfg.out, systems)
+        df = held_out_table(cfg, systems, bcfg.out, cache)
+    opts = SimpleNamespace(data=str(page_ctx.data_dir), mc_recordings=mc_recordings,
+                           car_rules=car_rules, auv_rules=auv_rules)
+    recs, rec_rows = recordings_section(opts, bcfg.out, systems) if recordings else (
+        ["## Held-out recordings", "", "*Skipped (--no-recordings).*", ""], None)
     scenarios = list(dict.fromkeys(s for s, _ in cfg.test))
     ctx = dict(date=_dt.date.today().isoformat(), machine=machine(), trials=n_fuzzy,
                baseline_trials=baseline_trials(bcfg.out),
-               workers=args.workers, minutes=(time.time() - t0) / 60.0, params=bcfg.out,
+               workers=workers, minutes=(time.time() - t0) / 60.0, params=bcfg.out,
                train=", ".join(f"`{s}` seed {d}" for s, d in cfg.train),
                n_seeds=len({d for _, d in cfg.test}),
                filters=list(dict.fromkeys(df["filter"])), cpu=cpu_minutes(), resumed=resumed,
-               recordings=recordings, recording_rows=rec_rows is not None, quick=args.quick)
-    write_atomic(RUNS, lambda tmp: df.to_csv(tmp, index=False), suffix=".csv")
+               recordings=recs, recording_rows=rec_rows is not None, quick=quick,
+               command=page_ctx.command)
+    write_atomic(page_dir / "science_runs.csv", lambda tmp: df.to_csv(tmp, index=False),
+                 suffix=".csv")
     if rec_rows is not None:
-        write_atomic(REC_RUNS, lambda tmp: rec_rows.to_csv(tmp, index=False), suffix=".csv")
-    write_page(ctx, scores_to(df, REF), scores_to(df, ORACLE), scenarios)
-    print(f"wrote {DOC}, {RUNS} and {bcfg.out}")
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
+        write_atomic(page_dir / "science_recordings.csv",
+                     lambda tmp: rec_rows.to_csv(tmp, index=False), suffix=".csv")
+    return page_text(ctx, scores_to(df, REF), scores_to(df, ORACLE), scenarios)

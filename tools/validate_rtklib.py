@@ -1,6 +1,6 @@
 """Figures of docs/validation.md: the filters on the rtklib-drive under the validation protocol.
 
-Run by hand from the repository root: ``python benchmarks/validate_rtklib.py [DATA_DIR]``
+Run by hand from the repository root: ``python tools/validate_rtklib.py [DATA_DIR]``
 (DATA_DIR defaults to ``$FUZZYNAV_DATA/rtklib-drive``, ``FUZZYNAV_DATA`` to
 ``../shared/datasets``).  About two minutes.  Prints markdown tables and writes the two
 figures into ``docs/figures/``; nothing is asserted (the tests do that).
@@ -21,7 +21,6 @@ import numpy as np
 
 from fuzzynav.filters.config import FilterConfig
 from fuzzynav.filters.runner import InitialState, run_filter
-from fuzzynav.metrics import mean_ci
 from fuzzynav.nav import attitude, earth
 from fuzzynav.realdata.figures import write_figures
 from fuzzynav.realdata.mems import CONSUMER_MEMS
@@ -30,6 +29,7 @@ from fuzzynav.realdata.score import errors_against, horizontal
 from fuzzynav.realdata.sources import SOURCES, resolve_mounting
 from fuzzynav.realdata.validate import validate
 from fuzzynav.realdata import coarse_align
+from fuzzynav.report import ci_cell
 from fuzzynav.sim.imu import ImuData
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -41,11 +41,8 @@ def _load(directory, mounting="rtklib-drive", **kw):
     return SOURCES["rtklib"].load(directory, mounting=resolve_mounting(mounting), **kw)
 
 
-def _cell(values, fmt="{:.2f}"):
-    est = mean_ci(values)
-    if not np.isfinite(est.mean):
-        return "—"
-    return fmt.format(est.mean) + ("" if est.n < 2 else " ± " + fmt.format(est.half_width))
+def _cell(values, fmt=".2f") -> str:
+    return ci_cell(values, fmt)
 
 
 def _runs(rec, name, settings, seeds=SEEDS, mems=CONSUMER_MEMS):
@@ -70,9 +67,9 @@ def filters_table(rec, velocity="shift"):
         print(f"| {name} | {_cell(_col(vals, 'gnss', 'rms_pos_h_m'))} | "
               f"{_cell(_col(vals, 'outages', 'rms_pos_h_m'))} | "
               f"{_cell(_col(vals, 'outages', 'rms_pos_h_aided_m'))} | "
-              f"{_cell(_col(vals, 'outages', 'drift_h_m_1'), '{:.0f}')} | "
-              f"{_cell(_col(vals, 'outages', 'drift_h_m_2'), '{:.0f}')} | "
-              f"{_cell(_col(vals, 'outages', 'drift_h_rms_m'), '{:.0f}')} | "
+              f"{_cell(_col(vals, 'outages', 'drift_h_m_1'), '.0f')} | "
+              f"{_cell(_col(vals, 'outages', 'drift_h_m_2'), '.0f')} | "
+              f"{_cell(_col(vals, 'outages', 'drift_h_rms_m'), '.0f')} | "
               f"{done}/{len(vals)} |")
     w = vals[0].windows
     print(f"\nOutage windows: {', '.join(f'{a:.1f}-{b:.1f} s' for a, b in w)} "
@@ -90,9 +87,9 @@ def constraints_table(rec):
         label = "none" if sigma == 0.0 else f"{sigma:g} m/s"
         print(f"| {label} | {_cell(_col(vals, 'gnss', 'rms_pos_h_m'))} | "
               f"{_cell(_col(vals, 'outages', 'rms_pos_h_m'))} | "
-              f"{_cell(_col(vals, 'outages', 'drift_h_m_1'), '{:.1f}')} | "
-              f"{_cell(_col(vals, 'outages', 'drift_h_m_2'), '{:.1f}')} | "
-              f"{_cell(_col(vals, 'outages', 'drift_h_rms_m'), '{:.1f}')} |")
+              f"{_cell(_col(vals, 'outages', 'drift_h_m_1'), '.1f')} | "
+              f"{_cell(_col(vals, 'outages', 'drift_h_m_2'), '.1f')} | "
+              f"{_cell(_col(vals, 'outages', 'drift_h_rms_m'), '.1f')} |")
 
 
 def velocity_modes(rec):
@@ -106,9 +103,9 @@ def velocity_modes(rec):
     for mode, settings in cases:
         vals = _runs(rec, "ekf", settings)
         print(f"| {mode} | {_cell(_col(vals, 'gnss', 'rms_pos_h_m'))} | "
-              f"{_cell(_col(vals, 'gnss', 'rms_vel_mps'), '{:.3f}')} | "
+              f"{_cell(_col(vals, 'gnss', 'rms_vel_mps'), '.3f')} | "
               f"{_cell(_col(vals, 'outages', 'rms_pos_h_aided_m'))} | "
-              f"{_cell(_col(vals, 'outages', 'drift_h_rms_m'), '{:.0f}')} |")
+              f"{_cell(_col(vals, 'outages', 'drift_h_rms_m'), '.0f')} |")
 
 
 def noise_levels(rec):
@@ -250,7 +247,7 @@ def timing_and_mounting(directory):
     for label, kw in cases:
         vals = _runs(_load(directory, **kw), "ekf", ProtocolSettings(), seeds=range(5))
         print(f"| {label} | {_cell(_col(vals, 'gnss', 'rms_pos_h_m'))} | "
-              f"{_cell(_col(vals, 'outages', 'drift_h_rms_m'), '{:.0f}')} |")
+              f"{_cell(_col(vals, 'outages', 'drift_h_rms_m'), '.0f')} |")
 
 
 def main(argv):

@@ -1,37 +1,32 @@
 """The result tables and figures of docs/paper004.md: paper 004 (SINS/DVL, Huber, APSO) in
 simulation and on the eight A-KIT AUV recordings.
 
-Runs every filter on the same seeds of the ``paper004`` family (seeds 200-209 by default,
+Runs every filter on the same seeds of the ``paper004`` family (seeds 200-207 at the full budget,
 none used in training) and on trajectories 1-8 of ``$FUZZYNAV_DATA/akit`` (skipped with a
 note when absent), writes the figures into docs/figures/ and rewrites the section between
 ``<!-- results:begin -->`` and ``<!-- results:end -->`` of docs/paper004.md.  About ten
-minutes on two cores.  Usage: ``python benchmarks/paper004_results.py [--mc 10]``;
-``--real-only`` reruns the A-KIT part alone (a loader change) and keeps the simulated tables.
+minutes on two cores.  Usage: ``fuzzynav docs regenerate paper004``; ``build(ctx,
+real_only=True)`` reruns the A-KIT part alone (a loader change) and keeps the simulated
+tables.
 """
 from __future__ import annotations
 
-import argparse
 import json
-import os
-import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _report import machine, write_results  # noqa: E402
+from fuzzynav import plots
+from fuzzynav.papers.paper004.claims import PAPER004_IMPROVEMENT, PAPER004_LAKE
+from fuzzynav.errors import FuzzynavError
+from fuzzynav.experiment import monte_carlo, run_on_log
+from fuzzynav.metrics import errors_vs_trajectory
+from fuzzynav.pages.common import machine
+from fuzzynav.report import ci_cell, improvement_cell, render
+from fuzzynav.sim.sensor_log import simulate
+from fuzzynav.sim.scenario import load_scenario
 
-from fuzzynav import plots  # noqa: E402
-from fuzzynav.papers.paper004.claims import PAPER004_IMPROVEMENT, PAPER004_LAKE  # noqa: E402
-from fuzzynav.experiment import monte_carlo, run_on_log  # noqa: E402
-from fuzzynav.metrics import errors_vs_trajectory, improvement_ci, mean_ci  # noqa: E402
-from fuzzynav.report import render  # noqa: E402
-from fuzzynav.sim.sensor_log import simulate  # noqa: E402
-from fuzzynav.sim.scenario import load_scenario  # noqa: E402
-
-ROOT = Path(__file__).resolve().parents[1]
 R = "rules/"
 FILTERS = {  # label -> filter spec (options below)
     "KF (EKF)": "ekf",
@@ -46,19 +41,15 @@ FILTERS = {  # label -> filter spec (options below)
 SCENARIOS = ("paper004", "paper004-clean", "paper004-heavy", "paper004-dropouts")
 APSO = "apso@studies/paper004_apso.json"
 #: on A-KIT every filter here is untrained; the tuned ones (APSO, fuzzy) are judged on the
-#: trajectories they were not trained on, in the held-out section (paper004_heldout.py)
+#: trajectories they were not trained on, in the held-out section (page_heldout.py)
 REAL_FILTERS = ("ekf", "ekf-st", "huber", "sage-husa", "vb")
-FIG = ROOT / "docs" / "figures"
 
 
 def _cell(values, digits=2) -> str:
-    est = mean_ci(np.asarray(values, float))
-    return f"{est.mean:.{digits}f} ± {est.half_width:.{digits}f}"
+    return ci_cell(values, f".{digits}f")
 
 
-def _imp(base, cand) -> str:
-    imp = improvement_ci(np.asarray(base, float), np.asarray(cand, float))
-    return f"{imp.mean:+.1f} % [{imp.lo:+.1f}, {imp.hi:+.1f}]"
+_imp = improvement_cell
 
 
 def simulate_family(mc, cache) -> dict:
@@ -140,12 +131,12 @@ def real_table(df, key="rms_pos_h_m") -> str:
     return render(head, rows, markdown=True)
 
 
-def sim_figures(cache) -> list:
+def sim_figures(cache, fig_dir: Path) -> list:
     """Convergence/inertia of the APSO and simulated error curves."""
     out = []
     fig, ax = plots.plt.subplots(figsize=(6, 3.2))
     for fold, style in (("paper004_apso", "o"), ("paper004_apso_rev", "s")):
-        doc = json.loads((ROOT / "studies" / f"{fold}.json").read_text())
+        doc = json.loads((Path("studies") / f"{fold}.json").read_text())
         hist = pd.DataFrame(doc["history"]["apso"])
         train = ",".join(sorted({r[0].split(":")[-1] for r in doc["train"]}))
         ax.plot(hist["iteration"], hist["best"], f"{style}-", label=f"best, trained on {train}")
@@ -158,7 +149,7 @@ def sim_figures(cache) -> list:
     ax2.set_ylabel("inertia weight (dotted)")
     ax.legend(loc="upper right", fontsize=7)
     fig.tight_layout()
-    out.append(plots.save(fig, FIG / "paper004_apso_convergence.png"))
+    out.append(plots.save(fig, fig_dir / "paper004_apso_convergence.png"))
     log = simulate(load_scenario("paper004"), 200, cache)
     fig, ax = plots.plt.subplots(figsize=(7, 3.2))
     for label in ("KF (EKF)", "Huber γ = 1.345", "APSO (Q/R tuned on A-KIT 1–4)"):
@@ -172,29 +163,30 @@ def sim_figures(cache) -> list:
     ax.legend(fontsize=8)
     ax.set_title("paper004, seed 200")
     fig.tight_layout()
-    out.append(plots.save(fig, FIG / "paper004_sim_error.png"))
+    out.append(plots.save(fig, fig_dir / "paper004_sim_error.png"))
     return out
 
 
-def akit_figures(recs, ekf_results) -> list:
+def akit_figures(recs, ekf_results, fig_dir: Path) -> list:
     """The EKF's tracks over the reference tracks, and its errors (none without data)."""
     if not recs:
         return []
     from fuzzynav.realdata.akit_figures import error_figure, map_figure
 
-    return [plots.save(map_figure(recs, ekf_results, "EKF"), FIG / "paper004_akit_map.png"),
-            plots.save(error_figure(recs, ekf_results, "EKF"), FIG / "paper004_akit_error.png")]
+    return [plots.save(map_figure(recs, ekf_results, "EKF"), fig_dir / "paper004_akit_map.png"),
+            plots.save(error_figure(recs, ekf_results, "EKF"),
+                       fig_dir / "paper004_akit_error.png")]
 
 
 REAL_HEAD = "### The eight A-KIT trajectories"
 
 
-def sim_part(mc, cache) -> tuple[list, list]:
+def sim_part(ctx, mc) -> tuple[list, list]:
     """The simulated tables' lines and figures."""
-    dfs = simulate_family(mc, cache)
+    dfs = simulate_family(mc, ctx.cache)
     failed = {k: int((df["completed"] < 1).sum()) for k, df in dfs.items()}
     return [
-        f"Generated by `benchmarks/paper004_results.py` ({machine()}). Simulation: seeds "
+        f"Generated by `{ctx.command}` ({machine()}). Simulation: seeds "
         f"200–{199 + mc} of every scenario (the tuned fuzzy rules and APSO "
         "multipliers were trained on A-KIT trajectories 1–4, so every simulated run is "
         "held out for them). Runs that stopped early: "
@@ -202,22 +194,30 @@ def sim_part(mc, cache) -> tuple[list, list]:
         "### The paper's lake-test table, in simulation (`paper004`)", "",
         paper_table(dfs["paper004"]), "",
         "### Every filter on the family: mean horizontal error (m), paired change vs the "
-        "EKF (positive = smaller error)", "", family_table(dfs), ""], sim_figures(cache)
+        "EKF (positive = smaller error)", "", family_table(dfs), ""], sim_figures(ctx.cache, ctx.fig_dir)
 
 
-def kept_sim_part() -> tuple[list, list]:
-    """``--real-only``: the simulated tables as the page has them (they read no recording)
+def kept_sim_part(fig_dir: Path) -> tuple[list, list]:
+    """``real_only``: the simulated tables as the page has them (they read no recording)
     and their figures as they are."""
-    body = (ROOT / "docs" / "paper004.md").read_text().split("<!-- results:begin -->")[1]
+    body = Path("docs/paper004.md").read_text().split("<!-- results:begin -->")[1]
     kept = body.split(REAL_HEAD)[0].strip("\n").split("\n") + [""]
-    return kept, [FIG / "paper004_apso_convergence.png", FIG / "paper004_sim_error.png"]
+    return kept, [fig_dir / "paper004_apso_convergence.png", fig_dir / "paper004_sim_error.png"]
 
 
-def real_part(data) -> tuple[list, list]:
-    """The A-KIT tables' lines (untuned filters, held-out studies) and figures."""
+def require_recordings(data: Path) -> None:
+    """Raise :class:`FuzzynavError` naming the dataset when A-KIT is not at ``data``."""
+    if not (data / "IMU_trajectory1.csv").is_file():
+        raise FuzzynavError(f"{data}: the A-KIT recordings (dataset 'akit') are missing; "
+                            "fetch them with `fuzzynav data fetch akit` or set $FUZZYNAV_DATA")
+
+
+def real_part(data, fig_dir: Path) -> tuple[list, list]:
+    """The A-KIT tables' lines (untuned filters, held-out studies) and figures, or a
+    sentence saying they were skipped when the recordings are absent."""
     if not (data / "IMU_trajectory1.csv").is_file():
         return [f"(A-KIT recordings not found at {data}: real-data tables skipped.)", ""], []
-    from paper004_heldout import heldout_frame, section
+    from fuzzynav.papers.paper004.page_heldout import heldout_frame, section
 
     recs, real, ekf_results = real_data(data)
     return [f"{REAL_HEAD}: horizontal RMS (m) against the post-processed reference", "",
@@ -228,27 +228,17 @@ def real_part(data) -> tuple[list, list]:
             real_table(real), "",
             "End error as % of the distance travelled:", "",
             real_table(real, "end_pos_h_pct"), ""] + section(heldout_frame()), \
-        akit_figures(recs, ekf_results)
+        akit_figures(recs, ekf_results, fig_dir)
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--mc", type=int, default=10)
-    ap.add_argument("--real-only", action="store_true",
-                    help="rerun the A-KIT part alone, keeping the page's simulated tables")
-    args = ap.parse_args(argv)
-    os.chdir(ROOT)
-    cache = Path(os.environ.get("FUZZYNAV_CACHE", tempfile.mkdtemp()))
-    parts, figs = kept_sim_part() if args.real_only else sim_part(args.mc, cache)
-    data = Path(os.environ.get("FUZZYNAV_DATA", ROOT.parent / "shared" / "datasets")) / "akit"
-    real_lines, real_figs = real_part(data)
+def build(ctx, mc: int = 8, real: bool = True, real_only: bool = False) -> str:
+    """The results section and figures: seeds 200.. (``mc``) of every simulated scenario and
+    A-KIT 1-8 (``real``: the recordings are required; False: skipped if absent)."""
+    if real:
+        require_recordings(ctx.data_dir / "akit")  # before the simulations, not after
+    parts, figs = kept_sim_part(ctx.fig_dir) if real_only else sim_part(ctx, mc)
+    real_lines, real_figs = real_part(ctx.data_dir / "akit", ctx.fig_dir)
     parts, figs = parts + real_lines, figs + real_figs
     parts += ["Figures: " + ", ".join(f"[{p.name}](figures/{p.name})" for p in figs), ""]
     parts += [f"![{p.stem}](figures/{p.name})" for p in figs]
-    text = "\n".join(parts)
-    write_results(ROOT / "docs" / "paper004.md", text)
-    print(text)
-
-
-if __name__ == "__main__":
-    main()
+    return "\n".join(parts)

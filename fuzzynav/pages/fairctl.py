@@ -6,21 +6,22 @@ selected among ROR, NIS, trend, speed, angular rate and |f| - g, Mamdani or Suge
 filters with the tuned parameters already in ``studies/paper000_baselines.json`` on every
 held-out run, and prints per scenario the paired difference of its score against the best
 classical baseline, with 95 % CIs (never pooled).  It reuses the scoring of
-``benchmarks/science_results.py`` and writes no page (``docs/science.md`` is that script's)::
+:mod:`fuzzynav.pages.science` and writes no page (``docs/science.md`` is that page's)::
 
-    nice python benchmarks/fairctl_results.py --trials 30 --workers 2 --work /tmp/ctl
+    nice python -m fuzzynav.pages.fairctl --trials 30 --workers 2 --work /tmp/ctl
 """
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from dataclasses import replace
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "benchmarks"))
-import science_results as sr  # noqa: E402
+from fuzzynav.pages import science as sr
+from fuzzynav.pages import scores as sc
+from fuzzynav.pages.common import REPO_ROOT as ROOT
 
 STUDY = ROOT / "studies" / "paper000_fair_ctl.toml"
 PARAMS = ROOT / "studies" / "paper000_baselines.json"
@@ -45,7 +46,7 @@ def main(argv=None) -> int:
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--work", required=True, help="directory for the journal and the runs")
     p.add_argument("--seeds", type=int, help="held-out seeds per scenario (default: all)")
-    p.add_argument("--cache", default=str(sr.default_cache_dir()), help="simulation cache")
+    p.add_argument("--cache", default=os.environ.get("FUZZYNAV_CACHE", str(Path.home() / ".cache" / "fuzzynav")), help="simulation cache")
     args = p.parse_args(argv)
     work = Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
@@ -57,10 +58,10 @@ def main(argv=None) -> int:
     df = sr.held_out_table(cfg, systems, PARAMS, args.cache)
     df.to_csv(work / "fair_ctl_runs.csv", index=False)
     scenarios = list(dict.fromkeys(s for s, _ in cfg.test))
-    scores = sr.scores_to(df, sr.REF)
-    rows, text, tally = sr.comparison_lines(scores, scenarios)
+    scores = sc.scores_to(df, sc.REF)
+    rows, text, tally = sc.comparison_lines(scores, scenarios)
     print(f"trial {trial.number}: training value {trial.value:.4f}; params {trial.params}")
-    print("\n".join(sr.ratio_table(scores, list(dict.fromkeys(df["filter"])), scenarios)))
+    print("\n".join(sc.ratio_table(scores, list(dict.fromkeys(df["filter"])), scenarios)))
     print("\n".join(rows + [""] + text + [""]))
     print(sr.summary_text(tally, len(scenarios)))
     print(f"{(time.time() - t0) / 60:.1f} min wall, {sr.cpu_minutes():.1f} min CPU")

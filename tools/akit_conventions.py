@@ -6,7 +6,7 @@ reference's Euler rates (the file's y column is reversed); the clock map the loa
 reference-point offset; and the DVL against the reference velocity rotated into the body,
 the reference interpolated at the DVL's times (forward RMS, lateral RMS before/after the
 offset, forward scale fit).
-Usage: ``python benchmarks/akit_conventions.py [DIR]`` (default ``$FUZZYNAV_DATA/akit``).
+Usage: ``python tools/akit_conventions.py [DIR]`` (default ``$FUZZYNAV_DATA/akit``).
 """
 from __future__ import annotations
 

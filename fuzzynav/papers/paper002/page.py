@@ -1,6 +1,6 @@
 """Regenerate docs/paper002.md: paper 002's alignment reproduced, with measured numbers.
 
-    python benchmarks/paper002_results.py [--mc 50] [--mc-variants 20]
+    fuzzynav docs regenerate paper002
 
 Runs the alignment filters on ``paper002`` (``--mc`` seeds) and on each variant
 (``--mc-variants`` seeds), with the paper's rules and, when ``rules/paper002_ror_tuned.json``
@@ -9,31 +9,22 @@ plain and the fuzzy filter; writes the page (text, tables, figures) atomically.
 """
 from __future__ import annotations
 
-import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from fuzzynav import units
+from fuzzynav.align import alignment_run as R
+from fuzzynav.align.monte_carlo import ALIGN_ROWS, monte_carlo_alignment
+from fuzzynav.align.scenario import load_alignment_scenario
+from fuzzynav.papers.claims import claims_for
+from fuzzynav.fileio import publish
+from fuzzynav.papers.paper002.page_text import TUNED, page
+from fuzzynav.report import comparison_rows, render
 
-from fuzzynav import units  # noqa: E402
-from fuzzynav.align import alignment_run as R  # noqa: E402
-from fuzzynav.align.monte_carlo import ALIGN_ROWS, monte_carlo_alignment  # noqa: E402
-from fuzzynav.align.scenario import load_alignment_scenario  # noqa: E402
-from fuzzynav.papers.claims import claims_for  # noqa: E402
-from fuzzynav.fileio import publish  # noqa: E402
-from fuzzynav.report import comparison_rows, render  # noqa: E402
-
-DOC = ROOT / "docs" / "paper002.md"
-FIG = ROOT / "docs" / "figures"
-TUNED = ROOT / "rules" / "paper002_ror_tuned.json"
 FILTERS = ["align-kf", "align-kf12", "align-fuzzy", "align-fuzzy-fast"]
 VARIANTS = ["paper002-rmismatch", "paper002-sway", "paper002-gusts", "paper002-mems"]
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from paper002_text import page  # noqa: E402
 
 
 def results(name, seeds):
@@ -59,7 +50,7 @@ def never(df) -> dict:
     return {f: int((g["aligned_pct"] == 0).sum()) for f, g in df.groupby("filter", sort=False)}
 
 
-def figure(name, seed=0) -> str:
+def figure(name, fig_dir: Path, seed=0) -> str:
     """Misalignment errors with +-3 sigma for the plain and the fuzzy filter."""
     import matplotlib
 
@@ -87,8 +78,8 @@ def figure(name, seed=0) -> str:
         axes[2, col].set_xlabel("time [s]")
     axes[0, 0].legend(loc="upper right", fontsize=8)
     fig.tight_layout()
-    FIG.mkdir(parents=True, exist_ok=True)
-    path = FIG / f"{name}_misalignment.png"
+    fig_dir.mkdir(parents=True, exist_ok=True)
+    path = fig_dir / f"{name}_misalignment.png"
     tmp = path.with_name(f".{path.stem}.tmp.png")
     fig.savefig(tmp, dpi=90)
     plt.close(fig)
@@ -96,31 +87,18 @@ def figure(name, seed=0) -> str:
     return f"figures/{path.name}"
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--mc", type=int, default=50)
-    ap.add_argument("--mc-variants", type=int, default=20)
-    ap.add_argument("--reuse", metavar="PICKLE",
-                    help="keep the Monte-Carlo results in this file and reuse them if present "
-                         "(to rewrite the text without rerunning)")
-    args = ap.parse_args(argv)
-    if args.reuse and Path(args.reuse).exists():
-        runs = pd.read_pickle(args.reuse)
+def build(ctx, mc: int = 50, mc_variants: int = 20, reuse: str | None = None) -> str:
+    """The whole page: ``mc`` seeds of paper002, ``mc_variants`` of each variant; ``reuse``
+    keeps the Monte-Carlo results in this pickle and reuses them if present (to rewrite the
+    text without rerunning)."""
+    if reuse and Path(reuse).exists():
+        runs = pd.read_pickle(reuse)
     else:
-        runs = {"paper002": results("paper002", range(args.mc))}
+        runs = {"paper002": results("paper002", range(mc))}
         for v in VARIANTS:
-            runs[v] = results(v, range(args.mc_variants))
-        if args.reuse:
-            pd.to_pickle(runs, args.reuse)
+            runs[v] = results(v, range(mc_variants))
+        if reuse:
+            pd.to_pickle(runs, reuse)
     tables = {n: table(n, df) for n, (_, df) in runs.items()}
-    figs = {n: figure(n) for n in ("paper002", "paper002-rmismatch")}
-    text = page(runs, tables, figs, never, args)
-    tmp = DOC.with_name(".paper002.md.tmp")
-    tmp.write_text(text, encoding="utf-8")
-    publish(tmp, DOC)
-    print(f"wrote {DOC}")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
+    figs = {n: figure(n, ctx.fig_dir) for n in ("paper002", "paper002-rmismatch")}
+    return page(runs, tables, figs, never, ctx.command)

@@ -1,7 +1,7 @@
 """Maintainer script: rebuild ``fuzzynav/realdata/datasets.json`` (what ``fuzzynav data
 fetch`` downloads) from local copies of the public recordings.
 
-``python benchmarks/data_registry.py DATASETS_DIR`` reads every file listed in
+``python tools/data_registry.py DATASETS_DIR`` reads every file listed in
 :data:`LAYOUT` under ``DATASETS_DIR`` (the maintainers' ``../shared/datasets``, whose files
 are byte-identical to the public ones), computes its SHA-256 and size, and writes the
 registry: per dataset its files with the path inside the dataset directory, the URL path

@@ -5,24 +5,16 @@ Each fold's study (``studies/paper004_fuzzy.toml``: trained on trajectories 1-4,
 rules run on the fold's held-out trajectories beside the EKF and Huber.  Over the two folds
 every trajectory is held out once, so the eight held-out results pool into one paired
 comparison against the EKF (mean relative change over trajectories, 95 % CI, t).
-Usage: ``python benchmarks/paper004_heldout.py`` (prints the section; needs the studies run
-and ``$FUZZYNAV_DATA``).
+Part of ``fuzzynav docs regenerate paper004`` (needs the studies run and ``$FUZZYNAV_DATA``).
 """
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
-import numpy as np
 import pandas as pd
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+from fuzzynav.pages.common import REPO_ROOT as ROOT
+from fuzzynav.realdata.dataspec import is_recording_name, parse_recording_spec
+from fuzzynav.report import ci_cell, improvement_cell, render
 
-from fuzzynav.metrics import improvement_ci, mean_ci  # noqa: E402
-from fuzzynav.realdata.dataspec import is_recording_name, parse_recording_spec  # noqa: E402
-from fuzzynav.report import render  # noqa: E402
-
-ROOT = Path(__file__).resolve().parents[1]
 FOLDS = ("studies/paper004_fuzzy.toml", "studies/paper004_fuzzy_rev.toml")
 APSO_FOLDS = ("studies/paper004_apso.toml", "studies/paper004_apso_rev.toml")
 COMPARE = ("ekf", "huber")
@@ -65,13 +57,10 @@ def _with_trajectory(df, cfg) -> pd.DataFrame:
 
 
 def _cell(values) -> str:
-    est = mean_ci(np.asarray(values, float))
-    return f"{est.mean:.2f} ± {est.half_width:.2f}"
+    return ci_cell(values, ".2f")
 
 
-def _imp(base, cand) -> str:
-    imp = improvement_ci(np.asarray(base, float), np.asarray(cand, float))
-    return f"{imp.mean:+.1f} % [{imp.lo:+.1f}, {imp.hi:+.1f}]"
+_imp = improvement_cell
 
 
 def heldout_table(df: pd.DataFrame, key: str = "rms_pos_h_m", filters=None) -> str:
@@ -124,7 +113,3 @@ def section(df: pd.DataFrame) -> list:
             heldout_table(df, "end_pos_h_pct", filters), "",
             "Per fold (horizontal RMS, paired change vs the EKF on the fold's four held-out "
             "trajectories):", "", fold_table(df), ""]
-
-
-if __name__ == "__main__":
-    print("\n".join(section(heldout_frame())))

@@ -1,6 +1,6 @@
 """The held-out recordings of ``docs/science.md``: the car drive and the AUV trajectories.
 
-Called by ``benchmarks/science_results.py`` (the section "Held-out recordings"); every part
+Called by :mod:`fuzzynav.pages.science` (the section "Held-out recordings"); every part
 that lacks its data or its rules is skipped with a sentence on the page saying so.
 
 * **Car drive** (``$FUZZYNAV_DATA/rtklib-drive``, ``--data`` of the script): the protocol of
@@ -22,13 +22,13 @@ that lacks its data or its rules is skipped with a sentence on the page saying s
 from __future__ import annotations
 
 import os
-import sys
 import tempfile
 from pathlib import Path
 
 import pandas as pd
 
-ROOT = Path(__file__).resolve().parents[1]
+from fuzzynav.pages.common import REPO_ROOT as ROOT
+
 #: rules tuned on a recording, looked for when no path is given
 CAR_RULES = ROOT / "rules" / "rtklib_drive_tuned.json"
 AUV_RULES = ROOT / "rules" / "paper004_fuzzy_dvl.json"
@@ -90,7 +90,7 @@ def _save_systems(systems: dict, directory: Path) -> Path:
 
 
 def _drift_lines(df: pd.DataFrame, order) -> list:
-    import science_results as sr
+    from fuzzynav.pages import scores as sr
 
     lines = ["| filter | horizontal RMS, GNSS throughout (m) | velocity RMS (m/s) | "
              "drift RMS over the outages (m) | runs completed |", "|---|---|---|---|---|"]
@@ -104,7 +104,7 @@ def _drift_lines(df: pd.DataFrame, order) -> list:
 
 def _paired_lines(scores, scenario, fuzzies, ref) -> list:
     """A sentence per fuzzy controller against the best classical filter and ``ref``."""
-    import science_results as sr
+    from fuzzynav.pages import scores as sr
 
     pool = scores[~scores["filter"].isin([*fuzzies, *sr.NOT_CLASSICAL])]
     best = pool.groupby("filter")["score"].mean().idxmin()
@@ -118,7 +118,7 @@ def _paired_lines(scores, scenario, fuzzies, ref) -> list:
 
 def car_section(directory: Path, params: Path, systems: dict, car_rules, seeds) -> tuple:
     """Markdown lines of the car drive and its rows."""
-    import science_results as sr
+    from fuzzynav.pages import scores as sr
 
     rules = Path(car_rules) if car_rules else CAR_RULES
     note = [] if rules.is_file() else [
@@ -158,7 +158,7 @@ def _held_out_trajectories(rules: Path) -> list:
 
 def auv_section(directory: Path, auv_rules) -> tuple:
     """Markdown lines of the AUV runs (or the note why they are skipped), and their rows."""
-    import science_results as sr
+    from fuzzynav.pages import scores as sr
 
     rules = Path(auv_rules) if auv_rules else AUV_RULES
     if not directory.is_dir():
@@ -223,31 +223,20 @@ def splice_auv(page: str, auv_lines: list) -> str:
     return page[:a] + "\n".join(auv_lines) + "\n" + page[b:]
 
 
-def main(argv=None) -> int:
-    """``--auv-only``: rerun the AUV subsection of docs/science.md and its rows of
+def regenerate_auv(data: str | None = None, auv_rules: str | None = None,
+                   root: Path = ROOT) -> None:
+    """Rerun the AUV subsection of docs/science.md and its rows of
     docs/science_recordings.csv alone (the simulated sections need hours of tuning;
-    ``science_results.py`` regenerates the whole page)."""
-    import argparse
-
+    ``fuzzynav docs regenerate science`` regenerates the whole page)."""
     from fuzzynav.fileio import write_atomic
 
-    p = argparse.ArgumentParser(description=main.__doc__)
-    p.add_argument("--auv-only", action="store_true", required=True)
-    p.add_argument("--data", help="recordings directory (default $FUZZYNAV_DATA)")
-    p.add_argument("--auv-rules", help="DVL rules tuned on recordings")
-    args = p.parse_args(argv)
-    lines, df = auv_section(data_root(args.data) / "akit", args.auv_rules)
-    page = ROOT / "docs" / "science.md"
+    lines, df = auv_section(data_root(data) / "akit", auv_rules)
+    page = root / "docs" / "science.md"
     text = splice_auv(page.read_text(), lines)
     write_atomic(page, lambda tmp: Path(tmp).write_text(text))
-    csv = ROOT / "docs" / "science_recordings.csv"
+    csv = root / "docs" / "science_recordings.csv"
     if df is not None and csv.is_file():
         old = pd.read_csv(csv)
         # columns only the replaced rows had (an earlier loader's fields) go with them
         new = pd.concat([old[old["scenario"] != "akit"], df]).dropna(axis=1, how="all")
         write_atomic(csv, lambda tmp: new.to_csv(tmp, index=False))
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

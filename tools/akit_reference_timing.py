@@ -9,7 +9,7 @@ few hundredths of a degree; a timing error shows as heading error where the turn
 changes.  *Before*: the reference placed by the earlier loader (the yaw rate of the reference
 against the z gyro x cos roll in 1-s bins, whole-trajectory lag of 0-3 samples, reproduced
 below); *after*: the loader's clock map (``fuzzynav.realdata.loaders.akit_timing``).  Usage:
-``python benchmarks/akit_reference_timing.py`` (reads ``$FUZZYNAV_DATA/akit``).
+``python tools/akit_reference_timing.py`` (reads ``$FUZZYNAV_DATA/akit``).
 """
 from __future__ import annotations
 

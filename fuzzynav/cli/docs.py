@@ -1,0 +1,39 @@
+"""``fuzzynav docs list | regenerate``: the docs results pages, made from the package."""
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def register(sub) -> None:
+    p = sub.add_parser("docs", help="the docs results pages: list them, regenerate them")
+    ds = p.add_subparsers(dest="docs_command", metavar="ACTION")
+    ds.required = True
+    ls = ds.add_parser("list", help="the pages: name, docs file, section and what it shows")
+    ls.set_defaults(func=_cmd_list)
+    r = ds.add_parser("regenerate", help="rerun a page's experiments and rewrite its section")
+    r.add_argument("pages", nargs="+", metavar="PAGE", help="page name (fuzzynav docs list)")
+    r.add_argument("--budget", choices=("small", "full"), default="full",
+                   help="full: the Monte-Carlo counts and study budgets the page states "
+                        "(default); small: a quick look, written to --out")
+    r.add_argument("--out", metavar="DIR", type=Path,
+                   help="write PAGE.md and figures/ into DIR instead of over docs/ "
+                        "(required with --budget small)")
+    r.set_defaults(func=_cmd_regenerate)
+
+
+def _cmd_list(args) -> int:
+    from fuzzynav.pages.registry import PAGES
+
+    for page in PAGES.values():
+        where = page.doc + (f" [{page.marker}]" if page.marker else " [whole page]")
+        print(f"{page.name:10s} {where:32s} {page.summary}")
+    return 0
+
+
+def _cmd_regenerate(args) -> int:
+    from fuzzynav.pages.registry import get_page, regenerate
+
+    pages = [get_page(name) for name in args.pages]  # every name checked before any run
+    for page in pages:
+        print(f"wrote {regenerate(page, args.budget, args.out)}")
+    return 0

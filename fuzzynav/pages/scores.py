@@ -1,0 +1,87 @@
+"""Scores of the science page: each run's RMS ratios to a reference filter, the paired
+difference of two filters per scenario with its 95 % CI, and the markdown built from them."""
+from __future__ import annotations
+
+import pandas as pd
+
+from fuzzynav.metrics import mean_ci
+from fuzzynav.report import ci_cell
+
+FUZZY = "fuzzy-tuned"
+REF, ORACLE = "ekf-tuned", "ekf-true"
+#: filters that are neither fuzzy nor told the truth: the "best classical baseline" pool
+NOT_CLASSICAL = (FUZZY, "fakf", "fuzzy", ORACLE)
+METRICS = ("rms_pos_m", "rms_vel_mps", "rms_att_deg")
+
+
+def scores_to(df: pd.DataFrame, ref: str, metrics=METRICS) -> pd.DataFrame:
+    """Per run and filter: mean over ``metrics`` (pos/vel/att) of the RMS ratio to ``ref``."""
+    key = ["scenario", "seed"]
+    metrics = list(metrics)
+    base = df[df["filter"] == ref][[*key, *metrics]]
+    out = df[[*key, "filter", *metrics]].merge(base, on=key, suffixes=("", "_ref"))
+    ratios = [out[m] / out[m + "_ref"] for m in metrics]
+    out["score"] = sum(ratios) / len(ratios)
+    return out[["scenario", "seed", "filter", "score"]]
+
+
+def cell(values) -> str:
+    return ci_cell(values, ".2f")
+
+
+def ratio_table(scores: pd.DataFrame, order, scenarios) -> list:
+    """Markdown rows: filter x scenario, mean score (95 % CI over seeds)."""
+    lines = ["| filter | " + " | ".join(f"`{s}`" for s in scenarios) + " |",
+             "|---|" + "---|" * len(scenarios)]
+    for f in order:
+        sub = scores[scores["filter"] == f]
+        cells = [cell(sub[sub["scenario"] == s]["score"]) for s in scenarios]
+        lines.append(f"| {f} | " + " | ".join(cells) + " |")
+    return lines
+
+
+def best_classical(scores: pd.DataFrame, scenario: str) -> str:
+    """The classical filter with the lowest mean score on ``scenario``."""
+    sub = scores[(scores["scenario"] == scenario) & ~scores["filter"].isin(NOT_CLASSICAL)]
+    return sub.groupby("filter")["score"].mean().idxmin()
+
+
+def paired(scores: pd.DataFrame, scenario: str, a: str, b: str):
+    """Mean and 95 % CI of ``score(a) - score(b)`` over the scenario's seeds."""
+    sub = scores[scores["scenario"] == scenario].pivot(index="seed", columns="filter",
+                                                       values="score")
+    return mean_ci((sub[a] - sub[b]).to_numpy())
+
+
+def verdict(est) -> str:
+    """``wins against`` / ``draws with`` / ``loses to`` by the 95 % CI of a paired difference
+    (negative favours the first filter); with one pair there is no CI to tell."""
+    if est.n < 2:
+        return "is not told apart (one seed) from"
+    if est.hi < 0:
+        return "wins against"
+    if est.lo > 0:
+        return "loses to"
+    return "draws with"
+
+
+def sentence(scenario: str, a: str, b: str, est) -> str:
+    return (f"On `{scenario}`, {a} **{verdict(est)}** {b}: score difference "
+            f"{est.mean:+.3f} (95 % CI {est.lo:+.3f} to {est.hi:+.3f}, {est.n} seeds).")
+
+
+def comparison_lines(scores: pd.DataFrame, scenarios) -> tuple:
+    """Table rows and one sentence per scenario: the fuzzy controller vs the best classical
+    baseline and vs the tuned constant-noise EKF."""
+    rows = ["| scenario | best classical | fuzzy − best (95 % CI) | verdict | "
+            "fuzzy − ekf-tuned (95 % CI) | verdict |", "|---|---|---|---|---|---|"]
+    text, tally = [], {"wins against": 0, "draws with": 0, "loses to": 0}
+    for s in scenarios:
+        best = best_classical(scores, s)
+        vs_best, vs_ref = paired(scores, s, FUZZY, best), paired(scores, s, FUZZY, REF)
+        tally[verdict(vs_best)] = tally.get(verdict(vs_best), 0) + 1
+        rows.append(f"| `{s}` | {best} | {vs_best.mean:+.3f} [{vs_best.lo:+.3f}, "
+                    f"{vs_best.hi:+.3f}] | {verdict(vs_best)} | {vs_ref.mean:+.3f} "
+                    f"[{vs_ref.lo:+.3f}, {vs_ref.hi:+.3f}] | {verdict(vs_ref)} |")
+        text.append("- " + sentence(s, "the tuned fuzzy controller", f"`{best}`", vs_best))
+    return rows, text, tally
