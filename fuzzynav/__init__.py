@@ -20,7 +20,11 @@ tuning
     Optuna / PSO studies that learn fuzzy rules or tune classical filters; export, reports.
 papers
     One folder per source paper (``papers/paperNNN/``): its published figures (shown beside
-    measured results, never asserted), paper-specific named filters, scenarios.
+    measured results, never asserted), paper-specific named filters, scenarios, and the
+    generator of its docs results page.
+pages
+    The docs results pages that span papers (science, fair controller) and the registry
+    ``fuzzynav docs regenerate`` runs the pages from.
 cli
     The ``fuzzynav`` command.
 

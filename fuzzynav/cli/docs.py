@@ -22,7 +22,7 @@ def register(sub) -> None:
 
 
 def _cmd_list(args) -> int:
-    from fuzzynav.pages.registry import PAGES
+    from fuzzynav.pages.page_registry import PAGES
 
     for page in PAGES.values():
         where = page.doc + (f" [{page.marker}]" if page.marker else " [whole page]")
@@ -31,7 +31,7 @@ def _cmd_list(args) -> int:
 
 
 def _cmd_regenerate(args) -> int:
-    from fuzzynav.pages.registry import get_page, regenerate
+    from fuzzynav.pages.page_registry import get_page, regenerate
 
     pages = [get_page(name) for name in args.pages]  # every name checked before any run
     for page in pages:

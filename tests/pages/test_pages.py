@@ -9,7 +9,7 @@ from scipy import stats
 
 from fuzzynav.cli import main
 from fuzzynav.pages.common import markers, replace_section
-from fuzzynav.pages.registry import PAGES
+from fuzzynav.pages.page_registry import PAGES
 from fuzzynav.report import ci_cell, improvement_cell
 
 from ..conftest import ROOT
