@@ -31,9 +31,9 @@ def _fuzzy_call_case():
 
 
 def _filter_cases(cache_dir):
-    from fuzzynav.experiment import perturbed_initial_state, setup_for
+    # names both trees have (modules were renamed since older base revisions)
+    from fuzzynav.experiment import perturbed_initial_state, setup_for, simulate
     from fuzzynav.filters.runner import run_filter
-    from fuzzynav.sim.sensor_log import simulate
     from fuzzynav.sim.scenario import load_scenario
 
     log = simulate(load_scenario("paper000"), 0, cache_dir)

@@ -21,7 +21,7 @@ import time
 import numba as nb
 import numpy as np
 
-from fuzzynav.experiment import perturbed_initial_state, setup_for
+from fuzzynav.experiment import perturbed_initial_state, setup_for, simulate
 from fuzzynav.filters import kalman, loop
 from fuzzynav.filters.error_model import discretize, fill_F
 from fuzzynav.filters.runner import _sensor_tables, run_filter
@@ -31,8 +31,11 @@ try:  # this tree: feedback has its own module (filter banks)
 except ImportError:  # the base revision: it lived in the loop module
     _apply_feedback = loop._feedback
 from fuzzynav.nav import strapdown
-from fuzzynav.nav.state_layout import PREV_SIZE
-from fuzzynav.sim.sensor_log import simulate
+
+try:
+    from fuzzynav.nav.state_layout import PREV_SIZE
+except ImportError:  # a base revision before the module got its name (bench_ekf --base)
+    from fuzzynav.nav.layout import PREV_SIZE
 from fuzzynav.sim.scenario import load_scenario
 
 
