@@ -43,8 +43,8 @@ from fuzzynav.filters.named import FilterSetup, base_config, every_sensor, regis
 
 #: the tuned-parameter file used when a filter is named without ``@FILE``
 DEFAULT_PARAMS = "paper000_baselines.json"
-__all__ = ["DEFAULT_PARAMS", "Q_FIELDS", "TUNED", "find_params_file", "params_of", "read_params",
-           "scaled_noise_setup"]
+__all__ = ["DEFAULT_PARAMS", "Q_FIELDS", "TUNED", "find_params_file", "hqh_per_channel", "params_of",
+           "read_params", "scaled_noise_setup"]
 
 
 def read_params(path) -> dict:

@@ -17,7 +17,7 @@ from fuzzynav.filters import adaptation, measurements
 from fuzzynav.filters.adaptation.classical import (ConstantScale, FadingMemory, Huber, SageHusa,
                                                    VariationalBayes)
 from fuzzynav.filters.adaptation.binding import BANK_CONTROLLERS, Binding
-from fuzzynav.filters.multipliers import is_multiplier, r_scales
+from fuzzynav.filters.multipliers import Q_FIELDS, is_multiplier, r_scales
 from fuzzynav.filters.named import FilterContext, FilterSetup, base_config, every_sensor, \
     register_alias, register_filter
 
@@ -178,11 +178,11 @@ def _ekf_scaled(ctx):
     from fuzzynav.filters.params_file import check_params
 
     mult = {k: v for k, v in ctx.options.items() if is_multiplier(k)}
-    mult = check_params("ekf-tuned", mult, None, "options.") if mult else {}
-    q = sorted(k for k in mult if not k.startswith("r_"))
+    q = sorted(k for k in mult if k in Q_FIELDS)
     if q:
         raise FuzzynavError(f"ekf-scaled: options {', '.join(q)} scale Q; ekf-scaled scales "
                             "R only (ekf-tuned takes both)")
+    mult = check_params("ekf-scaled", mult, None, "options.") if mult else {}
     scales, default = r_scales(mult)
     return every_sensor(ctx, lambda: ConstantScale(scales, default))
 

@@ -124,7 +124,7 @@ def register_alias(alias: str, name: str) -> None:
     """Register ``alias`` as another name of the filter ``name`` (listed as an alias)."""
     target = FILTERS[name]
     FILTERS.add(alias, NamedFilter(alias, f"alias of {name!r}", target.make,
-                                   target.takes_rules))
+                                   target.takes_rules, target.takes_params))
 
 
 def parse_filter_spec(spec: str):

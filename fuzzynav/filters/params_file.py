@@ -62,12 +62,13 @@ class Param:
 
 _MULT = Param(*MULTIPLIER)
 #: the constant-multiplier filters (one vocabulary, :mod:`fuzzynav.filters.multipliers`)
-MULTIPLIER_FILTERS = ("ekf-tuned", "als", "apso")
+MULTIPLIER_FILTERS = ("ekf-tuned", "als", "apso", "ekf-scaled")
 
 #: tuned filter -> {key: Param}; the per-channel R factors ``r_<channel>`` of the
 #: multiplier filters are added by :func:`known_keys`
 PARAMETERS = {
     **{name: {**{k: _MULT for k in Q_FIELDS}, R_ALL: _MULT} for name in MULTIPLIER_FILTERS},
+    "ekf-scaled": {R_ALL: _MULT},  # R only (its options; and r_<channel>)
     "sage-husa-tuned": {"b": Param(0.0, 1.0, lo_open=True, hi_open=True),
                         "floor": Param(0.0, MULTIPLIER[1], lo_open=True),
                         "cap": Param(0.0, MULTIPLIER[1], lo_open=True)},

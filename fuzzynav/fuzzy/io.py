@@ -286,4 +286,4 @@ def save_fis(fis: FuzzySystem, path) -> None:
 
 
 __all__ = ["load_fis", "save_fis", "from_dict", "to_dict", "schema", "validate_document",
-           "parse_json_text", "dumps", "MAX_FILE_BYTES"]
+           "parse_json_text", "dumps", "schema_message", "MAX_FILE_BYTES"]

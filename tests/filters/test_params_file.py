@@ -127,6 +127,8 @@ def test_the_one_finder_finds_a_bare_name_in_studies_and_refuses_a_directory(tmp
     ({"r_scale": 2.0}, "options.r_scale: an old name: the multiplier is now 'r_all'"),
     ({"r_pos": 0.0}, "options.r_pos: must be a number in [1e-06"),
     ({"q_att": 2.0}, "ekf-scaled: options q_att scale Q"),
+    ({"r_bogus": 2.0}, "options.r_bogus: unknown parameter of ekf-scaled (known: r_all, "
+                       "r_<channel>)"),
 ])
 def test_ekf_scaled_options_use_the_one_vocabulary(options, phrase):
     from fuzzynav.errors import FuzzynavError
@@ -135,3 +137,16 @@ def test_ekf_scaled_options_use_the_one_vocabulary(options, phrase):
     with pytest.raises(FuzzynavError) as exc:
         get_filter("ekf-scaled").make(FilterContext(options=options))
     assert phrase in str(exc.value)
+
+
+def test_an_alias_of_a_filter_with_parameters_reads_its_file_too():
+    from fuzzynav.filters.named import FILTERS, parse_filter_spec, register_alias
+
+    FILTERS.load()
+    try:
+        register_alias("ekf-tuned-alias", "ekf-tuned")
+        assert FILTERS["ekf-tuned-alias"].takes_params
+        assert parse_filter_spec(f"ekf-tuned-alias@{SHIPPED}") == ("ekf-tuned-alias",
+                                                                   {"params": str(SHIPPED)})
+    finally:
+        dict.pop(FILTERS, "ekf-tuned-alias", None)
