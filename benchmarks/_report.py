@@ -3,7 +3,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from fuzzynav.pages.common import machine, markers, replace_section, write_text_atomic
+from fuzzynav.fileio import write_text_atomic
+from fuzzynav.pages.common import machine, markers, replace_section
 
 __all__ = ["machine", "write_section"]
 

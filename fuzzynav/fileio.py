@@ -23,7 +23,7 @@ from pathlib import Path
 from fuzzynav.errors import InputFileError, OutputError, brief
 
 __all__ = ["FILE_MODE", "publish", "MAX_STEM", "safe_stem", "output_errors", "SYSTEM_DIRS",
-           "is_inside", "check_place", "study_output", "make_dir", "write_atomic",
+           "is_inside", "check_place", "study_output", "make_dir", "write_atomic", "write_text_atomic",
            "publish_all", "sweep_staged", "staged", "json_ready"]
 
 
@@ -158,6 +158,15 @@ def write_atomic(path, write, suffix: str = ".tmp", what: str = "") -> Path:
         if tmp is not None and os.path.exists(tmp):
             os.unlink(tmp)
     return path
+
+
+def write_text_atomic(path, text: str, what: str = "") -> Path:
+    """Write ``text`` (UTF-8, ``\\n`` line ends) to ``path`` with :func:`write_atomic`."""
+    def fill(tmp):
+        with open(tmp, "w", encoding="utf-8", newline="\n") as fh:
+            fh.write(text)
+
+    return write_atomic(path, fill, suffix=Path(path).suffix or ".tmp", what=what)
 
 
 def publish_all(pairs, what: str = "") -> None:

@@ -13,17 +13,20 @@ import pytest
 from fuzzynav.cli import main
 from fuzzynav.errors import InputFileError, OutputError
 from fuzzynav.fileio import check_place, is_inside, make_dir, staged, study_output, write_atomic
+from fuzzynav.fuzzy import load_fis, save_fis, write_matlab_fis
 from tests.tuning.test_baselines import TINY
 
 ROOT = Path(__file__).resolve().parents[1]
 TARGET = "/etc/fuzzynav-test-must-not-exist"
+GPS_RULES = ROOT / "rules" / "paper000_gps_sins.json"
 
 
 @pytest.fixture(autouse=True)
 def _nothing_in_etc():
-    assert not os.path.exists(TARGET)
+    assert not os.path.exists(TARGET) and not os.path.exists(f"{TARGET}.fis")
     yield
-    assert not os.path.exists(TARGET), f"{TARGET} was written"
+    for path in (TARGET, f"{TARGET}.fis"):
+        assert not os.path.exists(path), f"{path} was written"
 
 
 @pytest.mark.parametrize("writer", [
@@ -31,6 +34,8 @@ def _nothing_in_etc():
     lambda: write_atomic(f"{TARGET}/x.json", lambda tmp: Path(tmp).write_text("{}")),
     lambda: staged(TARGET).__enter__(),
     lambda: check_place("/usr/../etc/passwd-copy"),
+    lambda: save_fis(load_fis(GPS_RULES), f"{TARGET}/x.json"),
+    lambda: write_matlab_fis(load_fis(GPS_RULES), f"{TARGET}.fis"),
 ])
 def test_no_writer_writes_into_a_system_directory(writer):
     with pytest.raises(OutputError, match="/etc is a system directory"):
@@ -90,3 +95,21 @@ def test_a_cli_cache_in_a_system_directory_is_one_line(tmp_path, capsys):
     code = main(["run", "paper000-steps", "--filter", "ekf", "--cache", TARGET])
     _, err = capsys.readouterr()
     assert code == 2 and "/etc is a system directory" in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("dst", [f"{TARGET}.fis", f"{TARGET}/x.json"])
+def test_fis_convert_into_a_system_directory_is_one_line(capsys, dst):
+    code = main(["fis", "convert", str(GPS_RULES), dst])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == "" and err.count("\n") == 1, (out, err)
+    assert "/etc is a system directory" in err and "rule file" in err
+
+
+def test_fis_convert_writes_a_rule_file_with_the_usual_mode(tmp_path, capsys):
+    dst = tmp_path / "new" / "gps.fis"
+    assert main(["fis", "convert", str(GPS_RULES), str(dst)]) == 0
+    assert dst.is_file() and load_fis(dst).output_names == load_fis(GPS_RULES).output_names
+    mask = os.umask(0)
+    os.umask(mask)
+    assert dst.stat().st_mode & 0o777 == 0o666 & ~mask
+    assert [p.name for p in dst.parent.iterdir()] == ["gps.fis"]  # no temporary file left

@@ -1,6 +1,7 @@
 """fuzzynav.fuzzy — a generic, exact and fast Mamdani/Sugeno fuzzy inference engine.
 
-Knows nothing of navigation (imports nothing of fuzzynav but :mod:`fuzzynav.errors`).
+Knows nothing of navigation (imports nothing of fuzzynav but :mod:`fuzzynav.errors` and
+the atomic writer :mod:`fuzzynav.fileio`).
 
 Main entry points
 -----------------

@@ -14,7 +14,8 @@ import re
 from fuzzynav.fuzzy._where import FisError, located
 from fuzzynav.fuzzy.membership import SHAPES
 from fuzzynav.fuzzy.system import Antecedent, FuzzySystem, Operators, Rule, Term, Variable
-from fuzzynav.fuzzy.textio import read_text, write_text_atomic
+from fuzzynav.fileio import write_text_atomic
+from fuzzynav.fuzzy.textio import read_text
 
 _FROM_MATLAB = {s.matlab: s.name for s in SHAPES.values() if s.matlab}
 _KNOWN_SYSTEM_KEYS = {"Name", "Type", "Version", "NumInputs", "NumOutputs", "NumRules",
@@ -242,5 +243,5 @@ def v_index(variables, name, term) -> int:
 
 def write_matlab_fis(fis: FuzzySystem, path) -> list[str]:
     """Write ``fis`` as a MATLAB ``.fis`` file atomically; return the dropped fields."""
-    write_text_atomic(path, matlab_text(fis))
+    write_text_atomic(path, matlab_text(fis), what="rule file")
     return dropped_fields(fis)

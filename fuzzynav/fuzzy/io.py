@@ -21,7 +21,8 @@ from fuzzynav.fuzzy.document import FORMAT, OPTIONAL_OBJECTS, VERSION, to_dict
 from fuzzynav.fuzzy.fis_matlab import read_matlab_fis, write_matlab_fis
 from fuzzynav.fuzzy.system import (NAME_RE, Antecedent, FuzzySystem, Operators, Rule, Term,
                                    Variable)
-from fuzzynav.fuzzy.textio import MAX_FILE_BYTES, read_text, write_text_atomic
+from fuzzynav.fileio import write_text_atomic
+from fuzzynav.fuzzy.textio import MAX_FILE_BYTES, read_text
 
 
 # ------------------------------------------------------------------------ parsing
@@ -282,7 +283,7 @@ def save_fis(fis: FuzzySystem, path) -> None:
     if str(path).lower().endswith(".fis"):
         write_matlab_fis(fis, path)
         return
-    write_text_atomic(path, dumps(to_dict(fis)))
+    write_text_atomic(path, dumps(to_dict(fis)), what="rule file")
 
 
 __all__ = ["load_fis", "save_fis", "from_dict", "to_dict", "schema", "validate_document",

@@ -4,12 +4,11 @@ from __future__ import annotations
 import datetime as _dt
 import os
 import platform
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.fileio import publish
+from fuzzynav.fileio import write_text_atomic
 
 #: the repository root (docs/, rules/, studies/ live here in a source checkout)
 REPO_ROOT = Path(__file__).resolve().parents[2]
@@ -61,16 +60,6 @@ def machine() -> str:
 def markers(marker: str) -> tuple[str, str]:
     """The begin and end comment lines of the marked section ``marker``."""
     return f"<!-- {marker}:begin -->", f"<!-- {marker}:end -->"
-
-
-def write_text_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file in the same directory + rename."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
-    with os.fdopen(fd, "w", encoding="utf-8") as fh:
-        fh.write(text)
-    publish(tmp, path)
 
 
 def replace_section(text: str, marker: str | None, body: str, where: str = "page") -> str:

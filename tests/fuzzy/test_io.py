@@ -103,7 +103,8 @@ def test_save_is_atomic(tmp_path, monkeypatch, target, err):
     monkeypatch.setattr(tempfile if target == "mkstemp" else os, target, _fail_with(err))
     with pytest.raises(OutputError) as info:
         save_fis(load_fis(GPS), path)
-    assert str(info.value) == f"{path}: cannot write it: {os.strerror(err)} (nothing was changed)"
+    assert str(info.value) == (f"{path}: cannot write the rule file: {os.strerror(err)} "
+                               "(nothing was changed)")
     assert path.read_bytes() == before
     assert os.listdir(tmp_path) == ["r.json"]  # no temporary file left behind
 
