@@ -40,6 +40,7 @@ from fuzzynav.errors import InputFileError
 from fuzzynav.nav import attitude, earth
 from fuzzynav.nav.strapdown import quat_mul, rv2q
 from fuzzynav.realdata.start_options import StartOptions
+from fuzzynav.realdata import start_check
 
 __all__ = ["StartEstimate", "opening_rest", "level", "relative_attitude",
            "heading_from_course", "heading_from_track", "heading_from_specific_force",
@@ -191,7 +192,7 @@ def _circular_mean(d) -> float:
 
 
 def heading_from_track(imu, gnss, t_ref, c_level, rate_bias, window_s=30.0,
-                       baseline_m=10.0) -> float:
+                       baseline_m=10.0, with_sigma=False):
     """Heading [rad] at ``t_ref`` of a body whose y axis is the direction of travel, from the
     GNSS track: for a slow platform, whose velocity is too small for its course to be read.
 
@@ -200,6 +201,8 @@ def heading_from_track(imu, gnss, t_ref, c_level, rate_bias, window_s=30.0,
     gyro-propagated azimuth of the forward axis is subtracted; the circular mean of the
     differences is the heading.  The position noise turns a chord by about
     ``sigma / baseline`` rad: choose the baseline well above the fixes' noise.
+    With ``with_sigma``, also the 1-sigma [rad]: the chords' circular spread over the
+    square root of half their number (consecutive chords share fixes).
     """
     k0, k1, idx = _window(imu, gnss, t_ref, window_s, None)  # no velocity needed
     lla = gnss.z[idx, :3]
@@ -219,11 +222,13 @@ def heading_from_track(imu, gnss, t_ref, c_level, rate_bias, window_s=30.0,
     t_mid = 0.5 * (gnss.time_s[idx[i]] + gnss.time_s[idx[j]])
     d = np.arctan2(chord[:, 0], chord[:, 1]) - _forward_azimuth(imu, k0, k1, c_level,
                                                                   rate_bias, t_mid)
+    if with_sigma:
+        return _circular_mean(d), start_check.circular_sigma(d, max(1, d.size // 2))
     return _circular_mean(d)
 
 
 def heading_from_specific_force(imu, gnss, t_ref, c_level, rate_bias, window_s=60.0,
-                                min_speed_mps=2.0, interval_s=1.0) -> float:
+                                min_speed_mps=2.0, interval_s=1.0, with_sigma=False):
     """Heading [rad] at ``t_ref`` by matching levelled specific force to GNSS velocity.
 
     Over each interval of about ``interval_s`` between GNSS epochs in the window, the
@@ -231,6 +236,8 @@ def heading_from_specific_force(imu, gnss, t_ref, c_level, rate_bias, window_s=6
     paired with the velocity change ``b = dv_gnss + int (2 w_ie + w_en) x v dt``; the
     horizontal parts give the heading in closed form.  Short intervals keep an
     accelerometer bias from accumulating (it would over a whole window).
+    With ``with_sigma``, also the 1-sigma [rad]: the circular spread of the intervals'
+    own headings (the fit's residual), weighted by ``|a| |b|``, over sqrt of their number.
     """
     k0, k1, idx = _window(imu, gnss, t_ref, window_s, min_speed_mps)
     C = relative_attitude(imu, k0, k1, rate_bias)
@@ -249,7 +256,13 @@ def heading_from_specific_force(imu, gnss, t_ref, c_level, rate_bias, window_s=6
          * (gnss.time_s[i1] - gnss.time_s[i0])[:, None])
     num = np.sum(b[:, 0] * a[:, 1] - b[:, 1] * a[:, 0])
     den = np.sum(b[:, 0] * a[:, 0] + b[:, 1] * a[:, 1])
-    return float(attitude.wrap_2pi(np.arctan2(num, den)))
+    heading = float(attitude.wrap_2pi(np.arctan2(num, den)))
+    if not with_sigma:
+        return heading
+    each = np.arctan2(b[:, 0] * a[:, 1] - b[:, 1] * a[:, 0], np.sum(b[:, :2] * a, 1))
+    wt = np.hypot(*a.T) * np.hypot(*b[:, :2].T)
+    big = wt >= np.median(wt)  # the intervals that carry the fit
+    return heading, start_check.circular_sigma(each[big] - heading)
 
 
 def _heading(imu, gnss, t1, c_level, w, method, options, kw) -> float:
@@ -261,6 +274,25 @@ def _heading(imu, gnss, t1, c_level, w, method, options, kw) -> float:
     fn = heading_from_course if method == "course" else heading_from_specific_force
     return fn(imu, gnss, t1, c_level, w, **{**window, "min_speed_mps": options.min_speed_mps,
                                             **kw})
+
+
+def _cross_check(imu, gnss, t1, c_level, w, method, heading, options) -> None:
+    """Refuse a ``course``/``track`` heading that the specific-force heading contradicts
+    (:mod:`fuzzynav.realdata.start_check`: the 180-degree ambiguity of the direction of
+    travel); skipped when the data give no specific-force heading."""
+    try:
+        sf, s_sf = heading_from_specific_force(imu, gnss, t1, c_level, w, window_s=options.
+                                               window_for("specific-force"),
+                                               min_speed_mps=None, with_sigma=True)
+        if method == "track":
+            _, s1 = heading_from_track(imu, gnss, t1, c_level, w, window_s=options.
+                                       window_for("track"),
+                                       baseline_m=options.track_baseline_m, with_sigma=True)
+        else:
+            s1 = 0.0  # the course of GNSS velocity: small beside the specific force's
+    except InputFileError:
+        return
+    start_check.check_headings((method, heading, s1), ("specific-force", sf, s_sf))
 
 
 def initial_state(imu, gnss, heading_rad=None, forward_known=False, options=None,
@@ -294,6 +326,8 @@ def initial_state(imu, gnss, heading_rad=None, forward_known=False, options=None
     else:
         method = options.method(forward_known)
         heading = _heading(imu, gnss, t1, c_level, w, method, options, kw)
+        if method in ("course", "track"):
+            _cross_check(imu, gnss, t1, c_level, w, method, heading, options)
     att = np.array([pitch, roll, heading])
     g = _gnss_at(gnss, t1)
     w_ie_b = attitude.euler_to_dcm(att).T @ earth.omega_ie_n(g[0])
