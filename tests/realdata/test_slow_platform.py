@@ -33,13 +33,17 @@ def _run(*argv):
     return code, out.getvalue(), err.getvalue()
 
 
+def write_walk(d, forward: float = 1.0):
+    """The simulated walk in ``d``, its IMU's x and y axes times ``forward`` (-1: reversed)."""
+    write_drive(d, segments=WALK_SEGMENTS)
+    (d / "mounting.toml").write_text(f"imu_to_body = [[{forward}, 0.0, 0.0], [0.0, {forward}, "
+                                     "0.0], [0.0, 0.0, 1.0]]\n")
+    return d
+
+
 @pytest.fixture(scope="module")
 def walk(tmp_path_factory):
-    d = tmp_path_factory.mktemp("walk")
-    write_drive(d, segments=WALK_SEGMENTS)
-    (d / "mounting.toml").write_text("imu_to_body = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], "
-                                     "[0.0, 0.0, 1.0]]\n")
-    return d
+    return write_walk(tmp_path_factory.mktemp("walk"))
 
 
 def test_car_defaults_refuse_a_walk_and_name_the_option(walk):

@@ -9,17 +9,12 @@ import pytest
 
 from fuzzynav.realdata.start_check import check_headings
 from fuzzynav.errors import InputFileError
-from tests.realdata.rtklib_files import WALK_SEGMENTS, write_drive
-from tests.realdata.test_slow_platform import PROTOCOL, _run
+from tests.realdata.test_slow_platform import PROTOCOL, _run, write_walk
 
 
 @pytest.fixture(scope="module")
 def reversed_walk(tmp_path_factory):
-    d = tmp_path_factory.mktemp("reversed_walk")
-    write_drive(d, segments=WALK_SEGMENTS)
-    (d / "mounting.toml").write_text("imu_to_body = [[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], "
-                                     "[0.0, 0.0, 1.0]]\n")
-    return d
+    return write_walk(tmp_path_factory.mktemp("reversed_walk"), forward=-1.0)
 
 
 @pytest.mark.parametrize("query", ["heading=track&baseline=15", "min_speed=0.5"])
