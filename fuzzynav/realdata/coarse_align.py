@@ -236,8 +236,9 @@ def heading_from_specific_force(imu, gnss, t_ref, c_level, rate_bias, window_s=6
     paired with the velocity change ``b = dv_gnss + int (2 w_ie + w_en) x v dt``; the
     horizontal parts give the heading in closed form.  Short intervals keep an
     accelerometer bias from accumulating (it would over a whole window).
-    With ``with_sigma``, also the 1-sigma [rad]: the circular spread of the intervals'
-    own headings (the fit's residual), weighted by ``|a| |b|``, over sqrt of their number.
+    With ``with_sigma``, also the 1-sigma [rad]: the circular spread of the intervals' own
+    headings about the fit, over the half of the intervals with the larger ``|a| |b|`` (the
+    ones that carry the fit), divided by the square root of their number.
     """
     k0, k1, idx = _window(imu, gnss, t_ref, window_s, min_speed_mps)
     C = relative_attitude(imu, k0, k1, rate_bias)
