@@ -88,7 +88,8 @@ class NamedFilter:
 
 
 #: the one catalog: the generic families here, then every paper folder's ``filters.py``
-FILTERS = Registry("filter", "fuzzynav.filters", ("catalog", "bank_named", "baselines"),
+FILTERS = Registry("filter", "fuzzynav.filters",
+                   ("catalog", "bank_named", "baselines", "supervisor_named"),
                    paper_module="filters")
 
 

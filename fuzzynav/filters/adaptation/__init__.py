@@ -95,7 +95,7 @@ class NoAdaptation(Adapter):
 
 ADAPTERS = Registry("adaptation policy", __name__,
                     ("exponential_weighting", "r_scaling", "classical", "strong_tracking",
-                     "rq_scaling"))
+                     "rq_scaling", "supervisors"))
 
 
 def register(cls):

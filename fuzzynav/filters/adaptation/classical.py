@@ -62,12 +62,12 @@ class ConstantScale(Adapter):
         return fp, np.zeros(1, np.int64), np.zeros(1)
 
 
-@njit_signature(ADAPT_SIG)
-def sage_husa_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
-    b, floor, cap = fp[0], fp[1], fp[2]
-    k = st[0]
-    d = (1.0 - b) / (1.0 - b ** (k + 1.0))
-    st[0] = k + 1.0
+@nb.njit(cache=True, error_model="numpy")
+def sage_husa_step(d, floor, cap, st, r, HPH, R, m, out):
+    """One Sage-Husa epoch with weight ``d``: ``R_i <- (1-d) R_i + d (r_i^2 - HPH_ii)``,
+    bounded by ``[floor, cap] R_i``; estimates in ``st[1:1+m]``, R multipliers in ``out``.
+    Shared by :func:`sage_husa_kernel` and the fuzzy supervisor
+    (:mod:`~fuzzynav.filters.adaptation.supervisors`)."""
     out[0] = 1.0
     out[1] = 1.0
     for i in range(m):
@@ -76,6 +76,15 @@ def sage_husa_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
         rh = min(max(rh, floor * R[i]), cap * R[i])
         st[1 + i] = rh
         out[2 + i] = rh / R[i]
+
+
+@njit_signature(ADAPT_SIG)
+def sage_husa_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
+    b, floor, cap = fp[0], fp[1], fp[2]
+    k = st[0]
+    d = (1.0 - b) / (1.0 - b ** (k + 1.0))
+    st[0] = k + 1.0
+    sage_husa_step(d, floor, cap, st, r, HPH, R, m, out)
     diag[0] = out[2] if m > 0 else 1.0
     return 0
 
@@ -100,9 +109,10 @@ class SageHusa(Adapter):
                 np.zeros(1 + _MAXROWS))
 
 
-@njit_signature(ADAPT_SIG)
-def huber_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
-    gamma = fp[0]
+@nb.njit(cache=True, error_model="numpy")
+def huber_step(gamma, r, HPH, R, m, out):
+    """Huber weights ``w_i = min(1, gamma / |r_i / sqrt(S_ii)|)``, ``out[2+i] = 1 / w_i``;
+    returns the smallest weight (shared with the fuzzy supervisor)."""
     out[0] = 1.0
     out[1] = 1.0
     wmin = 1.0
@@ -111,7 +121,12 @@ def huber_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
         w = 1.0 if zeta <= gamma else gamma / zeta
         out[2 + i] = 1.0 / w
         wmin = min(wmin, w)
-    diag[0] = wmin
+    return wmin
+
+
+@njit_signature(ADAPT_SIG)
+def huber_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
+    diag[0] = huber_step(fp[0], r, HPH, R, m, out)
     return 0
 
 
@@ -173,9 +188,10 @@ class FadingMemory(Adapter):
                 np.zeros(2 + _MAXROWS))
 
 
-@njit_signature(ADAPT_SIG)
-def vb_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
-    rho, n_iter = fp[0], int(fp[1])
+@nb.njit(cache=True, error_model="numpy")
+def vb_step(rho, n_iter, st, r, HPH, R, m, out):
+    """One variational-Bayes epoch with forgetting ``rho`` on the posteriors in ``st``
+    (layout of :class:`VariationalBayes`); shared with the fuzzy supervisor."""
     a = st[1:1 + _MAXROWS]
     b = st[1 + _MAXROWS:1 + 2 * _MAXROWS]
     if st[0] == 0.0:  # prior: mean R equal to the nominal variance, weak (alpha = 2)
@@ -202,6 +218,11 @@ def vb_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
     _ones(out, m)
     for i in range(m):
         out[2 + i] = (b[i] / a[i]) / R[i]
+
+
+@njit_signature(ADAPT_SIG)
+def vb_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
+    vb_step(fp[0], int(fp[1]), st, r, HPH, R, m, out)
     diag[0] = out[2] if m > 0 else 1.0
     return 0
 
