@@ -123,7 +123,8 @@ def _cmd_report(args) -> int:
     if args.study_seeds is not None and not args.no_eval:
         seeds = [seed for seed, _ in runs]
         print(f"wrote {write_spread_report(plan, seeds, out, tuned_names(plan))}")
-    url = args.storage or (plan.config(plan.parts()[0]).storage_url if plan.parts() else None)
+    last = runs[-1][1]  # (a journal per tuning: the last one's)
+    url = args.storage or (last.config(last.parts()[0]).storage_url if last.parts() else None)
     if url:
         print(f"interactive: optuna-dashboard {url.replace('journal:', '')}")
     return 0

@@ -6,6 +6,8 @@ table shows the mean ratio per group with a 95 % confidence interval over the ru
 """
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 
@@ -117,12 +119,18 @@ def format_scenarios(train: pd.DataFrame, test: pd.DataFrame, candidates, ref: s
     frames = [(label, df) for label, df in (("train", train), ("test", test))
               if df is not None and not df.empty and "score" in df]
     others = list(dict.fromkeys(f for _, df in frames for f in df["filter"]))
-    others = [f for f in others if f != ref]
-    rows = [[label, *r] for label, df in frames
+    # one tuned filter is not compared with itself; several (a baseline study) are
+    others = [f for f in others if f != ref and (len(candidates) > 1 or f not in candidates)]
+    rows = [[label, _short(r[0]), *r[1:]] for label, df in frames
             for r in scenario_rows(df, candidates, others)]
     header = ["set", "scenario", "filter", "runs", "score", f"vs {ref}",
               *(f"vs {o}" for o in others)]
     return render(header, rows, markdown=markdown)
+
+
+def _short(scenario: str) -> str:
+    """A scenario file's name without its directory (built-in names and recordings as they are)."""
+    return Path(scenario).name if scenario.endswith(".toml") else scenario
 
 
 def scenario_section(train, test, candidates, ref) -> list:
