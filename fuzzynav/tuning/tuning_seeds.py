@@ -25,8 +25,8 @@ import pandas as pd
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.metrics import mean_ci
 
-__all__ = ["study_seeds", "seeded_plan", "tunings", "tuned_names", "tuning_spread", "format_spread",
-           "write_spread_report"]
+__all__ = ["study_seeds", "seeded_plan", "tunings", "tuned_names", "tuning_spread",
+           "format_spread", "write_spread_report"]
 
 
 def study_seeds(plan, n: int) -> list:

@@ -43,7 +43,7 @@ def test_a_baseline_study_is_seeded_into_its_own_parameter_file(tmp_path, sim_ca
     plans = [seeded_plan(load_plan(p, sim_cache), s) for s in (3, 3, 4)]
     found = []
     for plan in plans:
-        studies, lines = run_plan(plan, 2, progress=False)
+        studies, _ = run_plan(plan, 2, progress=False)
         found.append([t.params for t in studies["huber-tuned"].trials])
     assert plans[0].bcfg.out == tmp_path / "tuned-seed3.json"
     assert plans[0].config("huber-tuned").name == "tiny_baselines-seed3.huber-tuned"
