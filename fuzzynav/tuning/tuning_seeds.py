@@ -23,7 +23,7 @@ import numpy as np
 import pandas as pd
 
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.metrics import mean_ci
+from fuzzynav.metrics import improvement_ci, mean_ci
 
 __all__ = ["study_seeds", "seeded_plan", "tunings", "tuned_names", "tuning_spread",
            "format_spread", "write_spread_report"]
@@ -98,7 +98,9 @@ def tuning_spread(tables: dict, candidates) -> tuple:
     (pandas.DataFrame, pandas.DataFrame)
         Per tuning and candidate: ``tuning_seed, filter, score`` (mean over the held-out
         runs), ``score_ci`` (Student-t 95 % half width over those runs: the spread between
-        test seeds) and ``runs``; and per candidate across tunings: ``tunings, mean, min,
+        test seeds), ``runs`` and ``change_pct`` [``change_lo``, ``change_hi``] (that
+        tuning's paired change against the baseline, score 1 on every run:
+        :func:`~fuzzynav.metrics.improvement_ci`, positive = smaller error); and per candidate across tunings: ``tunings, mean, min,
         max, std`` (sample std, NaN from one tuning) of the per-tuning scores.
     """
     rows = []
@@ -106,11 +108,13 @@ def tuning_spread(tables: dict, candidates) -> tuple:
         for cand in candidates:
             x = df.loc[df["filter"] == cand, "score"].to_numpy(float) if "score" in df \
                 else np.array([])
-            est = mean_ci(x)
+            est, imp = mean_ci(x), improvement_ci(np.ones_like(x), x)
             rows.append({"tuning_seed": seed, "filter": cand, "score": est.mean,
                          "score_ci": est.mean - est.lo if est.n >= 2 else np.nan,
-                         "runs": est.n})
-    per = pd.DataFrame(rows, columns=["tuning_seed", "filter", "score", "score_ci", "runs"])
+                         "runs": est.n, "change_pct": imp.mean, "change_lo": imp.lo,
+                         "change_hi": imp.hi})
+    per = pd.DataFrame(rows, columns=["tuning_seed", "filter", "score", "score_ci", "runs",
+                                      "change_pct", "change_lo", "change_hi"])
     across = []
     for cand, sub in per.groupby("filter", sort=False):
         s = sub["score"].to_numpy(float)
@@ -128,10 +132,11 @@ def format_spread(per: pd.DataFrame, across: pd.DataFrame) -> str:
     from fuzzynav.report import render
 
     rows = [[int(r.tuning_seed), r.filter, int(r.runs),
-             f"{r.score:.3f}" + (f" ± {r.score_ci:.3f}" if np.isfinite(r.score_ci) else "")]
+             f"{r.score:.3f}" + (f" ± {r.score_ci:.3f}" if np.isfinite(r.score_ci) else ""),
+             f"{r.change_pct:+.1f} % [{r.change_lo:+.1f}, {r.change_hi:+.1f}]"]
             for r in per.itertuples()]
-    one = render(["tuning seed", "filter", "held-out runs", "held-out score"], rows,
-                 markdown=True)
+    one = render(["tuning seed", "filter", "held-out runs", "held-out score",
+                  "vs baseline (paired)"], rows, markdown=True)
     rows = [[r.filter, int(r.tunings), *(f"{getattr(r, c):.3f}" if np.isfinite(getattr(r, c))
                                          else "—" for c in ("mean", "min", "max", "std"))]
             for r in across.itertuples()]

@@ -65,6 +65,10 @@ def test_the_spread_between_tunings_is_that_of_their_held_out_means():
     means = np.array([tables[s]["score"].mean() for s in (0, 1, 2)])
     assert per["score"].to_numpy() == pytest.approx(means)
     assert list(per["runs"]) == [5, 5, 5]
+    # each tuning's paired change against the baseline (score 1 on every run)
+    assert per["change_pct"].to_numpy() == pytest.approx(100 * (1 - means))
+    assert (per["change_lo"] <= per["change_pct"]).all()
+    assert (per["change_pct"] <= per["change_hi"]).all()
     r = across.iloc[0]
     assert (r["tunings"], r["mean"], r["min"], r["max"]) == \
         (3, pytest.approx(means.mean()), pytest.approx(means.min()), pytest.approx(means.max()))
