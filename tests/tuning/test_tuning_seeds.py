@@ -89,3 +89,19 @@ def test_cli_runs_and_reports_each_tuning(capsys, tmp_path, sim_cache):
     assert (tmp_path / "rep" / "seed1" / "report.md").is_file()
     assert "## Per scenario or recording" in (tmp_path / "rep" / "seed0" / "report.md").read_text()
     assert main(["study", "run", str(cfg), "--study-seeds", "0"]) == 2
+
+
+def test_a_started_worker_runs_the_tuning_it_is_given(tmp_path, sim_cache):
+    """Workers started as new interpreters (not forked) load the file and get the seed."""
+    from fuzzynav.tuning.optuna_study import open_study
+    from fuzzynav.tuning.study_run import worker_command
+    from fuzzynav.tuning.worker import main as worker_main
+
+    path = write_study(tmp_path, study=TPE)
+    plan = seeded_plan(load_plan(path, sim_cache), 5)
+    cmd = worker_command(plan.cfg, 2, None, 0, sim_cache, study_seed=5)
+    assert cmd[-2:] == ["--study-seed", "5"]
+    open_study(plan.cfg, None, create=True)
+    assert worker_main(cmd[3:]) == 0
+    assert len(open_study(plan.cfg, None).trials) == 2
+    assert not (tmp_path / "tiny.journal").exists()  # the file's unseeded study untouched
