@@ -6,7 +6,7 @@ import pandas as pd
 
 from fuzzynav.metrics import improvement_ci, mean_ci
 
-__all__ = ["NAV_ROWS", "comparison_rows", "render"]
+__all__ = ["NAV_ROWS", "comparison_rows", "scenario_rows", "render"]
 
 #: (row label, metric key) in the order of the papers' tables
 NAV_ROWS = (
@@ -107,3 +107,29 @@ def render(header, rows, markdown=False) -> str:
     lines = [fmt.format(*header), fmt.format(*("-" * w for w in widths))]
     lines += [fmt.format(*map(str, r)) for r in rows]
     return "\n".join(lines)
+
+
+def scenario_rows(df: pd.DataFrame, candidates, others=(), value: str = "score"):
+    """Per-scenario rows of a run table: one row per (scenario, candidate filter).
+
+    ``df`` has one row per (scenario, seed, filter) and a ``value`` column that is already
+    a ratio to the reference filter (the EKF: 1 on every run by construction), as
+    :func:`fuzzynav.tuning.evaluate.run_table` writes it.  A row is ``scenario, filter,
+    runs, mean ± 95 % CI`` (:func:`ci_cell`, over that scenario's seeds), the paired change
+    against the reference (:func:`improvement_cell` against ones) and against each of
+    ``others`` on the same seeds (``"—"`` where that filter did not run, and against
+    itself).
+    """
+    rows = []
+    for scenario, sub in df.groupby("scenario", sort=False):
+        piv = sub.pivot_table(index="seed", columns="filter", values=value, dropna=False)
+        for cand in candidates:
+            if cand not in piv:
+                continue
+            c = piv[cand].to_numpy(float)
+            cells = [improvement_cell(np.ones_like(c), c)]
+            cells += [improvement_cell(piv[o].to_numpy(float), c)
+                      if o in piv and o != cand else "—" for o in others]
+            rows.append([scenario, cand, int(np.isfinite(c).sum()), ci_cell(c, ".3f"),
+                         *cells])
+    return rows

@@ -46,6 +46,9 @@ def _common(p) -> None:
     p.add_argument("--storage", help="Optuna storage URL (default: journal file next to the "
                                      "config), e.g. postgresql://user@host/db")
     p.add_argument("--cache", default=str(default_cache_dir()), help="simulation cache")
+    p.add_argument("--study-seeds", type=int, metavar="N",
+                   help="tune N times with sampler seeds [study] seed + 0..N-1, each into "
+                        "its own study <name>-seed<S> (see docs/studies.md)")
 
 
 def _plan(args):
@@ -54,6 +57,20 @@ def _plan(args):
     from fuzzynav.tuning.kinds import load_plan
 
     return load_plan(args.config, args.cache)
+
+
+def _tunings(plan, args) -> list:
+    """``[(seed, plan)]``: the file's one study, or one per ``--study-seeds`` tuning."""
+    from fuzzynav.tuning.tuning_seeds import tunings
+
+    check_count("--study-seeds", args.study_seeds)
+    return tunings(plan, args.study_seeds)
+
+
+def _seeded_path(path, seed):
+    """``rules/x.json`` -> ``rules/x-seed<S>.json`` (unchanged without a tuning seed)."""
+    path = Path(path)
+    return path if seed is None else path.with_name(f"{path.stem}-seed{seed}{path.suffix}")
 
 
 def _open(plan, args) -> dict:
@@ -67,33 +84,47 @@ def _cmd_run(args) -> int:
 
     check_count("--trials", args.trials)
     check_count("--workers", args.workers, hi=MAX_WORKERS)
+    check_count("--study-seeds", args.study_seeds)
     with compiling() as cold:  # a cold kernel cache: loading the config already compiles
         plan = _plan(args)
         if cold and plan.kind == "fuzzy":
             compile_by_running(plan.cfg, args.cache)
     from fuzzynav.tuning.study_run import run_plan
 
-    studies, lines = run_plan(plan, args.trials, args.workers, args.storage)
-    for line in lines:
-        print(line)
-    if not args.no_summary:
-        plan.summary(studies)
+    for seed, one in _tunings(plan, args):
+        if seed is not None:
+            print(f"tuning seed {seed}: study {one.name}")
+        studies, lines = run_plan(one, args.trials, args.workers, args.storage)
+        for line in lines:
+            print(line)
+        if not args.no_summary:
+            one.summary(studies)
     return 0
 
 
 def _cmd_export(args) -> int:
     plan = _plan(args)
-    for p in plan.export(_open(plan, args), args.out, args.trial, args.pareto):
-        print(f"wrote {p}")
+    for seed, one in _tunings(plan, args):
+        out = _seeded_path(args.out, seed)
+        for p in one.export(_open(one, args), out, args.trial, args.pareto):
+            print(f"wrote {p}")
     return 0
 
 
 def _cmd_report(args) -> int:
+    from fuzzynav.tuning.tuning_seeds import tuned_names, write_spread_report
+
     plan = _plan(args)
-    out = args.out or (Path(args.config).parent / f"{plan.name}_report")
-    path = plan.report(_open(plan, args), out, evaluate=not args.no_eval)
-    print(f"wrote {path}")
-    url = args.storage or (plan.config(plan.parts()[0]).storage_url if plan.parts() else None)
+    out = Path(args.out or (Path(args.config).parent / f"{plan.name}_report"))
+    runs = _tunings(plan, args)
+    for seed, one in runs:
+        where = out if seed is None else out / f"seed{seed}"
+        print(f"wrote {one.report(_open(one, args), where, evaluate=not args.no_eval)}")
+    if args.study_seeds is not None and not args.no_eval:
+        seeds = [seed for seed, _ in runs]
+        print(f"wrote {write_spread_report(plan, seeds, out, tuned_names(plan))}")
+    last = runs[-1][1]  # (a journal per tuning: the last one's)
+    url = args.storage or (last.config(last.parts()[0]).storage_url if last.parts() else None)
     if url:
         print(f"interactive: optuna-dashboard {url.replace('journal:', '')}")
     return 0

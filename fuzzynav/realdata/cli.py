@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from dataclasses import asdict
 from pathlib import Path
 
@@ -132,6 +133,10 @@ def run_recording(spec, filter_name, options, args) -> int:
     seeds = list(range(args.seed, args.seed + args.mc))
     vals = [validate(rec, filter_name, settings, s, options) for s in seeds]
     check_finite(vals, spec)  # a diverged run: no table at all, exit 3
+    check = vals[0].start.coarse.heading_check
+    if check.startswith(("turned", "direction not checked")):
+        print(f"note: start heading by {vals[0].start.coarse.method}: {check}",
+              file=sys.stderr)
     df = metrics_table(vals)
     if args.json:
         print(json.dumps(json_summary(spec, rec, vals, df), indent=2))
@@ -170,7 +175,8 @@ def _describe(spec, rec, v) -> list:
            f"{v.windows[0, 0]:.1f} s ({n_done} complete)" if len(v.windows) else "no outages")
     return [f"recording {spec}: {rec.imu.time_s[0]:.1f}-{rec.imu.time_s[-1]:.1f} s, filter "
             f"starts at {v.start.init.time_s:.1f} s (rest {st.rest_s[0]:.1f}-{st.rest_s[1]:.1f}"
-            f" s, heading {math.degrees(st.att[2]):.1f} deg by {st.method})",
+            f" s, heading {math.degrees(st.att[2]):.1f} deg by {st.method}"
+            + (f": {st.heading_check})" if st.heading_check else ")"),
             f"fed: positions + {s.noise_pos_m:g} m white noise per axis, {vel}; {out}",
             f"scored against the RTK-fixed epochs (antenna); velocity against RTK velocity read "
             f"{s.velocity_lag_s:g} s later"]
@@ -221,6 +227,7 @@ def json_summary(spec, rec, vals, df) -> dict:
         "start": {"time_s": v0.start.init.time_s, "rest_s": list(st.rest_s),
                   "pitch_deg": math.degrees(st.att[0]), "roll_deg": math.degrees(st.att[1]),
                   "heading_deg": math.degrees(st.att[2]), "heading_method": st.method,
+                  "heading_check": st.heading_check,
                   "gyro_bias_dps": [math.degrees(x) for x in st.gyro_bias_rps],
                   "options": asdict(rec.start_options) if hasattr(rec, "start_options")
                   else None},

@@ -69,6 +69,10 @@ class StartEstimate:
         The rest period used for levelling [s].
     method : str
         ``given``, ``course``, ``track`` or ``specific-force``.
+    heading_check : str
+        What the independent headings said of a ``course``/``track`` heading
+        (:mod:`fuzzynav.realdata.start_check`): it agrees, it was turned by 180 degrees,
+        or why its direction could not be checked; empty for other methods.
     """
 
     time_s: float
@@ -79,6 +83,7 @@ class StartEstimate:
     f_rest_mps2: float
     rest_s: tuple
     method: str
+    heading_check: str = ""
 
 
 def _speed(gnss) -> np.ndarray:
@@ -169,13 +174,19 @@ def _window(imu, gnss, t_ref, window_s, min_speed_mps):
 
 
 def heading_from_course(imu, gnss, t_ref, c_level, rate_bias, window_s=30.0,
-                        min_speed_mps=2.0) -> float:
-    """Heading [rad] at ``t_ref`` of a body whose y axis is the direction of travel."""
+                        min_speed_mps=2.0, with_sigma=False):
+    """Heading [rad] at ``t_ref`` of a body whose y axis is the direction of travel.
+
+    With ``with_sigma``, also the 1-sigma [rad]: the circular spread of the epochs' own
+    headings over the square root of half their number (GNSS velocities are correlated).
+    """
     k0, k1, idx = _window(imu, gnss, t_ref, window_s, min_speed_mps)
     idx = idx[_speed(gnss)[idx] >= min_speed_mps]
     course = np.arctan2(gnss.z[idx, 3], gnss.z[idx, 4])
-    return _circular_mean(course - _forward_azimuth(imu, k0, k1, c_level, rate_bias,
-                                                    gnss.time_s[idx]))
+    d = course - _forward_azimuth(imu, k0, k1, c_level, rate_bias, gnss.time_s[idx])
+    if with_sigma:
+        return _circular_mean(d), start_check.circular_sigma(d, max(1, d.size // 2))
+    return _circular_mean(d)
 
 
 def _forward_azimuth(imu, k0, k1, c_level, rate_bias, t):
@@ -277,23 +288,38 @@ def _heading(imu, gnss, t1, c_level, w, method, options, kw) -> float:
                                             **kw})
 
 
-def _cross_check(imu, gnss, t1, c_level, w, method, heading, options) -> None:
-    """Refuse a ``course``/``track`` heading that the specific-force heading contradicts
-    (:mod:`fuzzynav.realdata.start_check`: the 180-degree ambiguity of the direction of
-    travel); skipped when the data give no specific-force heading."""
+def _estimate(imu, gnss, t1, c_level, w, method, options, **kw):
+    """``(method, heading, sigma)`` by ``method``, or None when the data give none."""
     try:
-        sf, s_sf = heading_from_specific_force(imu, gnss, t1, c_level, w, window_s=options.
-                                               window_for("specific-force"),
-                                               min_speed_mps=None, with_sigma=True)
-        if method == "track":
-            _, s1 = heading_from_track(imu, gnss, t1, c_level, w, window_s=options.
-                                       window_for("track"),
-                                       baseline_m=options.track_baseline_m, with_sigma=True)
-        else:
-            s1 = 0.0  # the course of GNSS velocity: small beside the specific force's
+        h, sigma = _heading(imu, gnss, t1, c_level, w, method, options,
+                            {"with_sigma": True, **kw})
     except InputFileError:
-        return
-    start_check.check_headings((method, heading, s1), ("specific-force", sf, s_sf))
+        return None
+    return method, h, sigma
+
+
+def _cross_check(imu, gnss, t1, c_level, w, method, options, kw) -> tuple:
+    """The ``course``/``track`` heading checked against the other two methods
+    (:mod:`fuzzynav.realdata.start_check`): refused when course and track disagree, turned
+    by 180 degrees when the specific force says the forward axis points backward.
+
+    Returns
+    -------
+    heading_rad : float
+    finding : str
+        What the checks found (:attr:`StartEstimate.heading_check`).
+    """
+    chosen = _estimate(imu, gnss, t1, c_level, w, method, options, **kw)
+    other = _estimate(imu, gnss, t1, c_level, w, "track" if method == "course" else
+                      "course", options)
+    if other is not None:
+        start_check.check_headings(chosen, other)
+    sf = _estimate(imu, gnss, t1, c_level, w, "specific-force", options, min_speed_mps=None)
+    also = f"; agrees with {other[0]}" if other is not None else ""
+    if sf is None:
+        return chosen[1], f"direction not checked: no specific-force heading{also}"
+    heading, finding = start_check.resolve_direction(chosen, sf)
+    return heading, finding + also
 
 
 def initial_state(imu, gnss, heading_rad=None, forward_known=False, options=None,
@@ -317,6 +343,7 @@ def initial_state(imu, gnss, heading_rad=None, forward_known=False, options=None
         ``window_s``, ``min_speed_mps`` for the heading estimators (override ``options``).
     """
     options = StartOptions() if options is None else options
+    check = ""
     t0, t1 = opening_rest(imu, gnss, options.rest_speed_mps, options.min_rest_s)
     pitch, roll, f, w = level(imu, t0, t1)
     c_level = attitude.euler_to_dcm(np.array([pitch, roll, 0.0]))
@@ -328,9 +355,10 @@ def initial_state(imu, gnss, heading_rad=None, forward_known=False, options=None
         method = options.method(forward_known)
         heading = _heading(imu, gnss, t1, c_level, w, method, options, kw)
         if method in ("course", "track"):
-            _cross_check(imu, gnss, t1, c_level, w, method, heading, options)
+            heading, check = _cross_check(imu, gnss, t1, c_level, w, method, options, kw)
     att = np.array([pitch, roll, heading])
     g = _gnss_at(gnss, t1)
     w_ie_b = attitude.euler_to_dcm(att).T @ earth.omega_ie_n(g[0])
     return StartEstimate(time_s=t1, lla=g[:3], vel_n=g[3:], att=att, gyro_bias_rps=w - w_ie_b,
-                        f_rest_mps2=float(np.linalg.norm(f)), rest_s=(t0, t1), method=method)
+                        f_rest_mps2=float(np.linalg.norm(f)), rest_s=(t0, t1), method=method,
+                        heading_check=check)

@@ -16,12 +16,13 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from fuzzynav.errors import FuzzynavError
 from fuzzynav.metrics import NavErrors, errors_vs_reference, rms_metrics
 from fuzzynav.nav import attitude, earth
 from fuzzynav.realdata.protocol import read_later
 from fuzzynav.sim.sensors.gnss import in_windows
 
-__all__ = ["OutageDrift", "antenna_track", "errors_against", "horizontal", "outage_drifts",
+__all__ = ["OutageDrift", "antenna_track", "check_scored", "errors_against", "horizontal", "outage_drifts",
            "score"]
 
 
@@ -94,6 +95,26 @@ def outage_drifts(err: NavErrors, result_time_s, windows, max_gap_s: float = 1.0
         else:
             out.append(OutageDrift(float(a), float(b), False, np.nan, np.nan, np.nan))
     return out
+
+
+def check_scored(reference, t_start_s: float, t_end_s: float, what: str) -> None:
+    """Refuse a run with no reference epoch in ``[t_start_s, t_end_s]`` before it runs:
+    its metrics would all be NaN, which reads as a diverged filter.
+
+    Raises
+    ------
+    FuzzynavError
+        Naming ``what`` (the recording or study run), the scored span and where the
+        reference's epochs lie.
+    """
+    t = np.asarray(reference.time_s, float)
+    if np.any((t >= t_start_s) & (t <= t_end_s)):
+        return
+    where = (f"its {t.size} epochs lie in {t[0]:.1f}-{t[-1]:.1f} s" if t.size
+             else "it has no epochs")
+    raise FuzzynavError(f"{what}: no reference epoch to score in {t_start_s:.1f}-"
+                        f"{t_end_s:.1f} s (after the filter start and --t-start / t_start_s; "
+                        f"{where}): nothing would be scored")
 
 
 def score(err: NavErrors, result_time_s, windows, t_start_s: float = 0.0) -> dict:

@@ -26,7 +26,7 @@ from fuzzynav.errors import FuzzynavError
 from fuzzynav.realdata import akit
 from fuzzynav.realdata.dataspec import parse_recording_spec, resolve, until, within
 from fuzzynav.realdata.protocol import ProtocolSettings
-from fuzzynav.realdata.score import errors_against, score
+from fuzzynav.realdata.score import check_scored, errors_against, score
 from fuzzynav.realdata.session import GnssSource, context_for
 from fuzzynav.realdata.sources import SOURCES, data_options
 from fuzzynav.realdata.validate import fed_sigma, prepare_feeds, required_names
@@ -146,6 +146,7 @@ def _gnss_run(name, seed, rec, lo, hi,
         raise FuzzynavError(f"{name}: {max(hi - t0, 0.0):.3g} s left to score after the start "
                             f"at {t0 - float(rec.imu.time_s[0]):.0f} s (at least "
                             f"{MIN_SCORED_S:g}: MIN_SCORED_S); widen the window")
+    check_scored(cut.reference, t0, hi, name)
 
     fixes = feeds[STUDY_FEED]
     vel_scored = bool(np.isfinite(cut.reference.z[:, 3:6]).all())

@@ -14,7 +14,7 @@ from fuzzynav.errors import InputFileError
 from fuzzynav.realdata import protocol
 from fuzzynav.realdata.mems import CONSUMER_MEMS, MemsModel
 from fuzzynav.realdata.protocol import ProtocolSettings
-from fuzzynav.realdata.score import errors_against, outage_drifts, score
+from fuzzynav.realdata.score import check_scored, errors_against, outage_drifts, score
 from fuzzynav.realdata.session import (GnssSource, Start, constraints_for, context_for,
                                        start_from)
 from fuzzynav.runpath import RunOutcome, check_outcomes, run
@@ -111,6 +111,8 @@ def validate(rec, filter_name: str, settings: ProtocolSettings = ProtocolSetting
     feeds, windows, start, lever = prepare_feeds(rec, settings, seed)
     sigma0 = fed_sigma(rec, settings)
     t0 = max(settings.t_start_s, start.init.time_s)
+    check_scored(rec.reference, t0, float(rec.imu.time_s[-1]),
+                 f"recording {getattr(rec, 'directory', '')}")
     runs = {}
     nhc = constraints_for(start, settings.nhc_sigma_mps, settings.nhc_rate_hz)
     vel_scored = bool(np.isfinite(rec.reference.z[:, 3:6]).all())

@@ -12,7 +12,7 @@ from pathlib import Path
 import pandas as pd
 
 from fuzzynav.fileio import staged, write_atomic
-from fuzzynav.tuning.evaluate import format_summary, run_table
+from fuzzynav.tuning.evaluate import format_summary, run_table, scenario_section
 from fuzzynav.tuning.objective import Evaluator
 
 __all__ = ["tuned_specs", "evaluate_baselines", "write_baseline_report"]
@@ -56,7 +56,8 @@ def write_baseline_report(bcfg, out, cache_dir=None, evaluate: bool = True) -> P
             write_atomic(tmp / "runs.csv", lambda t: runs.to_csv(t, index=False))
             lines += ["", f"## Train and held-out test (ratio of RMS error to "
                           f"{bcfg.study.baseline}; < 1 is better)", "", "```",
-                      format_summary(train, test), "```"]
+                      format_summary(train, test), "```", ""]
+            lines += scenario_section(train, test, list(bcfg.tune), bcfg.study.baseline)
         text = "\n".join(lines) + "\n"
         write_atomic(tmp / "report.md", lambda t: Path(t).write_text(text))
     return out / "report.md"

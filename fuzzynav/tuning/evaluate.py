@@ -6,6 +6,8 @@ table shows the mean ratio per group with a 95 % confidence interval over the ru
 """
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 
@@ -16,7 +18,8 @@ from fuzzynav.runpath import RunOutcome, check_outcomes, nonfinite
 from fuzzynav.tuning.study_config import GROUP_METRICS
 from fuzzynav.tuning.objective import CANDIDATE
 
-__all__ = ["run_table", "summary", "format_summary"]
+__all__ = ["run_table", "summary", "format_summary", "format_scenarios",
+           "scenario_section"]
 
 
 def run_table(evaluator, systems: dict, runs, compare=()) -> pd.DataFrame:
@@ -100,3 +103,42 @@ def format_summary(train: pd.DataFrame, test: pd.DataFrame) -> str:
                 else f"{r.get(c, np.nan):.3f}"
                 for c in ("pos_ratio", "vel_ratio", "att_ratio", "score")] + [int(r["runs"])])
     return render(header, rows)
+
+
+def format_scenarios(train: pd.DataFrame, test: pd.DataFrame, candidates, ref: str = "ekf",
+                     markdown: bool = True) -> str:
+    """The per-scenario table: one row per (set, scenario or recording, candidate).
+
+    Each row gives the candidate's mean score (ratio to ``ref``) with its Student-t 95 % CI
+    over that scenario's seeds, and its paired change against ``ref`` and against every
+    other filter of the table on the same seeds (:func:`fuzzynav.report.scenario_rows`,
+    positive = the candidate's error is smaller, bootstrap 95 % interval).
+    """
+    from fuzzynav.report import render, scenario_rows
+
+    frames = [(label, df) for label, df in (("train", train), ("test", test))
+              if df is not None and not df.empty and "score" in df]
+    others = list(dict.fromkeys(f for _, df in frames for f in df["filter"]))
+    # one tuned filter is not compared with itself; several (a baseline study) are
+    others = [f for f in others if f != ref and (len(candidates) > 1 or f not in candidates)]
+    rows = [[label, _short(r[0]), *r[1:]] for label, df in frames
+            for r in scenario_rows(df, candidates, others)]
+    header = ["set", "scenario", "filter", "runs", "score", f"vs {ref}",
+              *(f"vs {o}" for o in others)]
+    return render(header, rows, markdown=markdown)
+
+
+def _short(scenario: str) -> str:
+    """A scenario file's name without its directory (built-in names and recordings as they are)."""
+    return Path(scenario).name if scenario.endswith(".toml") else scenario
+
+
+def scenario_section(train, test, candidates, ref) -> list:
+    """The report's lines of the per-scenario table (:func:`format_scenarios`): the
+    pooled train/test table hides which scenario a filter wins or loses on."""
+    return ["## Per scenario or recording", "",
+            f"Score (ratio to {ref}; mean ± 95 % CI over the scenario's seeds) and the "
+            "paired change of the score against each filter on the same seeds (positive: "
+            "smaller error; bootstrap 95 % interval).", "",
+            format_scenarios(train, test, candidates, ref), ""]
+

@@ -24,11 +24,11 @@ from fuzzynav import plots
 from fuzzynav.fuzzy.describe import rule_markdown
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.fileio import staged, write_atomic
-from fuzzynav.tuning.evaluate import format_summary, run_table
+from fuzzynav.tuning.evaluate import format_summary, run_table, scenario_section
 from fuzzynav.tuning.export import choose_trial, systems_of
 from fuzzynav.tuning.study_config import GROUP_METRICS
 from fuzzynav.tuning import pareto
-from fuzzynav.tuning.objective import Evaluator, weighted_score
+from fuzzynav.tuning.objective import CANDIDATE, Evaluator, weighted_score
 from fuzzynav.tuning.optuna_study import best_trials
 
 __all__ = ["plt", "trials_frame", "write_report"]
@@ -144,6 +144,7 @@ def _best_trial_section(cfg, trial, out, cache_dir, evaluate) -> list:
         write_atomic(out / "runs.csv", lambda tmp: runs.to_csv(tmp, index=False))
         lines += ["## Train and held-out test (ratio of RMS error to the EKF; < 1 is better)",
                   "", "```", format_summary(train, test), "```", ""]
+        lines += scenario_section(train, test, [CANDIDATE], cfg.baseline)
     return lines
 
 

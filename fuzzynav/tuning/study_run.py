@@ -50,15 +50,19 @@ USER_ERROR = 2
 POLL_S = 0.5
 
 
-def worker_command(cfg, total, storage, index, cache_dir, part: str = "") -> list:
+def worker_command(cfg, total, storage, index, cache_dir, part: str = "",
+                   study_seed=None) -> list:
     """The command line of study worker ``index`` (see :data:`WORKER_BOOT`); ``part``: the
-    key of the file's study it runs (:mod:`fuzzynav.tuning.kinds`)."""
+    key of the file's study it runs (:mod:`fuzzynav.tuning.kinds`); ``study_seed``: the
+    tuning seed of a ``--study-seeds`` run (:mod:`fuzzynav.tuning.tuning_seeds`)."""
     cmd = [sys.executable, "-c", WORKER_BOOT, str(cfg.path), "--total", str(total),
            "--index", str(index), "--storage", storage or cfg.storage_url]
     if cache_dir:
         cmd += ["--cache", str(cache_dir)]
     if part:
         cmd += ["--part", part]
+    if study_seed is not None:
+        cmd += ["--study-seed", str(study_seed)]
     return cmd
 
 
@@ -95,10 +99,12 @@ def _forked_main(cfg, total, storage, index, cache_dir, make_objective):
         sys.exit(USER_ERROR)
 
 
-def _spawn(cfg, total, storage, index, cache_dir, make_objective=None, part=""):
+def _spawn(cfg, total, storage, index, cache_dir, make_objective=None, part="",
+           study_seed=None):
     if FORK and make_objective is not None:
         return ForkedWorker(cfg, total, storage, index, cache_dir, make_objective)
-    return subprocess.Popen(worker_command(cfg, total, storage, index, cache_dir, part),
+    return subprocess.Popen(worker_command(cfg, total, storage, index, cache_dir, part,
+                                           study_seed),
                             env=dict(os.environ, PYTHONWARNINGS="ignore"))
 
 
@@ -126,7 +132,7 @@ def _exit_text(code: int) -> str:
 
 
 def supervise(cfg, study, total, workers, storage=None, cache_dir=None, on_poll=None,
-              make_objective=None, part=""):
+              make_objective=None, part="", study_seed=None):
     """Run ``workers`` worker processes until they stop; restart the ones that die.
 
     Parameters
@@ -146,6 +152,8 @@ def supervise(cfg, study, total, workers, storage=None, cache_dir=None, on_poll=
         plan they inherit (None: start new interpreters, which load the plan themselves).
     part : str
         The key of the file's study the workers run (:mod:`fuzzynav.tuning.kinds`).
+    study_seed : int, optional
+        The tuning seed of a ``--study-seeds`` run, passed to started workers.
 
     Raises
     ------
@@ -154,7 +162,7 @@ def supervise(cfg, study, total, workers, storage=None, cache_dir=None, on_poll=
         ``total``.
     """
     url = storage or cfg.storage_url
-    procs = {i: _spawn(cfg, total, storage, i, cache_dir, make_objective, part)
+    procs = {i: _spawn(cfg, total, storage, i, cache_dir, make_objective, part, study_seed)
              for i in range(workers)}
     restarts = dict.fromkeys(procs, 0)
     errors = []
@@ -176,7 +184,8 @@ def supervise(cfg, study, total, workers, storage=None, cache_dir=None, on_poll=
                     restarts[i] += 1
                     tqdm.write(f"fuzzynav: worker {i} {_exit_text(code)}; its trial will be "
                                "retried, worker restarted", file=sys.stderr)
-                    procs[i] = _spawn(cfg, total, storage, i, cache_dir, make_objective, part)
+                    procs[i] = _spawn(cfg, total, storage, i, cache_dir, make_objective, part,
+                                      study_seed)
                 else:
                     errors.append((i, code))
             if on_poll is not None:
@@ -245,6 +254,7 @@ def run_study(cfg, trials=None, workers: int = 1, storage=None, cache_dir=None,
         # records would take CPU time from them
         supervise(cfg, study, total, workers, storage, cache_dir,
                   make_objective=make_objective, part=part,
+                  study_seed=getattr(plan, "study_seed", None),
                   on_poll=(lambda: bar.update(min(n_finished(study), total) - bar.n))
                   if progress else None)
     bar.update(min(n_finished(study), total) - bar.n)

@@ -25,12 +25,17 @@ def main(argv=None) -> int:
     ap.add_argument("--index", type=int, default=0)
     ap.add_argument("--cache")
     ap.add_argument("--part", default="", help="which of the file's studies (default: its one)")
+    ap.add_argument("--study-seed", type=int, help="the tuning seed of a --study-seeds run")
     args = ap.parse_args(argv)
     from fuzzynav.tuning.kinds import load_plan
     from fuzzynav.tuning.optuna_study import run_worker
 
     try:
         plan = load_plan(args.config, args.cache)
+        if args.study_seed is not None:
+            from fuzzynav.tuning.tuning_seeds import seeded_plan
+
+            plan = seeded_plan(plan, args.study_seed)
         run_worker(plan.config(args.part), args.total, args.storage, args.index, args.cache,
                    make_objective=lambda worker: plan.objective(args.part, worker))
     except FuzzynavError as exc:

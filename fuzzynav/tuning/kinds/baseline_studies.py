@@ -109,11 +109,14 @@ class BaselinePlan:
 
     def summary(self, studies: dict) -> None:
         from fuzzynav.tuning.baseline_report import evaluate_baselines
-        from fuzzynav.tuning.evaluate import format_summary
+        from fuzzynav.tuning.evaluate import format_scenarios, format_summary
 
         train, test = evaluate_baselines(self.bcfg, self.cache_dir)
         print(f"mean ratio of RMS error to {self.bcfg.study.baseline} (95 % CI over runs):")
         print(format_summary(train, test))
+        print("per scenario or recording (paired change of the score, + = smaller error):")
+        print(format_scenarios(train, test, list(self.bcfg.tune), self.bcfg.study.baseline,
+                               markdown=False))
 
     def export(self, studies: dict, out, trial=None, pareto=None) -> list:
         """Write the parameter file of the studies' best trials to ``out``."""

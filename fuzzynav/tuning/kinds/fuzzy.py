@@ -56,9 +56,9 @@ class FuzzyPlan:
 
     def summary(self, studies: dict) -> None:
         """The best trial and its train/test table (printed)."""
-        from fuzzynav.tuning.evaluate import format_summary, run_table
+        from fuzzynav.tuning.evaluate import format_scenarios, format_summary, run_table
         from fuzzynav.tuning.export import choose_trial, systems_of
-        from fuzzynav.tuning.objective import Evaluator
+        from fuzzynav.tuning.objective import CANDIDATE, Evaluator
 
         cfg, study = self.cfg, studies[""]
         try:
@@ -79,6 +79,8 @@ class FuzzyPlan:
         test = run_table(ev, systems, cfg.test, compare)
         print("mean ratio of RMS error to the EKF (95 % CI over runs; < 1 beats the EKF):")
         print(format_summary(train, test))
+        print("per scenario or recording (paired change of the score, + = smaller error):")
+        print(format_scenarios(train, test, [CANDIDATE], cfg.baseline, markdown=False))
 
     def export(self, studies: dict, out, trial=None, pareto=None) -> list:
         from fuzzynav.tuning.export import export_rules
