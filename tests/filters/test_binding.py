@@ -93,7 +93,7 @@ def _set(path, value):
      "relative-trace"),
     (("adapter",), "sage-husa",
      "bad.json: $.binding.adapter: unknown fuzzy adapter 'sage-husa'; known: "
-     "exponential-weighting, r-scaling"),
+     "exponential-weighting, fuzzy-huber, fuzzy-sage-husa, fuzzy-vb, r-scaling"),
     (("sensor",), "", "bad.json: $.binding.sensor: must name a sensor or sensor kind"),
 ])
 def test_a_malformed_binding_is_one_line_naming_file_and_json_path(path, value, message):

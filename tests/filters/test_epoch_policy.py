@@ -224,7 +224,9 @@ def test_every_per_sensor_policy_the_loop_knows_can_be_stepped():
     """A new fuzzy policy fails here ("run by a rule file") until a rule file is named."""
     names = set(adaptation.ADAPTERS.load())
     fuzzy = {"exponential-weighting": "paper000_gps_sins.json",
-             "r-scaling": "paper002_ror_gnss.json", "rq-scaling": "paper000_rq_gnss.json"}
+             "r-scaling": "paper002_ror_gnss.json", "rq-scaling": "paper000_rq_gnss.json",
+             "fuzzy-sage-husa": "supervisor_sage_husa.json", "fuzzy-vb": "supervisor_vb.json",
+             "fuzzy-huber": "supervisor_huber.json"}
     for name in sorted(names):
         policy = (EpochPolicy.from_rules(fuzzy[name], GNSS_ROWS) if name in fuzzy
                   else EpochPolicy.from_policy(name, GNSS_ROWS))

@@ -24,7 +24,7 @@ import numpy as np
 from fuzzynav.filters.adaptation import ADAPT_SIG, Adapter, register
 from fuzzynav.filters.numba_lazy import njit_signature
 
-_MAXROWS = 16
+MAX_ROWS = 16
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -106,7 +106,7 @@ class SageHusa(Adapter):
 
     def arrays(self, model):
         return (np.array([self.b, self.floor, self.cap]), np.zeros(1, np.int64),
-                np.zeros(1 + _MAXROWS))
+                np.zeros(1 + MAX_ROWS))
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -157,9 +157,9 @@ def fading_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
         trv += v
         trr += R[i]
         trh += HPH[i, i]
-    st[1 + _MAXROWS] += 1.0
+    st[1 + MAX_ROWS] += 1.0
     lam = 1.0
-    if trh > 0.0 and st[1 + _MAXROWS] >= 1.0 / (1.0 - rho):  # after the average has settled
+    if trh > 0.0 and st[1 + MAX_ROWS] >= 1.0 / (1.0 - rho):  # after the average has settled
         lam = min(max(1.0, (trv - beta * trr) / trh), lam_max)
     _ones(out, m)
     out[0] = lam
@@ -185,15 +185,15 @@ class FadingMemory(Adapter):
 
     def arrays(self, model):
         return (np.array([self.rho, self.beta, self.lam_max]), np.zeros(1, np.int64),
-                np.zeros(2 + _MAXROWS))
+                np.zeros(2 + MAX_ROWS))
 
 
 @nb.njit(cache=True, error_model="numpy")
 def vb_step(rho, n_iter, st, r, HPH, R, m, out):
     """One variational-Bayes epoch with forgetting ``rho`` on the posteriors in ``st``
     (layout of :class:`VariationalBayes`); shared with the fuzzy supervisor."""
-    a = st[1:1 + _MAXROWS]
-    b = st[1 + _MAXROWS:1 + 2 * _MAXROWS]
+    a = st[1:1 + MAX_ROWS]
+    b = st[1 + MAX_ROWS:1 + 2 * MAX_ROWS]
     if st[0] == 0.0:  # prior: mean R equal to the nominal variance, weak (alpha = 2)
         for i in range(m):
             a[i], b[i] = 2.0, 2.0 * R[i]
@@ -240,4 +240,4 @@ class VariationalBayes(Adapter):
 
     def arrays(self, model):
         return (np.array([self.rho, float(self.iterations)]), np.zeros(1, np.int64),
-                np.zeros(1 + 2 * _MAXROWS))
+                np.zeros(1 + 2 * MAX_ROWS))

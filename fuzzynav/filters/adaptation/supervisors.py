@@ -30,16 +30,16 @@ import numba as nb
 import numpy as np
 
 from fuzzynav.filters.adaptation import ADAPT_SIG, register
-from fuzzynav.filters.adaptation.classical import (_MAXROWS, huber_step, sage_husa_step,
+from fuzzynav.filters.adaptation.classical import (MAX_ROWS, huber_step, sage_husa_step,
                                                    vb_step)
 from fuzzynav.filters.adaptation.fuzzy_common import IP_OUT, evaluate, log_inputs
 from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
 from fuzzynav.filters.numba_lazy import njit_signature
 
 #: Sage-Husa parent state (k, estimates) then the supervisor's b_0, d_(k-1), varied flag
-SH_STATE = 1 + _MAXROWS
+SH_STATE = 1 + MAX_ROWS
 SH_EXTRA = SH_STATE + 3
-VB_EXTRA = 1 + 2 * _MAXROWS
+VB_EXTRA = 1 + 2 * MAX_ROWS
 B_MAX = 1.0 - 1e-12
 GAMMA_MIN, GAMMA_MAX = 1e-3, 100.0
 
