@@ -3,9 +3,11 @@
 ``fuzzy-sage-husa``, ``fuzzy-vb`` and ``fuzzy-huber`` run the classical parent on every
 sensor, with its constant set per epoch by a rule file on the sensors the rule file binds
 (default: the template ``rules/supervisor_<parent>.json``; ``--rules FILE`` or
-``NAME@FILE`` another; a study hands its candidates as the option ``systems``).  The parent's other constants are options (``floor``, ``cap`` of
-Sage-Husa, ``iterations`` of VB) with the parent's defaults, and so is the constant used on
-the sensors no rule file binds (``b``, ``rho``, ``gamma``).  The ``-tuned`` variants read
+``NAME@FILE`` another; a study hands its candidates as the option ``systems``).  The
+parent's other constants (``floor``, ``cap`` of Sage-Husa, ``iterations`` of VB) and the
+constant used on the sensors no rule file binds (``b``, ``rho``, ``gamma``) come from the
+rule file's ``binding.parent`` (a warm-started study writes its tuned parent's there), else
+the parent's defaults; options of the same names override both.  The ``-tuned`` variants read
 the rule file a supervisor study writes (``rules/supervisor_<parent>_tuned.json``).
 """
 from __future__ import annotations
@@ -45,22 +47,34 @@ SUPERVISED = {
 
 
 def supervised_setup(ctx, name: str, default_rules: str) -> FilterSetup:
-    """The parent on every sensor, supervised on those the rule files bind."""
+    """The parent on every sensor, supervised on those the rule files bind; the parent's
+    constants from the rule files' ``binding.parent`` (the tuned parent they were tuned
+    around), options overriding them."""
     cls, constants, _ = SUPERVISED[name]
-    parent, kwargs = constants(ctx.options)
     if ctx.options.get("systems"):  # a study's candidates: (fuzzy system, source) pairs
         bound = bind_systems(ctx.options["systems"], ctx.sensors, required=True)
     else:
         given = ctx.options.get("rules") or [default_rules]
         given = [given] if isinstance(given, (str, Path)) else list(given)
         bound = bind_rule_files(given, ctx.sensors, required=True)
-    adapters = {nm: parent() for nm in ctx.sensors}
-    for nm, p in bound.items():
+    for p in bound.values():
         if not isinstance(p, cls):
             raise FuzzynavError(f"{p.source}: {name} needs rule files bound to adapter "
                                 f"{cls.name!r}; this one is bound to {p.name!r}")
+    parent, kwargs = constants({**_parent_of(bound), **ctx.options})
+    adapters = {nm: parent() for nm in ctx.sensors}
+    for nm, p in bound.items():
         adapters[nm] = cls(p.fis, p.source, p.binding, **kwargs)
     return FilterSetup(base_config(ctx), adapters)
+
+
+def _parent_of(bound: dict) -> dict:
+    """The parent constants the bound rule files carry (one set: they must agree)."""
+    sets = {p.binding.parent: p.source for p in bound.values() if p.binding.parent}
+    if len(sets) > 1:
+        raise FuzzynavError("rule files tuned around different parent constants run one "
+                            "filter: " + "; ".join(f"{src}: {dict(c)}" for c, src in sets.items()))
+    return dict(next(iter(sets), ()))
 
 
 def _register(name: str, template: str) -> None:

@@ -2,7 +2,7 @@
 
 Keys (``docs/studies.md``): ``name``, ``template`` (a rule file), ``tune``, ``partitions``,
 ``free_triangles``, ``rule_weights``, ``window``, ``output_range``, ``output_low``,
-``types``.  Every problem is one :class:`fuzzynav.errors.InputFileError` naming the file
+``types``, ``parent`` (warm start, :mod:`fuzzynav.tuning.warm_start`).  Every problem is one :class:`fuzzynav.errors.InputFileError` naming the file
 and key (:mod:`fuzzynav.tuning.study_config` reads the rest of the study file).
 """
 from __future__ import annotations
@@ -39,6 +39,9 @@ class ControllerConfig:
     output_range: tuple | None = None
     output_low: tuple | None = None
     types: tuple = ("mamdani",)
+    #: warm start (:mod:`fuzzynav.tuning.warm_start`): ``(filter, params file,
+    #: ((constant, value), ...))`` of the tuned parent, or None
+    parent: tuple | None = None
 
 
 def user_file(t: Table, key: str, path: Path, suffixes: tuple, what: str) -> Path:
@@ -91,6 +94,21 @@ def _types(t: Table) -> tuple:
     return tuple(dict.fromkeys(raw))
 
 
+def _parent(t: Table, tmpl: Path, here: Path):
+    """``parent``: the tuned classical filter a supervisor's study warm-starts from."""
+    from fuzzynav.filters import adaptation
+    from fuzzynav.fuzzy import load_fis
+    from fuzzynav.tuning.warm_start import parse_parent
+
+    if not t.has("parent"):
+        return parse_parent(t, here, None)
+    binding = load_fis(tmpl).binding or {}
+    cls = adaptation.ADAPTERS.load().get(binding.get("adapter"))
+    if cls is None:
+        raise t.error("parent", f"the template {tmpl} names no adaptation policy to warm-start")
+    return parse_parent(t, here, cls)
+
+
 def parse_controller(t: Table, here: Path) -> ControllerConfig:
     name = t.string("name")
     tmpl = Path(t.string("template"))
@@ -121,7 +139,8 @@ def parse_controller(t: Table, here: Path) -> ControllerConfig:
                          window=_window(t),
                          output_range=_factor_pair(t, "output_range"),
                          output_low=_factor_pair(t, "output_low"),
-                         types=_types(t))
+                         types=_types(t),
+                         parent=_parent(t, tmpl, here))
     t.finish()
     if c.output_low and c.output_range and not c.output_low[1] < c.output_range[0]:
         raise t.error("output_low", "must lie below output_range (the output's low end "
@@ -130,6 +149,12 @@ def parse_controller(t: Table, here: Path) -> ControllerConfig:
 
     try:
         check_against_template(c)
+        if c.parent is not None:  # the space must hold the parent (checked on its system)
+            from fuzzynav.tuning.space import ControllerSpace
+            from fuzzynav.tuning.warm_start import check_first_trial, first_trial
+
+            space = ControllerSpace.from_config(c)
+            check_first_trial(space, first_trial(space))
     except InputFileError as exc:
         if exc.path is not None:  # the template itself is broken: its own error says where
             raise

@@ -12,6 +12,8 @@ For each controller (a template rule file):
   optional weights (``{ctrl}.weight.{struct}.{i}.{j}``);
 * a partition count of 1 on an input switches it off (one term true on its whole range, so
   the rule table does not depend on it): a study can select inputs;
+* a controller with a ``parent`` (:mod:`fuzzynav.tuning.warm_start`) writes its tuned
+  parent's constants into every candidate's ``binding.parent``;
 * the DoM window (``{ctrl}.window``) and the ends of the first output's range
   (``{ctrl}.out_lo``, ``{ctrl}.out_hi``) where configured;
 * a template with several outputs (``r_scale`` and ``q_scale`` of ``rq-scaling``) gets a
@@ -190,6 +192,8 @@ class ControllerSpace:
         inputs = tuple(self._variable(trial, v, False) for v in t.inputs)
         outputs = tuple(self._variable(trial, v, True, k == 0) for k, v in enumerate(t.outputs))
         binding = self.binding
+        if self.config.parent is not None:  # warm start: the tuned parent's constants
+            binding = replace(binding, parent=self.config.parent[2])
         if self.config.window is not None:
             binding = replace(binding, window=trial.suggest_int(self._p("window"),
                                                                 *self.config.window))

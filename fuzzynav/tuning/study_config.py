@@ -307,6 +307,10 @@ def study_config_from_dict(doc: dict, path: Path | None = None,
     if len({c.name for c in ctrls}) != len(ctrls):
         raise top.error("controllers", "controller names must be unique")
     top.finish()
+    if study["sampler"] == "pso" and any(c.parent is not None for c in ctrls):
+        raise InputFileError(None, "study.sampler", "a warm start (a controller's parent) "
+                             "enqueues a first trial, which the PSO swarm does not take; "
+                             "use tpe, cmaes or random")
     why_not = get_optimiser(study["sampler"]).check(study["multi_objective"])
     if why_not:
         raise InputFileError(None, "study.sampler", why_not)

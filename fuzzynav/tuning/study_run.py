@@ -237,6 +237,9 @@ def run_study(cfg, trials=None, workers: int = 1, storage=None, cache_dir=None,
     if workers > 1 and cfg.path is None:
         raise FuzzynavError("several workers need the study config as a file")
     study = open_study(cfg, storage, create=True)
+    if not study.trials:  # a new study: a warm start's first trial (a plan's, if it has one)
+        for params in getattr(plan, "first_trials", list)():
+            study.enqueue_trial(params, user_attrs={"warm_start": True})
     # what the (forked) workers start with, prepared by as many processes as will run trials
     plan.warm(workers if FORK else 1, progress)
 

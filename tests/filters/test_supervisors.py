@@ -165,3 +165,66 @@ def test_a_constant_supervisor_is_its_parent_bit_for_bit(short_log, tmp_path, na
     save_fis(constant_system(name, target, rng, rng[0] + 0.5 * (c - rng[0])), moved)
     m = run_on_log(short_log, name, {"rules": [str(moved)]}).result
     assert not np.array_equal(a.lla, m.lla) and not math.isnan(m.lla[-1, 0])
+
+
+# -- the tuned parent's constants in the rule file (binding.parent) ---------------------------
+TUNED_PARENTS = [("fuzzy-sage-husa", "sage-husa-tuned", "b", [0.9, 1.0],
+                  {"b": 0.95, "floor": 0.5, "cap": 20.0}),
+                 ("fuzzy-vb", "vb-tuned", "rho", [0.9, 1.0], {"rho": 0.93, "iterations": 2}),
+                 ("fuzzy-huber", "huber-tuned", "gamma", [0.5, 5.0], {"gamma": 2.2})]
+
+
+def _with_parent(fis, parent):
+    return dataclasses.replace(fis, binding={**fis.binding, "parent": parent})
+
+
+@pytest.mark.parametrize("name, tuned, target, rng, constants", TUNED_PARENTS)
+def test_a_constant_supervisor_with_binding_parent_is_the_tuned_parent(
+        short_log, tmp_path, name, tuned, target, rng, constants):
+    """The parent's constants come from the rule file: with the output at the tuned
+    constant, the run is the tuned parent's (read from a tuned-parameter file) bit for bit."""
+    import json
+
+    from fuzzynav.experiment import run_on_log
+    from fuzzynav.fuzzy import save_fis
+
+    params = tmp_path / "params.json"
+    params.write_text(json.dumps({"format": "fuzzynav-baselines", "version": 1,
+                                  "filters": {tuned: constants}}))
+    rules = tmp_path / "const.json"
+    save_fis(_with_parent(constant_system(name, target, rng, constants[target]), constants),
+             rules)
+    a = run_on_log(short_log, tuned, {"params": str(params)}).result
+    b = run_on_log(short_log, name, {"rules": [str(rules)]}).result
+    assert a.ok and b.ok
+    assert np.array_equal(a.lla, b.lla) and np.array_equal(a.sigma, b.sigma, equal_nan=True)
+    if len(constants) > 1:  # without binding.parent: the parent's defaults, another run
+        plain = tmp_path / "plain.json"
+        save_fis(constant_system(name, target, rng, constants[target]), plain)
+        d = run_on_log(short_log, name, {"rules": [str(plain)]}).result
+        assert not np.array_equal(a.lla, d.lla)
+
+
+@pytest.mark.parametrize("parent, where", [({"b": 0.95, "floor": 0.5}, "$.binding.parent"),
+                                           ({"b": 1.5, "floor": 0.5, "cap": 20.0},
+                                            "$.binding.parent.b"),
+                                           ({"b": 0.9, "floor": 0.5, "cap": 20.0, "x": 1},
+                                            "$.binding.parent.x")])
+def test_a_bad_binding_parent_is_refused_naming_the_key(parent, where):
+    fis = _with_parent(constant_system("fuzzy-sage-husa", "b", [0.9, 1.0], 0.95), parent)
+    with pytest.raises(InputFileError) as err:
+        Binding.of(fis, "f.json")
+    assert err.value.where == where
+
+
+def test_binding_parent_only_on_a_supervisor_and_written_back():
+    ok = _with_parent(constant_system("fuzzy-huber", "gamma", [0.5, 5.0], 2.0), {"gamma": 2.0})
+    b = Binding.of(ok, "f.json")
+    assert b.parent == (("gamma", 2.0),) and b.to_dict()["parent"] == {"gamma": 2.0}
+    assert "parent" not in Binding.of(constant_system("fuzzy-huber", "gamma", [0.5, 5.0], 2.0),
+                                      "f.json").to_dict()
+    from fuzzynav.fuzzy import load_fis
+
+    other = load_fis("rules/paper002_ror_gnss.json")
+    with pytest.raises(InputFileError, match="no fuzzy supervisor"):
+        Binding.of(_with_parent(other, {"gamma": 2.0}), "g.json")

@@ -11,7 +11,10 @@ the same JSON back.
 Keys (``docs/fuzzy.md``): ``adapter`` (a fuzzy adaptation policy), ``inputs`` (fuzzy input
 -> ``statistic`` and ``channel``), ``outputs`` (fuzzy output -> the policy quantity it
 drives), ``window`` (epochs, default 10), ``sensor`` (a sensor name or kind, optional),
-``normalisation`` (how ``dom`` is reduced: ``relative-trace``, the only one and default).
+``normalisation`` (how ``dom`` is reduced: ``relative-trace``, the only one and default),
+``parent`` (a fuzzy supervisor's classical constants, e.g. ``{"b": 0.93, "floor": 0.82,
+"cap": 26.8}``: the tuned parent the rules were tuned around; only for an adapter that
+declares ``parent_constants``).
 Statistics: the innovation ones of :mod:`~fuzzynav.filters.adaptation.window` and the
 epoch-context ones of :mod:`~fuzzynav.filters.adaptation.context` (motion state, the
 sensor's reported sigma, receiver quality columns).
@@ -32,7 +35,7 @@ from fuzzynav.filters.adaptation import context, window
 #: the DoM/ROR window in epochs, inclusive bounds
 WINDOW_RANGE = (1, 10000)
 DEFAULT_WINDOW = 10
-_KEYS = ("adapter", "inputs", "outputs", "window", "sensor", "normalisation")
+_KEYS = ("adapter", "inputs", "outputs", "window", "sensor", "normalisation", "parent")
 _INPUT_KEYS = ("statistic", "channel")
 
 
@@ -114,6 +117,9 @@ class Binding:
     normalisation : str
         How ``dom`` is reduced (``relative-trace``: per channel, see
         :mod:`fuzzynav.filters.adaptation.window`).
+    parent : tuple of (str, float)
+        A fuzzy supervisor's classical constants (name, value), in the adapter's
+        ``parent_constants`` order; empty: the parent's defaults.
     """
 
     adapter: str
@@ -122,6 +128,7 @@ class Binding:
     window: int = DEFAULT_WINDOW
     sensor: str | None = None
     normalisation: str = "relative-trace"
+    parent: tuple = ()
 
     @classmethod
     def of(cls, fis, source=None, adapter: str | None = None) -> "Binding":
@@ -143,7 +150,8 @@ class Binding:
                    window=_window(w, doc.get("window", DEFAULT_WINDOW)),
                    sensor=None if doc.get("sensor") is None else
                    w.name(doc["sensor"], "sensor", "a sensor or sensor kind"),
-                   normalisation=_normalisation(w, doc.get("normalisation", "relative-trace")))
+                   normalisation=_normalisation(w, doc.get("normalisation", "relative-trace")),
+                   parent=parent_constants(w, doc.get("parent"), adapter))
 
     def to_dict(self) -> dict:
         """The JSON object of this binding, as rule files write it."""
@@ -156,6 +164,8 @@ class Binding:
             d["sensor"] = self.sensor
         if any(b.statistic == "dom" for b in self.inputs):
             d["normalisation"] = self.normalisation  # says how the dom inputs are reduced
+        if self.parent:
+            d["parent"] = dict(self.parent)
         return d
 
     @property
@@ -307,3 +317,21 @@ def _normalisation(w: _Where, value) -> str:
         raise w.error("normalisation", f"unknown normalisation {brief(value)}; known: "
                                        f"{', '.join(window.DOM_NORMALISATIONS)}")
     return value
+
+
+def parent_constants(w, doc, adapter) -> tuple:
+    """``binding.parent``: the tuned parent's constants as ``((name, value), ...)``, checked
+    by the one reader of tuned parameters (:func:`fuzzynav.filters.params_file.check_params`,
+    as the entry ``adapter.parent`` of a tuned-parameter file: every key, in range).
+
+    ``w`` is a :class:`_Where` or a rule-file source (path or None)."""
+    from fuzzynav.filters.params_file import check_params
+
+    if doc is None:
+        return ()
+    w = w if isinstance(w, _Where) else _Where(w)
+    parent = getattr(adapter, "parent", None)
+    if parent is None:
+        raise w.error("parent", f"adapter {adapter.name!r} is no fuzzy supervisor: it has no "
+                                "classical parent whose constants could be set")
+    return tuple(check_params(parent, doc, w.source, "$.binding.parent.").items())

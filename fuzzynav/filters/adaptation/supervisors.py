@@ -100,7 +100,8 @@ def fuzzy_huber_kernel(fp, ip, st, r, HPH, R, chan, m, out, diag, ctx):
 
 class _Supervisor(FuzzyPolicy):
     """A fuzzy policy setting a classical parent's constant (``n_extra`` floats of parent
-    state appended to ``st``)."""
+    state appended to ``st``).  ``parent`` names the tuned parent's entry of a
+    tuned-parameter file: the constants a rule file's ``binding.parent`` may give."""
 
     n_extra = 0
 
@@ -124,6 +125,7 @@ class FuzzySageHusa(_Supervisor):
     """
 
     name = "fuzzy-sage-husa"
+    parent = "sage-husa-tuned"
     kernel = fuzzy_sage_husa_kernel
     role = "b"
     domains = (("b", 0.0, 1.0),)
@@ -142,6 +144,7 @@ class FuzzyVB(_Supervisor):
     (``iterations`` fixed-point iterations, ``rho_fallback`` for a non-number output)."""
 
     name = "fuzzy-vb"
+    parent = "vb-tuned"
     kernel = fuzzy_vb_kernel
     role = "rho"
     domains = (("rho", 0.0, 1.0),)
@@ -159,6 +162,7 @@ class FuzzyHuber(_Supervisor):
     """The Huber update whose threshold ``gamma_k`` a fuzzy system sets per epoch."""
 
     name = "fuzzy-huber"
+    parent = "huber-tuned"
     kernel = fuzzy_huber_kernel
     role = "gamma"
     domains = (("gamma", GAMMA_MIN, GAMMA_MAX),)

@@ -33,6 +33,19 @@ class FuzzyPlan:
     def config(self, key: str = ""):
         return self.cfg
 
+    def first_trials(self) -> list:
+        """Parameters to enqueue in a new study: with a warm start
+        (:mod:`fuzzynav.tuning.warm_start`), the trial where each warm-started controller
+        outputs its parent's constant; else none."""
+        from fuzzynav.tuning.space import ControllerSpace
+        from fuzzynav.tuning.warm_start import first_trial
+
+        params = {}
+        for cc in self.cfg.controllers:
+            if cc.parent is not None:
+                params.update(first_trial(ControllerSpace.from_config(cc)))
+        return [params] if params else []
+
     def warm(self, processes: int = 1, progress: bool = True):
         """Compile the kernels if the cache is cold (saying so), then a warm evaluator made
         by ``processes`` processes (:func:`fuzzynav.tuning.prefetch.warm_shared`)."""
