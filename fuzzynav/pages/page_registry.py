@@ -69,9 +69,10 @@ PAGES = {p.name: p for p in (
          {"mc": 8}, {"mc": 2, "real": False},
          "paper 004 simulated and on the A-KIT recordings"),
     Page("science", "fuzzynav.pages.science", "docs/science.md", None,
-         {"trials": 30, "workers": 2},
-         {"trials": 2, "workers": 1, "seeds": 2, "mc_recordings": 1, "recordings": False},
-         "the fuzzy controller against equally tuned baselines (the whole page)"),
+         {"trials": 300, "workers": 2, "tunings": 3, "curve_trials": 1000},
+         {"trials": 2, "workers": 1, "seeds": 2, "mc_recordings": 1, "recordings": False,
+          "tunings": 2, "curve_trials": 4, "budgets": (1, 2, 4)},
+         "the fuzzy designs against equally tuned baselines (the whole page)"),
 )}
 
 

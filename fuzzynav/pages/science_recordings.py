@@ -48,12 +48,15 @@ def data_root(given=None) -> Path:
     return Path(os.environ.get("FUZZYNAV_DATA", ROOT.parent / "shared" / "datasets"))
 
 
-def _car_specs(params: Path, sim_rules: Path, car_rules) -> dict:
-    """Label -> (named filter, options) of the filters run on the drive."""
+def _car_specs(params: Path, sim_rules: Path, car_rules, supervisors=None) -> dict:
+    """Label -> (named filter, options) of the filters run on the drive (``supervisors``:
+    label -> (named filter, rule file) of further fuzzy designs tuned on simulation)."""
     from fuzzynav.filters.baselines import TUNED
 
     specs = {n: (n, {"params": str(params)} if n in TUNED else {}) for n in CAR_FILTERS}
     specs[SIM_FUZZY] = ("fakf", {"rules": [str(sim_rules)]})
+    for label, (name, path) in (supervisors or {}).items():
+        specs[label] = (name, {"rules": [str(path)]})
     if car_rules is not None:
         specs[CAR_FUZZY] = ("fakf", {"rules": [str(car_rules)]})
     return specs
@@ -78,13 +81,13 @@ def car_table(directory: Path, specs: dict, seeds) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def _save_systems(systems: dict, directory: Path) -> Path:
-    """The tuned fuzzy controller as a rule file (one controller: the GNSS R-scaling)."""
+def _save_systems(systems: dict, directory: Path, stem: str = "fuzzy_tuned") -> Path:
+    """A tuned fuzzy design as a rule file (one controller: the GNSS one)."""
     from fuzzynav.fuzzy.io import save_fis
 
     if len(systems) != 1:
         raise ValueError(f"expected one tuned controller, got {sorted(systems)}")
-    path = directory / "fuzzy_tuned.json"
+    path = directory / f"{stem}.json"
     save_fis(next(iter(systems.values())), path)
     return path
 
@@ -106,7 +109,7 @@ def _paired_lines(scores, scenario, fuzzies, ref) -> list:
     """A sentence per fuzzy controller against the best classical filter and ``ref``."""
     from fuzzynav.pages import scores as sr
 
-    pool = scores[~scores["filter"].isin([*fuzzies, *sr.NOT_CLASSICAL])]
+    pool = scores[sr.is_classical(scores["filter"]) & ~scores["filter"].isin(fuzzies)]
     best = pool.groupby("filter")["score"].mean().idxmin()
     out = []
     for f in fuzzies:
@@ -116,8 +119,10 @@ def _paired_lines(scores, scenario, fuzzies, ref) -> list:
     return out
 
 
-def car_section(directory: Path, params: Path, systems: dict, car_rules, seeds) -> tuple:
-    """Markdown lines of the car drive and its rows."""
+def car_section(directory: Path, params: Path, systems: dict, car_rules, seeds,
+                supervisors=None) -> tuple:
+    """Markdown lines of the car drive and its rows (``supervisors``: label -> (named
+    filter, systems) of further fuzzy designs)."""
     from fuzzynav.pages import scores as sr
 
     rules = Path(car_rules) if car_rules else CAR_RULES
@@ -127,11 +132,13 @@ def car_section(directory: Path, params: Path, systems: dict, car_rules, seeds) 
         "judged on the second half in docs/studies.md; this section runs the whole drive, "
         "so only controllers tuned on simulation are held out here.", ""]
     with tempfile.TemporaryDirectory() as tmp:
+        sup = {label: (name, _save_systems(s, Path(tmp), label))
+               for label, (name, s) in (supervisors or {}).items()}
         specs = _car_specs(params, _save_systems(systems, Path(tmp)), rules if rules.is_file()
-                           else None)
+                           else None, sup)
         df = car_table(directory, specs, seeds)
     scores = sr.scores_to(df, sr.REF, CAR_METRICS)
-    fuzzies = [f for f in (SIM_FUZZY, CAR_FUZZY) if f in specs]
+    fuzzies = [f for f in (SIM_FUZZY, *sup, CAR_FUZZY) if f in specs]
     order = [*fuzzies, *CAR_FILTERS]
     return [
         "### The car drive (`rtklib-drive`, consumer MEMS IMU, real)", "",
@@ -194,15 +201,17 @@ def auv_section(directory: Path, auv_rules) -> tuple:
             *_paired_lines(scores, "akit", [AUV_FUZZY], "ekf"), ""], df
 
 
-def recordings_section(args, params: Path, systems: dict) -> tuple:
-    """The page's "Held-out recordings" section and the rows it scored (or None)."""
+def recordings_section(args, params: Path, systems: dict, supervisors=None) -> tuple:
+    """The page's "Held-out recordings" section and the rows it scored (or None);
+    ``supervisors``: label -> (named filter, systems) of the fuzzy supervisors."""
     root = data_root(args.data)
     seeds = list(range(args.mc_recordings))
     lines = ["## Held-out recordings", "",
              "Real data, never seen in training (the controllers and the tuned constants "
              "were learned on simulated runs; a controller learned on recordings is judged "
              "when its rule file exists).", ""]
-    car, car_df = car_section(root / "rtklib-drive", params, systems, args.car_rules, seeds) \
+    car, car_df = car_section(root / "rtklib-drive", params, systems, args.car_rules, seeds,
+                              supervisors) \
         if (root / "rtklib-drive").is_dir() else \
         ([f"*The car drive is not here ({root / 'rtklib-drive'}): section skipped. Set "
           "`FUZZYNAV_DATA` or pass `--data`.*", ""], None)

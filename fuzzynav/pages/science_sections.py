@@ -1,0 +1,144 @@
+"""Sections of ``docs/science.md`` over several fuzzy designs and tunings.
+
+* :func:`designs_lines` -- every fuzzy design against the best classical baseline of each
+  held-out set (paired per seed, 95 % CI), with a tally per design;
+* :func:`variance_lines` -- the tuning variance: each tuning's held-out score per filter,
+  the spread between tunings, and each design's verdict against the best classical filter
+  per tuning (the paired test reported per tuning, not pooled over tunings);
+* :func:`budget_lines` -- the budget curves: training and held-out score against the trials
+  a study was given, as a table and a figure.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from fuzzynav.pages import scores as sr
+
+__all__ = ["designs_lines", "design_tally", "variance_lines", "budget_lines",
+           "budget_sentences"]
+
+
+def design_tally(scores, scenarios, design) -> dict:
+    """Verdict -> count of ``design`` against each set's best classical filter."""
+    tally = {"wins against": 0, "draws with": 0, "loses to": 0}
+    for s in scenarios:
+        v = sr.verdict(sr.paired(scores, s, design, sr.best_classical(scores, s)))
+        tally[v] = tally.get(v, 0) + 1
+    return tally
+
+
+def designs_lines(scores, scenarios, designs) -> list:
+    """Markdown: scenario x design, the paired difference to the best classical filter."""
+    lines = ["| scenario | best classical | " + " | ".join(f"`{d}` − best" for d in designs)
+             + " |", "|---|---|" + "---|" * len(designs)]
+    for s in scenarios:
+        best = sr.best_classical(scores, s)
+        cells = []
+        for d in designs:
+            est = sr.paired(scores, s, d, best)
+            mark = {"wins against": " **win**", "loses to": " loss"}.get(sr.verdict(est), "")
+            cells.append(f"{est.mean:+.3f} [{est.lo:+.3f}, {est.hi:+.3f}]{mark}")
+        lines.append(f"| `{s}` | {best} | " + " | ".join(cells) + " |")
+    lines += ["", "| design | wins | draws | losses (of the held-out sets) |", "|---|---|---|---|"]
+    for d in designs:
+        t = design_tally(scores, scenarios, d)
+        lines.append(f"| `{d}` | {t['wins against']} | {t['draws with']} | {t['loses to']} |")
+    return lines
+
+
+def variance_lines(per_tuning: dict, designs, classical, scenarios) -> list:
+    """Markdown of the tuning variance.
+
+    ``per_tuning``: tuning seed -> scores against ``ekf`` (:func:`~.scores.scores_to`) of
+    that tuning's held-out runs; ``designs`` the fuzzy labels, ``classical`` the tuned
+    classical filters."""
+    from fuzzynav.tuning.tuning_seeds import tuning_spread
+
+    names = [*designs, *classical]
+    per, across = tuning_spread(per_tuning, names)
+    seeds = list(per_tuning)
+    lines = ["Held-out score against the EKF (mean over every held-out run; ± the 95 % CI "
+             "over those runs) of each tuning, and the spread between tunings:", "",
+             "| filter | " + " | ".join(f"tuning seed {s}" for s in seeds)
+             + " | mean | min – max | std between tunings |",
+             "|---|" + "---|" * (len(seeds) + 3)]
+    for name in names:
+        sub = per[per["filter"] == name].set_index("tuning_seed")
+        a = across[across["filter"] == name].iloc[0]
+        cells = [f"{sub.loc[s, 'score']:.3f} ± {sub.loc[s, 'score_ci']:.3f}" for s in seeds]
+        lines.append(f"| `{name}` | " + " | ".join(cells) + f" | {a['mean']:.3f} | "
+                     f"{a['min']:.3f} – {a['max']:.3f} | {a['std']:.3f} |")
+    lines += ["", "Each fuzzy design against the best classical filter of each held-out set, "
+              "per tuning (wins / draws / losses of the sets; the best classical filter "
+              "chosen per tuning and set, on the held-out data):", "",
+              "| design | " + " | ".join(f"tuning seed {s}" for s in seeds) + " |",
+              "|---|" + "---|" * len(seeds)]
+    for d in designs:
+        cells = []
+        for s in seeds:
+            t = design_tally(per_tuning[s], scenarios, d)
+            cells.append(f"{t['wins against']} / {t['draws with']} / {t['loses to']}")
+        lines.append(f"| `{d}` | " + " | ".join(cells) + " |")
+    return lines
+
+
+def _figure(points: pd.DataFrame, path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    for k, (name, sub) in enumerate(points.groupby("filter", sort=False)):
+        g = sub.groupby("trials")
+        n = np.array(sorted(g.groups))
+        for col, style in (("held_out_score", "-"), ("train_score", ":")):
+            m, lo, hi = g[col].mean(), g[col].min(), g[col].max()
+            ax.plot(n, m.loc[n], style, marker="o", color=f"C{k}",
+                    label=f"{name} ({'held out' if col[0] == 'h' else 'training'})")
+            if col[0] == "h":
+                ax.fill_between(n, lo.loc[n], hi.loc[n], color=f"C{k}", alpha=0.15)
+    ax.set_xscale("log")
+    ax.set_xlabel("trials of the study")
+    ax.set_ylabel("score (RMS error over the EKF's)")
+    ax.set_title("Budget curves (band: min–max over tunings)")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def budget_lines(points: pd.DataFrame, fig_path, fig_name: str) -> list:
+    """Markdown table of the budget curves and the figure (written to ``fig_path``)."""
+    _figure(points, fig_path)
+    lines = ["| filter | trials | tunings | training score | held-out score (min – max "
+             "over tunings) |", "|---|---|---|---|---|"]
+    for (name, n), sub in points.groupby(["filter", "trials"], sort=False):
+        h = sub["held_out_score"]
+        lines.append(f"| `{name}` | {n} | {len(sub)} | {sub['train_score'].mean():.3f} | "
+                     f"{h.mean():.3f} ({h.min():.3f} – {h.max():.3f}) |")
+    return [f"![budget curves](figures/{fig_name})", "", *lines]
+
+
+def budget_sentences(points: pd.DataFrame) -> list:
+    """Where more search stops helping (the budget with the best mean held-out score) and
+    where it overfits (training still improving while the held-out score worsens)."""
+    out = []
+    for name, sub in points.groupby("filter", sort=False):
+        g = sub.groupby("trials")[["train_score", "held_out_score"]].mean().sort_index()
+        best = int(g["held_out_score"].idxmin())
+        text = (f"- `{name}`: held-out score {' → '.join(f'{v:.3f}' for v in g['held_out_score'])}"
+                f" and training {' → '.join(f'{v:.3f}' for v in g['train_score'])} at "
+                f"{', '.join(str(int(n)) for n in g.index)} trials; best held out at {best}.")
+        worse = [(int(a), int(b)) for a, b in zip(g.index[:-1], g.index[1:])
+                 if g.loc[b, "train_score"] < g.loc[a, "train_score"]
+                 and g.loc[b, "held_out_score"] > g.loc[a, "held_out_score"]]
+        if worse:
+            text += (" From " + ", ".join(f"{a} to {b}" for a, b in worse) + " trials the "
+                     "training score still improves while the held-out score gets worse: "
+                     "the search overfits the training runs there.")
+        elif best == int(g.index[-1]):
+            text += " More search still helped at the largest budget measured."
+        out.append(text)
+    return out

@@ -1,0 +1,80 @@
+"""The science page's multi-design sections on synthetic scores (answers worked by hand)."""
+import numpy as np
+import optuna
+import pandas as pd
+import pytest
+
+from fuzzynav.pages import science_sections as sec
+from fuzzynav.pages.scores import best_classical, is_classical
+
+
+def _scores(values: dict) -> pd.DataFrame:
+    """filter -> scenario -> per-seed scores."""
+    rows = [{"scenario": sc, "seed": k, "filter": f, "score": v}
+            for f, by in values.items() for sc, xs in by.items() for k, v in enumerate(xs)]
+    return pd.DataFrame(rows)
+
+
+SCORES = _scores({
+    "fuzzy-a": {"s1": [0.70, 0.72, 0.71, 0.69], "s2": [1.30, 1.32, 1.31, 1.29]},
+    "sage-husa-tuned": {"s1": [0.80, 0.83, 0.80, 0.79], "s2": [0.90, 0.91, 0.93, 0.90]},
+    "vb-tuned": {"s1": [0.85, 0.86, 0.84, 0.85], "s2": [0.95, 0.96, 0.94, 0.95]},
+    "ekf-true": {"s1": [0.10] * 4, "s2": [0.10] * 4},
+    "fuzzy-b": {"s1": [0.01] * 4, "s2": [0.01] * 4},
+})
+
+
+def test_the_best_classical_filter_is_never_fuzzy_nor_the_oracle():
+    assert not is_classical(pd.Series(["fuzzy-b", "fakf", "ekf-true"])).any()
+    assert best_classical(SCORES, "s1") == "sage-husa-tuned"
+
+
+def test_a_design_is_tallied_against_each_sets_best_classical_filter():
+    # s1: fuzzy-a is 0.10 below sage-husa-tuned on every seed (win); s2: 0.40 above (loss)
+    assert sec.design_tally(SCORES, ["s1", "s2"], "fuzzy-a") == {
+        "wins against": 1, "draws with": 0, "loses to": 1}
+    lines = sec.designs_lines(SCORES, ["s1", "s2"], ["fuzzy-a"])
+    assert "-0.100" in lines[2] and "**win**" in lines[2] and "loss" in lines[3]
+
+
+def test_the_spread_between_tunings_is_the_sample_std_of_their_means():
+    t0 = _scores({"fuzzy-a": {"s1": [0.7, 0.7]}, "sage-husa-tuned": {"s1": [0.8, 0.8]}})
+    t1 = _scores({"fuzzy-a": {"s1": [0.9, 0.9]}, "sage-husa-tuned": {"s1": [0.8, 0.8]}})
+    lines = sec.variance_lines({0: t0, 1: t1}, ["fuzzy-a"], ["sage-husa-tuned"], ["s1"])
+    row = next(line for line in lines if line.startswith("| `fuzzy-a` | 0.700"))
+    assert f"{np.std([0.7, 0.9], ddof=1):.3f}" in row and "0.700 – 0.900" in row
+    # per tuning: a win in tuning 0 (0.7 < 0.8 on both seeds), a loss in tuning 1
+    assert "| `fuzzy-a` | 1 / 0 / 0 | 0 / 0 / 1 |" in lines
+
+
+def _points(train, held, name="f"):
+    return pd.DataFrame({"filter": name, "trials": [30, 100, 300, 1000], "tuning_seed": 0,
+                         "train_score": train, "held_out_score": held, "runs": 56})
+
+
+def test_budget_sentences_find_overfitting_and_the_best_budget():
+    over = sec.budget_sentences(_points([0.9, 0.8, 0.7, 0.6], [0.9, 0.85, 0.88, 0.95]))[0]
+    assert "best held out at 100" in over and "100 to 300, 300 to 1000" in over
+    assert "overfits" in over
+    still = sec.budget_sentences(_points([0.9, 0.8, 0.7, 0.6], [0.9, 0.85, 0.8, 0.7]))[0]
+    assert "best held out at 1000" in still and "still helped" in still
+
+
+def test_budget_lines_draw_the_figure(tmp_path):
+    lines = sec.budget_lines(pd.concat([_points([0.9, 0.8, 0.7, 0.6], [0.9, 0.8, 0.8, 0.8]),
+                                        _points([1, 1, 1, 1], [1, 1, 1, 1], "g")]),
+                             tmp_path / "b.png", "b.png")
+    assert (tmp_path / "b.png").stat().st_size > 1000
+    assert lines[0] == "![budget curves](figures/b.png)" and len(lines) == 2 + 2 + 8
+
+
+def test_best_of_first_n_is_what_a_budget_of_n_would_have_returned():
+    from fuzzynav.pages.science_tuning import best_of_first
+
+    study = optuna.create_study()
+    for v in (5.0, 3.0, 4.0, 1.0, 2.0):
+        study.add_trial(optuna.trial.create_trial(params={}, distributions={}, value=v))
+    firsts = best_of_first(study, 3).get_trials()
+    assert [t.number for t in firsts] == [0, 1, 2]
+    assert min(t.value for t in firsts) == 3.0
+    assert best_of_first(study, None) is study
