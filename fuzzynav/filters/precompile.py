@@ -1,24 +1,24 @@
-"""Compile the covariance kernels in a second process while this one compiles the loop.
+"""Compile the loop's heavy callees in a second process while this one compiles the rest.
 
 A cold ``fuzzynav run`` spends most of its time compiling, one kernel after the other, on
 one core: numba holds a process-wide lock while it compiles.  The covariance kernels of
-the filter loop (:data:`KERNELS`: the discretisation, the propagation, the innovation
-covariance and the update, with their 15-state copies about a third of a cold run's
-compile time) do not depend on the rest, and the loop calls them with one signature each
-(the loop's own work arrays, C-contiguous).  So when the loop is about to be compiled and
-they are not in the kernel cache, :func:`start` launches ``python -m
-fuzzynav.filters.precompile``: that process compiles them into the same keyed cache
-(numba writes each entry to a temporary file and renames it), printing each name when it
-is saved, while this process compiles the measurement models, the mechanization and the
-loop's other callees.  When the loop's typing reaches one of the kernels, this process
-waits for the helper to report it and loads it from the cache -- the same compiled code
-it would have produced (a warm run loads all of them so).  If the helper fails or is
-slow (:data:`WAIT_S`), this process compiles the kernel itself; results never depend on
-which process compiled.
+the filter loop and a few other callees (:data:`KERNELS`; with their 15-state copies about
+a third of a cold run's compile time) do not depend on the rest, and the loop calls them
+with one signature each (its own C-contiguous work arrays, :func:`signatures`).  So when
+the loop is about to be compiled and they are neither compiled nor in the kernel cache,
+:func:`start` launches ``python -m fuzzynav.filters.precompile``: it compiles them into
+the same keyed cache (numba writes each entry to a temporary file and renames it), from
+the last the loop needs to the first, writing ``start NAME`` and ``done NAME``; this
+process compiles the measurement models and the loop's callees from the first on.  When
+its typing reaches one of the kernels (:class:`_WaitingCache`, :meth:`Helper.claim`): done
+-- loaded from the cache, the code this process would have compiled (a warm run loads
+every kernel so); being compiled -- it waits (at most :data:`WAIT_S`); not started -- it
+compiles the kernel itself and tells the helper to skip it.  Results never depend on
+which process compiled (the same code; ``tools/behaviour_lock.py``).
 
 Off with ``FUZZYNAV_PRECOMPILE=0``, on one CPU, and without the keyed cache
-(``FUZZYNAV_NUMBA_CACHE=0``).  The waiting goes through the dispatcher's private cache
-object (``_cache``, numba 0.68; ``tests/filters/test_precompile.py``).
+(``FUZZYNAV_NUMBA_CACHE=0``).  The hook goes through the dispatcher's private cache object
+(``_cache``, numba 0.68) and the cache's index path (``tests/filters/test_precompile.py``).
 """
 from __future__ import annotations
 
