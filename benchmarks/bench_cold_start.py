@@ -57,8 +57,20 @@ def _child(argv, out_path):
     from fuzzynav.cli import main
 
     code = main(argv)
+    wall = time.perf_counter() - t0
+    try:
+        from fuzzynav.filters import precompile
+    except ImportError:  # a base revision without the helper
+        precompile = None
+    helper = getattr(precompile, "_HELPER", None)
+    if helper is not None:
+        helper.stop()
+    own = resource.getrusage(resource.RUSAGE_SELF)
     with open(out_path, "w", encoding="utf-8") as f:
-        json.dump({"code": code, "in_process_s": time.perf_counter() - t0, "compiles": recs}, f)
+        json.dump({"code": code, "in_process_s": wall, "compiles": recs,
+                   "own_cpu_s": own.ru_utime + own.ru_stime,
+                   "helper_cpu_s": None if helper is None else helper.cpu_s,
+                   "waited_s": None if helper is None else helper.waited_s}, f)
     return code
 
 
@@ -81,6 +93,15 @@ def _run(argv, env):
 
 def _summary(xs):
     return {"min": min(xs), "median": statistics.median(xs), "runs": len(xs)}
+
+
+def _median_or_none(xs):
+    xs = [x for x in xs if x is not None]
+    return statistics.median(xs) if xs else None
+
+
+def _fmt(x):
+    return "–" if x is None else f"{x:.1f}"
 
 
 def top_kernels(compiles, n):
@@ -114,7 +135,10 @@ def measure(argv, repeat, trees):
                          "cpu_s": _summary([x[1] for x in rs]),
                          "compiles": statistics.median(len(x[2]["compiles"]) for x in rs),
                          "compile_s": statistics.median(sum(c[2] for c in x[2]["compiles"])
-                                                        for x in rs)}
+                                                        for x in rs),
+                         "own_cpu_s": statistics.median(x[2]["own_cpu_s"] for x in rs),
+                         "helper_cpu_s": _median_or_none(x[2].get("helper_cpu_s") for x in rs),
+                         "waited_s": _median_or_none(x[2].get("waited_s") for x in rs)}
         res["top"] = top_kernels(r["cold"][0][2]["compiles"], 10 ** 6)
         out[label] = res
     return out
@@ -124,17 +148,23 @@ def report(command, results, top, repeat) -> str:
     """The figures as markdown: a table of the cases, then each tree's top kernels."""
     lines = [f"`fuzzynav {command}`, empty numba and simulation caches (cold) and then the "
              f"same caches again (warm); min / median of {repeat} run(s) each, whole "
-             "process (wall and CPU = user + system seconds); compile = the compilations' "
-             "own times summed (numba's `numba:compile` event).", "",
-             "| tree | case | wall (s) | CPU (s) | compilations | compile (s) |",
-             "|---|---|---|---|---|---|"]
+             "process (wall and CPU = user + system seconds, helper process included); "
+             "compile = the compilations' own times summed (numba's `numba:compile` event); "
+             "main CPU = the command's process alone; helper = the CPU seconds of the "
+             "process compiling the covariance kernels meanwhile "
+             "(`fuzzynav/filters/precompile.py`), waited = the seconds the command waited "
+             "for it (medians).", "",
+             "| tree | case | wall (s) | CPU (s) | compilations | compile (s) | main CPU (s) "
+             "| helper CPU (s) | waited (s) |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for label, res in results.items():
         for case in ("cold", "warm"):
             r = res[case]
             lines.append(f"| {label} | {case} | {r['wall_s']['min']:.1f} / "
                          f"{r['wall_s']['median']:.1f} | {r['cpu_s']['min']:.1f} / "
                          f"{r['cpu_s']['median']:.1f} | {r['compiles']:.0f} | "
-                         f"{r['compile_s']:.1f} |")
+                         f"{r['compile_s']:.1f} | {_fmt(r.get('own_cpu_s'))} | "
+                         f"{_fmt(r.get('helper_cpu_s'))} | {_fmt(r.get('waited_s'))} |")
     for label, res in results.items():
         lines += ["", f"Top kernels by own compile time, {label} (first cold run):", "",
                   "| s | compilations | kernel |", "|---|---|---|"]

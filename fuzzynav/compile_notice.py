@@ -20,7 +20,7 @@ __all__ = ["COLD_RUN_S", "COLD_TEXT", "PARTIAL_TEXT", "kernel_cache", "compiled_
            "cache_is_cold", "notice_text", "CompileNotice", "install", "announce"]
 
 #: a cold ``fuzzynav run paper000 --filter ekf`` [s] on a 2-core machine (docs/benchmarks.md)
-COLD_RUN_S = 50
+COLD_RUN_S = 30
 
 #: the line when the keyed cache is empty
 COLD_TEXT = f"compiling numba kernels (first run, ~{COLD_RUN_S} s) …"

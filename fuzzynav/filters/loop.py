@@ -18,7 +18,7 @@ import math
 import numba as nb
 import numpy as np
 
-from fuzzynav.filters import kalman
+from fuzzynav.filters import kalman, precompile
 from fuzzynav.filters.adaptation import context
 from fuzzynav.filters.bank_beta import push_innovation, update_shares
 from fuzzynav.filters.bank_fusion import FUSED_NOW, SHARED, STALE, after_propagation, fuse, \
@@ -276,7 +276,10 @@ run_loop = _make_loop(True, True)
 def loop_for(n_local: int, error_model: int, controller_on: int):
     """The compiled loop for a filter of ``n_local`` locals, error model code
     ``error_model``, share controller on or off: :data:`PLAIN_LOOP` for a single phi-model
-    filter, else :func:`run_loop` (each compiled on first use)."""
+    filter, else :func:`run_loop` (each compiled on first use).  On a cold kernel cache the
+    covariance kernels are compiled meanwhile in a second process
+    (:func:`fuzzynav.filters.precompile.start`)."""
+    precompile.start()
     if n_local == 1 and not controller_on and error_model != EM_ST:
         return PLAIN_LOOP
     return run_loop
