@@ -11,6 +11,11 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 
+# The cold-start compile helper (fuzzynav.filters.precompile) shares a first run's
+# compilation with a second process; under pytest-xdist every worker on a cold cache would
+# start its own, so the suite runs without it (its protocol has its own tests).
+os.environ.setdefault("FUZZYNAV_PRECOMPILE", "0")
+
 
 @pytest.fixture(scope="session")
 def sim_cache(tmp_path_factory):
