@@ -18,6 +18,9 @@ def register(sub) -> None:
     r.add_argument("--out", metavar="DIR", type=Path,
                    help="write PAGE.md and figures/ into DIR instead of over docs/ "
                         "(required with --budget small)")
+    r.add_argument("--work", metavar="DIR", type=Path,
+                   help="keep the page's study journals in DIR: a rerun after an "
+                        "interruption resumes them (pages that run studies: science)")
     r.set_defaults(func=_cmd_regenerate)
 
 
@@ -35,5 +38,5 @@ def _cmd_regenerate(args) -> int:
 
     pages = [get_page(name) for name in args.pages]  # every name checked before any run
     for page in pages:
-        print(f"wrote {regenerate(page, args.budget, args.out)}")
+        print(f"wrote {regenerate(page, args.budget, args.out, work=args.work)}")
     return 0

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import importlib
+import inspect
 import os
 import tempfile
 from collections.abc import Mapping
@@ -92,7 +93,7 @@ def get_page(name: str) -> Page:
 
 
 def regenerate(page: Page, budget: str = "full", out: Path | None = None,
-               root: Path = REPO_ROOT) -> Path:
+               root: Path = REPO_ROOT, work: Path | None = None) -> Path:
     """Run the generator of ``page`` with ``budget`` and rewrite its section.
 
     Parameters
@@ -105,6 +106,9 @@ def regenerate(page: Page, budget: str = "full", out: Path | None = None,
         itself and ``docs/figures``.
     root : Path
         Repository root.
+    work : Path, optional
+        Directory for the page's study journals, so that an interrupted run resumes
+        (only pages whose generator takes ``work``: the science page).
 
     Returns
     -------
@@ -121,6 +125,11 @@ def regenerate(page: Page, budget: str = "full", out: Path | None = None,
         raise FuzzynavError(f"{doc}: the docs page of {page.name!r} is missing")
     target = doc if out is None else Path(out) / doc.name
     kwargs = dict(page.full if budget == "full" else page.small)
+    build = importlib.import_module(page.module).build
+    if work is not None:
+        if "work" not in inspect.signature(build).parameters:
+            raise FuzzynavError(f"--work: page {page.name!r} runs no studies to resume")
+        kwargs["work"] = str(work)
     command = f"fuzzynav docs regenerate {page.name}" + (
         "" if budget == "full" else f" --budget {budget}")
     ctx = PageContext(root=root, fig_dir=target.parent / "figures",
@@ -129,7 +138,6 @@ def regenerate(page: Page, budget: str = "full", out: Path | None = None,
                                                    root.parent / "shared" / "datasets")),
                       command=command)
     ctx.fig_dir.mkdir(parents=True, exist_ok=True)
-    build = importlib.import_module(page.module).build
     with contextlib.chdir(root):  # the generators name rules/ and studies/ files relatively
         body = build(ctx, **kwargs)
     write_section(target, page.marker, body, source=doc)

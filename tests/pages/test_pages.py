@@ -67,6 +67,14 @@ def test_small_budget_needs_out_and_leaves_docs_alone(capsys):
     assert "--out" in capsys.readouterr().err
 
 
+def test_work_is_refused_by_a_page_that_runs_no_studies(tmp_path, capsys):
+    assert main(["docs", "regenerate", "paper000", "--budget", "small",
+                 "--out", str(tmp_path / "out"), "--work", str(tmp_path / "j")]) == 2
+    err = capsys.readouterr().err
+    assert "--work" in err and "paper000" in err
+    assert not (tmp_path / "out" / "paper000.md").exists()
+
+
 def test_missing_recordings_name_the_dataset_before_any_run(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("FUZZYNAV_DATA", str(tmp_path))
     assert main(["docs", "regenerate", "paper004", "--out", str(tmp_path / "out")]) == 2
