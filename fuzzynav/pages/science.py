@@ -40,6 +40,7 @@ from fuzzynav.fileio import write_atomic
 from fuzzynav.pages.common import REPO_ROOT as ROOT
 from fuzzynav.pages.common import machine
 from fuzzynav.pages import science_sections as sec
+from fuzzynav.pages import scores as sr
 from fuzzynav.pages.science_eval import curve_points, held_out_runs
 from fuzzynav.pages.science_recordings import recordings_section
 from fuzzynav.pages.science_tuning import (SUPERVISOR_STUDIES, best_of_first,
@@ -136,6 +137,9 @@ def page_text(ctx: dict, scores_ref, scores_oracle, scenarios) -> str:
         "- **Best classical baseline:** per scenario, the non-fuzzy, non-oracle filter with "
         "the lowest mean score there (chosen on the held-out data itself, which favours the "
         "baseline: a fuzzy design must beat the best one in hindsight).",
+        f"- **Win / loss:** the paired 95 % CI excludes zero *and* the mean difference is at "
+        f"least {sr.MIN_EFFECT} (0.5 % of the reference's error); anything less is a draw "
+        "(a supervisor that stays at its parent differs by ~1e-5 with an equally narrow CI).",
         "", "## Tuned parameters (first tuning)", "", *params_lines(ctx["params"]), "",
         *ctx["design_table"], "",
         "## Ratio to the tuned constant-noise EKF (`ekf-tuned`)", "",

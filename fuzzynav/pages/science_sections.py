@@ -121,24 +121,28 @@ def budget_lines(points: pd.DataFrame, fig_path, fig_name: str) -> list:
     return [f"![budget curves](figures/{fig_name})", "", *lines]
 
 
-def budget_sentences(points: pd.DataFrame) -> list:
-    """Where more search stops helping (the budget with the best mean held-out score) and
-    where it overfits (training still improving while the held-out score worsens)."""
+def budget_sentences(points: pd.DataFrame, tol: float = 0.001) -> list:
+    """Where more search stops helping (the smallest budget whose mean held-out score is
+    within ``tol`` of the best) and where it overfits (training better and held out worse
+    by more than ``tol`` from one budget to the next); changes under ``tol`` are flat."""
     out = []
     for name, sub in points.groupby("filter", sort=False):
         g = sub.groupby("trials")[["train_score", "held_out_score"]].mean().sort_index()
-        best = int(g["held_out_score"].idxmin())
-        text = (f"- `{name}`: held-out score {' → '.join(f'{v:.3f}' for v in g['held_out_score'])}"
-                f" and training {' → '.join(f'{v:.3f}' for v in g['train_score'])} at "
-                f"{', '.join(str(int(n)) for n in g.index)} trials; best held out at {best}.")
+        h, tr = g["held_out_score"], g["train_score"]
+        best = int(h.index[(h <= h.min() + tol).to_numpy()][0])
+        text = (f"- `{name}`: held-out score {' → '.join(f'{v:.3f}' for v in h)}"
+                f" and training {' → '.join(f'{v:.3f}' for v in tr)} at "
+                f"{', '.join(str(int(n)) for n in g.index)} trials; no budget after {best} "
+                f"improves the held-out score by more than {tol}.")
         worse = [(int(a), int(b)) for a, b in zip(g.index[:-1], g.index[1:])
-                 if g.loc[b, "train_score"] < g.loc[a, "train_score"]
-                 and g.loc[b, "held_out_score"] > g.loc[a, "held_out_score"]]
+                 if tr[b] < tr[a] - tol and h[b] > h[a] + tol]
         if worse:
             text += (" From " + ", ".join(f"{a} to {b}" for a, b in worse) + " trials the "
                      "training score still improves while the held-out score gets worse: "
                      "the search overfits the training runs there.")
         elif best == int(g.index[-1]):
             text += " More search still helped at the largest budget measured."
+        elif (h.max() - h.min()) <= tol and (tr.max() - tr.min()) <= tol:
+            text += " The search found nothing better than its first trials."
         out.append(text)
     return out

@@ -11,6 +11,10 @@ FUZZY = "fuzzy-tuned"
 REF, ORACLE = "ekf-tuned", "ekf-true"
 #: filters that are neither fuzzy nor told the truth: the "best classical baseline" pool
 NOT_CLASSICAL = (FUZZY, "fakf", "fuzzy", ORACLE)
+#: the smallest paired score difference called a win or a loss (0.5 % of the reference's
+#: error): a supervisor that stays at its parent differs by ~1e-5 with a CI just as narrow,
+#: and a CI that excludes zero is then no result
+MIN_EFFECT = 0.005
 METRICS = ("rms_pos_m", "rms_vel_mps", "rms_att_deg")
 
 
@@ -60,12 +64,13 @@ def paired(scores: pd.DataFrame, scenario: str, a: str, b: str):
 
 def verdict(est) -> str:
     """``wins against`` / ``draws with`` / ``loses to`` by the 95 % CI of a paired difference
-    (negative favours the first filter); with one pair there is no CI to tell."""
+    (negative favours the first filter) that also exceeds :data:`MIN_EFFECT` in its mean;
+    with one pair there is no CI to tell."""
     if est.n < 2:
         return "is not told apart (one seed) from"
-    if est.hi < 0:
+    if est.hi < 0 and est.mean <= -MIN_EFFECT:
         return "wins against"
-    if est.lo > 0:
+    if est.lo > 0 and est.mean >= MIN_EFFECT:
         return "loses to"
     return "draws with"
 

@@ -54,10 +54,29 @@ def _points(train, held, name="f"):
 
 def test_budget_sentences_find_overfitting_and_the_best_budget():
     over = sec.budget_sentences(_points([0.9, 0.8, 0.7, 0.6], [0.9, 0.85, 0.88, 0.95]))[0]
-    assert "best held out at 100" in over and "100 to 300, 300 to 1000" in over
+    assert "no budget after 100 improves" in over and "100 to 300, 300 to 1000" in over
     assert "overfits" in over
     still = sec.budget_sentences(_points([0.9, 0.8, 0.7, 0.6], [0.9, 0.85, 0.8, 0.7]))[0]
-    assert "best held out at 1000" in still and "still helped" in still
+    assert "no budget after 1000 improves" in still and "still helped" in still
+
+
+def test_budget_changes_under_the_tolerance_are_flat():
+    """A supervisor that never leaves its parent: differences of 1e-5 are no overfitting."""
+    flat = sec.budget_sentences(_points([0.816, 0.81599, 0.81598, 0.81597],
+                                        [0.785, 0.78501, 0.785, 0.78502]))[0]
+    assert "overfits" not in flat and "still helped" not in flat
+    assert "no budget after 30 improves" in flat and "nothing better" in flat
+
+
+def test_a_tiny_difference_with_a_narrow_ci_is_a_draw():
+    from fuzzynav.metrics import mean_ci
+    from fuzzynav.pages import scores as sr
+
+    tiny = mean_ci(-1e-5 + 1e-7 * np.arange(8))  # CI excludes zero, effect negligible
+    assert tiny.hi < 0 and sr.verdict(tiny) == "draws with"
+    real = mean_ci(-0.02 + 0.001 * np.arange(8))
+    assert sr.verdict(real) == "wins against"
+    assert sr.verdict(mean_ci(0.02 + 0.001 * np.arange(8))) == "loses to"
 
 
 def test_budget_lines_draw_the_figure(tmp_path):
