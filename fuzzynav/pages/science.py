@@ -259,8 +259,7 @@ def _best(scores, names) -> str:
 
 def build(page_ctx, trials: int = 300, workers: int = 2, work: str | None = None,
           seeds: int | None = None, mc_recordings: int = 5, quick: bool = False,
-          recordings: bool = True, car_rules: str | None = None,
-          auv_rules: str | None = None, tunings: int = 3, curve_trials: int = 1000,
+          recordings: bool = True, tunings: int = 3, curve_trials: int = 1000,
           budgets: tuple = (30, 100, 300, 1000)) -> str:
     """The whole of docs/science.md; writes ``science_runs.csv``, ``science_budget.csv``
     (and ``science_recordings.csv``) beside the page.
@@ -268,7 +267,7 @@ def build(page_ctx, trials: int = 300, workers: int = 2, work: str | None = None
     ``trials`` per study, ``workers`` per study, ``work`` the journals' directory,
     ``seeds`` held-out seeds per simulated scenario (None: all of the study),
     ``mc_recordings`` noise seeds on the drive, ``quick`` a smoke run, ``recordings`` False
-    skips the recordings section; ``car_rules`` / ``auv_rules`` rules tuned on recordings;
+    skips the recordings section (its recording-tuned files: :mod:`fuzzynav.pages.science_splits`);
     ``tunings`` sampler seeds per tuned filter; ``curve_trials`` the budget curves' longest
     study and ``budgets`` their points.
     """
@@ -311,7 +310,7 @@ def build(page_ctx, trials: int = 300, workers: int = 2, work: str | None = None
         pooled, pooled_wins = sec.pooled_lines(per_tuning, list(dict.fromkeys(
             s for s, _ in test)), DESIGNS)
     opts = SimpleNamespace(data=str(page_ctx.data_dir), mc_recordings=mc_recordings,
-                           car_rules=car_rules, auv_rules=auv_rules)
+                           cache=str(page_ctx.cache))
     recs, rec_rows = recordings_section(opts, params, systems, sup) if recordings else (
         ["## Held-out recordings", "", "*Skipped (--no-recordings).*", ""], None)
     scenarios = list(dict.fromkeys(s for s, _ in test))

@@ -9,18 +9,22 @@ that lacks its data or its rules is skipped with a sentence on the page saying s
   seed.  Compared: the classical filters with the parameters tuned on the *simulated*
   training runs (``studies/paper000_baselines.json``), the paper's fuzzy rules (``fakf``),
   the fuzzy controller tuned on the same simulated runs (``fuzzy-tuned``: trained on
-  simulation, judged on a real drive), and, when it exists, a controller tuned on the
-  first part of the drive (``--car-rules``, default :data:`CAR_RULES`).  Score per seed:
+  simulation, judged on a real drive).  A controller tuned on the drive itself is never
+  run on the whole drive (it would be judged on its training half).  Score per seed:
   the mean of the horizontal-position and velocity RMS ratios to ``ekf-tuned`` with GNSS
   throughout (a recording has no attitude truth); the outage drift is tabulated apart.
   The CI is over noise seeds of one recording, not over recordings.
-* **AUV** (``$FUZZYNAV_DATA/akit``): only with recording-trained DVL rules (``--auv-rules``,
-  default :data:`AUV_RULES`), judged on the trajectories its provenance holds out (with the
-  APSO multipliers of the same fold beside); those trajectories are the pairs, score the
-  mean of the horizontal-position and velocity RMS ratios to the EKF with DVL.
+* **The drive's second half** (:func:`split_section`): the fuzzy controller and the classical
+  filters tuned on the first half with the same budget (:data:`CAR_RULES`,
+  ``studies/rtklib_split_baselines.json``), on noise seeds 100+ of the held-out half
+  (:mod:`fuzzynav.pages.science_splits`).
+* **AUV** (``$FUZZYNAV_DATA/akit``, :func:`auv_section`): both A-KIT folds (1-4 -> 5-8 and
+  5-8 -> 1-4), each with its fuzzy DVL controller and the classical filters tuned on its four
+  training trajectories; the held-out trajectories are the pairs.
 """
 from __future__ import annotations
 
+import contextlib
 import os
 import tempfile
 from pathlib import Path
@@ -29,16 +33,15 @@ import pandas as pd
 
 from fuzzynav.pages.common import REPO_ROOT as ROOT
 
-#: rules tuned on a recording, looked for when no path is given
+#: the controller tuned on the drive's first half (judged on its second half only)
 CAR_RULES = ROOT / "rules" / "rtklib_drive_tuned.json"
-AUV_RULES = ROOT / "rules" / "paper004_fuzzy_dvl.json"
-#: the APSO multipliers of the same training fold (``studies/paper004_apso.toml``)
-AUV_APSO = ROOT / "studies" / "paper004_apso.json"
+DATA_ENV = "FUZZYNAV_DATA"
+#: the first noise seed on the car drive's held-out half (its training used seeds 0-2)
+SPLIT_SEED0 = 100
 CAR_FILTERS = ("ekf", "ekf-tuned", "als", "sage-husa", "sage-husa-tuned", "vb", "vb-tuned",
                "huber-tuned", "strong-tracking-tuned", "fakf")
-AUV_FILTERS = ("ekf", "sage-husa", "vb", "huber")
 CAR_METRICS = ("rms_pos_h_m", "rms_vel_mps")
-SIM_FUZZY, CAR_FUZZY, AUV_FUZZY = "fuzzy-tuned", "fuzzy-drive", "fuzzy-auv"
+SIM_FUZZY = "fuzzy-tuned"
 
 
 def data_root(given=None) -> Path:
@@ -48,7 +51,7 @@ def data_root(given=None) -> Path:
     return Path(os.environ.get("FUZZYNAV_DATA", ROOT.parent / "shared" / "datasets"))
 
 
-def _car_specs(params: Path, sim_rules: Path, car_rules, supervisors=None) -> dict:
+def _car_specs(params: Path, sim_rules: Path, supervisors=None) -> dict:
     """Label -> (named filter, options) of the filters run on the drive (``supervisors``:
     label -> (named filter, rule file) of further fuzzy designs tuned on simulation)."""
     from fuzzynav.filters.baselines import TUNED
@@ -57,8 +60,6 @@ def _car_specs(params: Path, sim_rules: Path, car_rules, supervisors=None) -> di
     specs[SIM_FUZZY] = ("fakf", {"rules": [str(sim_rules)]})
     for label, (name, path) in (supervisors or {}).items():
         specs[label] = (name, {"rules": [str(path)]})
-    if car_rules is not None:
-        specs[CAR_FUZZY] = ("fakf", {"rules": [str(car_rules)]})
     return specs
 
 
@@ -119,26 +120,22 @@ def _paired_lines(scores, scenario, fuzzies, ref) -> list:
     return out
 
 
-def car_section(directory: Path, params: Path, systems: dict, car_rules, seeds,
+def car_section(directory: Path, params: Path, systems: dict, seeds,
                 supervisors=None) -> tuple:
     """Markdown lines of the car drive and its rows (``supervisors``: label -> (named
     filter, systems) of further fuzzy designs)."""
     from fuzzynav.pages import scores as sr
 
-    rules = Path(car_rules) if car_rules else CAR_RULES
-    note = [] if rules.is_file() else [
-        f"No controller tuned on the drive itself is judged here (`{rules.name}` absent): "
-        "the one tuned on the first half of the drive (`studies/rtklib_split.toml`) is "
-        "judged on the second half in docs/studies.md; this section runs the whole drive, "
-        "so only controllers tuned on simulation are held out here.", ""]
+    note = ["The controller tuned on the drive's first half is not run here (it would be "
+            "judged on its own training half): the next subsection judges it on the second "
+            "half.", ""]
     with tempfile.TemporaryDirectory() as tmp:
         sup = {label: (name, _save_systems(s, Path(tmp), label))
                for label, (name, s) in (supervisors or {}).items()}
-        specs = _car_specs(params, _save_systems(systems, Path(tmp)), rules if rules.is_file()
-                           else None, sup)
+        specs = _car_specs(params, _save_systems(systems, Path(tmp)), sup)
         df = car_table(directory, specs, seeds)
     scores = sr.scores_to(df, sr.REF, CAR_METRICS)
-    fuzzies = [f for f in (SIM_FUZZY, *sup, CAR_FUZZY) if f in specs]
+    fuzzies = [f for f in (SIM_FUZZY, *sup) if f in specs]
     order = [*fuzzies, *CAR_FILTERS]
     return [
         "### The car drive (`rtklib-drive`, consumer MEMS IMU, real)", "",
@@ -154,51 +151,72 @@ def car_section(directory: Path, params: Path, systems: dict, car_rules, seeds,
         ""], df
 
 
-def _held_out_trajectories(rules: Path) -> list:
-    """The A-KIT trajectories a recording-trained rule file was judged on (its provenance)."""
-    import json
+@contextlib.contextmanager
+def _data_env(root: Path):
+    """The studies read relative recording directories from ``$FUZZYNAV_DATA``: point it at
+    the page's data root while they run, so ``--data`` holds for them too."""
+    old = os.environ.get(DATA_ENV)
+    os.environ[DATA_ENV] = str(root)
+    try:
+        yield
+    finally:
+        if old is None:
+            os.environ.pop(DATA_ENV, None)
+        else:
+            os.environ[DATA_ENV] = old
 
-    test = json.loads(rules.read_text()).get("provenance", {}).get("test", [])
-    return [str(name).rpartition(":")[2] for name, _seed in test
-            if str(name).startswith("akit:")]
+
+def split_section(root: Path, seeds, cache=None) -> tuple:
+    """Markdown lines of the car drive's held-out half (every filter tuned on the first
+    half) and its rows, or the note why it is skipped."""
+    from fuzzynav.pages import science_splits as ss
+
+    sp = ss.CAR_SPLIT
+    head = ["### The car drive's second half, every filter tuned on its first half", "",
+            f"The fuzzy controller (`{sp.study}`, exported to `{sp.rules}`) and the classical "
+            f"filters (`{Path(sp.params).with_suffix('.toml').as_posix()}` -> `{sp.params}`) "
+            "were tuned on the first half of the drive (noise seeds 0–2 of the protocol's "
+            "2 m fix noise), each with 100 TPE trials, the Wilcoxon pruner and the same "
+            "objective; they are judged on the second half, which training never saw.", ""]
+    if not (root / "rtklib-drive").is_dir():
+        return head + [f"*The car drive is not here ({root / 'rtklib-drive'}): skipped.*",
+                       ""], None
+    note = ss.missing_note([sp])
+    if sp.missing():
+        return head + note + [""], None
+    sp = sp.available()
+    with _data_env(root):
+        df = ss.split_frame(sp, cache, seeds)
+    what = (f"noise seeds {seeds[0]}–{seeds[-1]} of the one held-out half: the spread of the "
+            "noise added to its fixes, not of drives")
+    return head + note + ss.splits_lines([sp], {sp.label: df}, "noise seeds", what), df
 
 
-def auv_section(directory: Path, auv_rules) -> tuple:
-    """Markdown lines of the AUV runs (or the note why they are skipped), and their rows."""
-    from fuzzynav.pages import scores as sr
+def auv_section(directory: Path, cache=None) -> tuple:
+    """Markdown lines of both A-KIT folds (or the note why they are skipped), and their
+    rows."""
+    from fuzzynav.pages import science_splits as ss
 
-    rules = Path(auv_rules) if auv_rules else AUV_RULES
+    head = [f"{AUV_HEADING} (both folds, A-KIT 1–4 ↔ 5–8, DVL-aided)", "",
+            "Each fold's fuzzy DVL controller (`studies/paper004_fuzzy.toml` / `_rev`, "
+            "150 TPE trials) and classical filters (`studies/paper004_baselines.toml` / "
+            "`_rev`, 150 TPE trials each, same pruner and objective) were tuned on four "
+            "trajectories and are judged on the other four; `apso` is paper 004's PSO of the "
+            "Q/R multipliers on the same four (64 evaluations). Pairs are the held-out "
+            "trajectories: with four pairs a 95 % CI is wide (Student t with 3 degrees of "
+            "freedom, 3.18 standard errors), so only a large, consistent difference is a win "
+            "or a loss. Per trajectory: docs/paper004.md.", ""]
     if not directory.is_dir():
-        return [f"*The AUV recordings are not here ({directory}): section skipped.*", ""], None
-    if not rules.is_file():
-        return [f"*The AUV trajectories are not judged: no DVL controller tuned on "
-                f"recordings (`{rules.name}` absent; paper 004's leave-trajectories-out study "
-                "writes it). The classical filters on them: docs/paper004.md.*", ""], None
-    from fuzzynav.realdata.akit import run_all
-    from fuzzynav.realdata.loaders.akit_recording import load_akit
-
-    held = _held_out_trajectories(rules)
-    if not held:
-        return [f"*The AUV trajectories are not judged: `{rules.name}` names no held-out "
-                "A-KIT trajectory in its provenance.*", ""], None
-    recs = load_akit(directory, ",".join(held))
-    extra = [("apso", "apso", {"rules": [str(AUV_APSO)]})] if AUV_APSO.is_file() else []
-    frames = []
-    for label, name, opts in [*[(f, f, None) for f in AUV_FILTERS], *extra,
-                              (AUV_FUZZY, "fakf", {"rules": [str(rules)]})]:
-        df, _ = run_all(recs, name, opts)
-        frames.append(df.assign(filter=label, scenario="akit"))
-    df = pd.concat(frames)
-    scores = sr.scores_to(df, "ekf", CAR_METRICS)
-    return [f"### The AUV trajectories held out (A-KIT {', '.join(held)}, DVL-aided)", "",
-            f"The controller (and `apso`) were tuned on the other A-KIT trajectories "
-            f"(`{rules.name}`'s provenance); pairs are the held-out trajectories; score: mean "
-            "of horizontal-position and velocity RMS ratios to the EKF with DVL. Both folds, "
-            "per trajectory: docs/paper004.md.", "",
-            "| filter | score vs `ekf` |", "|---|---|",
-            *[f"| {f} | {sr.cell(scores[scores['filter'] == f]['score'])} |"
-              for f in (AUV_FUZZY, *AUV_FILTERS, *[e[0] for e in extra])], "",
-            *_paired_lines(scores, "akit", [AUV_FUZZY], "ekf"), ""], df
+        return head + [f"*The AUV recordings are not here ({directory}): skipped.*", ""], None
+    folds = [f for f in ss.AKIT_FOLDS if not f.missing()]
+    note = ss.missing_note(ss.AKIT_FOLDS)
+    if not folds:
+        return head + note + [""], None
+    with _data_env(directory.parent):
+        frames = {f.label: ss.split_frame(f, cache) for f in folds}
+    lines = ss.splits_lines(folds, frames, "trajectories",
+                            "the four held-out trajectories of each fold")
+    return head + note + lines, pd.concat(frames.values(), ignore_index=True)
 
 
 def recordings_section(args, params: Path, systems: dict, supervisors=None) -> tuple:
@@ -207,17 +225,19 @@ def recordings_section(args, params: Path, systems: dict, supervisors=None) -> t
     root = data_root(args.data)
     seeds = list(range(args.mc_recordings))
     lines = ["## Held-out recordings", "",
-             "Real data, never seen in training (the controllers and the tuned constants "
-             "were learned on simulated runs; a controller learned on recordings is judged "
-             "when its rule file exists).", ""]
-    car, car_df = car_section(root / "rtklib-drive", params, systems, args.car_rules, seeds,
-                              supervisors) \
+             "Real data. First the whole car drive, with every filter as tuned on the "
+             "simulated training runs; then the drive's second half and the A-KIT "
+             "trajectories, held out from studies that tuned the fuzzy controller and the "
+             "classical filters alike on the other part of the same recordings.", ""]
+    car, car_df = car_section(root / "rtklib-drive", params, systems, seeds, supervisors) \
         if (root / "rtklib-drive").is_dir() else \
         ([f"*The car drive is not here ({root / 'rtklib-drive'}): section skipped. Set "
           "`FUZZYNAV_DATA` or pass `--data`.*", ""], None)
-    auv, auv_df = auv_section(root / "akit", args.auv_rules)
-    frames = [d for d in (car_df, auv_df) if d is not None]
-    return lines + car + auv, (pd.concat(frames) if frames else None)
+    split, split_df = split_section(root, [SPLIT_SEED0 + k for k in seeds],
+                                    getattr(args, "cache", None))
+    auv, auv_df = auv_section(root / "akit", getattr(args, "cache", None))
+    frames = [d for d in (car_df, split_df, auv_df) if d is not None]
+    return lines + car + split + auv, (pd.concat(frames) if frames else None)
 
 
 AUV_HEADING = "### The AUV trajectories held out"
@@ -232,14 +252,13 @@ def splice_auv(page: str, auv_lines: list) -> str:
     return page[:a] + "\n".join(auv_lines) + "\n" + page[b:]
 
 
-def regenerate_auv(data: str | None = None, auv_rules: str | None = None,
-                   root: Path = ROOT) -> None:
+def regenerate_auv(data: str | None = None, root: Path = ROOT) -> None:
     """Rerun the AUV subsection of docs/science.md and its rows of
     docs/science_recordings.csv alone (the simulated sections need hours of tuning;
     ``fuzzynav docs regenerate science`` regenerates the whole page)."""
     from fuzzynav.fileio import write_atomic
 
-    lines, df = auv_section(data_root(data) / "akit", auv_rules)
+    lines, df = auv_section(data_root(data) / "akit")
     page = root / "docs" / "science.md"
     text = splice_auv(page.read_text(), lines)
     write_atomic(page, lambda tmp: Path(tmp).write_text(text))
@@ -247,5 +266,6 @@ def regenerate_auv(data: str | None = None, auv_rules: str | None = None,
     if df is not None and csv.is_file():
         old = pd.read_csv(csv)
         # columns only the replaced rows had (an earlier loader's fields) go with them
-        new = pd.concat([old[old["scenario"] != "akit"], df]).dropna(axis=1, how="all")
+        new = pd.concat([old[~old["scenario"].str.startswith("akit")], df]).dropna(
+            axis=1, how="all")
         write_atomic(csv, lambda tmp: new.to_csv(tmp, index=False))

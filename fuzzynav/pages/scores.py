@@ -75,9 +75,10 @@ def verdict(est) -> str:
     return "draws with"
 
 
-def sentence(scenario: str, a: str, b: str, est) -> str:
+def sentence(scenario: str, a: str, b: str, est, unit: str = "seeds") -> str:
+    """One sentence of a paired comparison; ``unit`` names the pairs (seeds, trajectories)."""
     return (f"On `{scenario}`, {a} **{verdict(est)}** {b}: score difference "
-            f"{est.mean:+.3f} (95 % CI {est.lo:+.3f} to {est.hi:+.3f}, {est.n} seeds).")
+            f"{est.mean:+.3f} (95 % CI {est.lo:+.3f} to {est.hi:+.3f}, {est.n} {unit}).")
 
 
 def comparison_lines(scores: pd.DataFrame, scenarios, fuzzy: str = FUZZY) -> tuple:

@@ -1,59 +1,67 @@
 """Held-out results of the studies trained on A-KIT recordings (docs/paper004.md).
 
-Each fold's study (``studies/paper004_fuzzy.toml``: trained on trajectories 1-4, judged on
-5-8; ``paper004_fuzzy_rev.toml``: the reverse) is read from its journal; its best trial's
-rules run on the fold's held-out trajectories beside the EKF and Huber.  Over the two folds
-every trajectory is held out once, so the eight held-out results pool into one paired
-comparison against the EKF (mean relative change over trajectories, 95 % CI, t).
-Part of ``fuzzynav docs regenerate paper004`` (needs the studies run and ``$FUZZYNAV_DATA``).
+Each fold (``studies/paper004_fuzzy.toml``: trained on trajectories 1-4, judged on 5-8;
+``paper004_fuzzy_rev.toml``: the reverse) runs what was tuned on its four training
+trajectories on the other four: the fuzzy DVL controller as exported
+(``rules/paper004_fuzzy_dvl.json``, ``_rev.json``), the classical filters tuned with the
+same budget, pruner and objective (``studies/paper004_baselines.json``, ``_rev.json``) and
+the APSO multipliers (``studies/paper004_apso.json``, ``_rev.json``), beside the EKF and
+Huber (:func:`fuzzynav.pages.science_splits.split_frame`, shared with docs/science.md).
+Over the two folds every trajectory is held out once, so the eight held-out results pool
+into one paired comparison (mean relative change over trajectories, 95 % CI, t).  The
+"best equally tuned classical filter" of a fold is the ``-tuned`` filter with the lowest
+mean held-out score (the studies' objective against ``ekf-tuned``; chosen in hindsight,
+which favours it).  Part of ``fuzzynav docs regenerate paper004`` (needs those files and
+``$FUZZYNAV_DATA``).
 """
 from __future__ import annotations
 
 import pandas as pd
 
+from fuzzynav.metrics import mean_ci
 from fuzzynav.pages.common import REPO_ROOT as ROOT
-from fuzzynav.realdata.dataspec import is_recording_name, parse_recording_spec
+from fuzzynav.pages.science_splits import AKIT_FOLDS, SPLIT_METRICS, split_frame
+from fuzzynav.realdata.dataspec import parse_recording_spec
 from fuzzynav.report import ci_cell, improvement_cell, render
 
-FOLDS = ("studies/paper004_fuzzy.toml", "studies/paper004_fuzzy_rev.toml")
-APSO_FOLDS = ("studies/paper004_apso.toml", "studies/paper004_apso_rev.toml")
-COMPARE = ("ekf", "huber")
 TUNED_LABEL = "fuzzy R-scaling (tuned on the other four)"
 APSO_LABEL = "APSO Q/R (tuned on the other four)"
+BEST_LABEL = "best equally tuned classical (per fold)"
+#: the classical filters tuned with the fuzzy study's budget (the pool of BEST_LABEL)
+TUNED = ("ekf-tuned", "sage-husa-tuned", "vb-tuned", "huber-tuned")
 
 
-def fuzzy_fold(path) -> pd.DataFrame:
-    """One row per (held-out trajectory, filter) of a fuzzy study's best trial."""
+def fold_frame(split, cache=None) -> pd.DataFrame:
+    """One row per (held-out trajectory, filter) of a fold, with ``trajectory`` and
+    ``fold`` (the training trajectories)."""
     from fuzzynav.tuning.study_config import load_study_config
-    from fuzzynav.tuning.evaluate import run_table
-    from fuzzynav.tuning.export import choose_trial, systems_of
-    from fuzzynav.tuning.objective import Evaluator
-    from fuzzynav.tuning.optuna_study import open_study
 
-    cfg = load_study_config(ROOT / path)
-    trial = choose_trial(open_study(cfg), cfg)
-    runs = [r for r in cfg.test if is_recording_name(r[0])]
-    df = run_table(Evaluator(cfg), systems_of(cfg, trial), runs, COMPARE)
-    df["filter"] = df["filter"].replace({"tuned": TUNED_LABEL})
-    return _with_trajectory(df, cfg)
-
-
-def apso_fold(path) -> pd.DataFrame:
-    """One row per held-out trajectory of an APSO baseline study's tuned multipliers."""
-    from fuzzynav.tuning.baseline_config import load_baseline_config
-    from fuzzynav.tuning.evaluate import run_table
-    from fuzzynav.tuning.objective import Evaluator
-
-    bcfg = load_baseline_config(ROOT / path)
-    spec = f"apso@{bcfg.out}"
-    df = run_table(Evaluator(bcfg.study), {}, bcfg.study.test, (spec,))
-    return _with_trajectory(df.replace({"filter": {spec: APSO_LABEL}}), bcfg.study)
-
-
-def _with_trajectory(df, cfg) -> pd.DataFrame:
+    cfg = load_study_config(ROOT / split.study)
     train = sorted({parse_recording_spec(n).session for n, _ in cfg.train})
-    return df.assign(trajectory=[int(parse_recording_spec(n).session) for n in df["scenario"]],
-                     fold="trained on " + ",".join(train))
+    df = split_frame(split, cache)
+    return df.assign(trajectory=df["seed"], fold="trained on " + ",".join(train)).replace(
+        {"filter": {split.fuzzy: TUNED_LABEL, "apso": APSO_LABEL}})
+
+
+def best_tuned(df: pd.DataFrame) -> str:
+    """The filter of :data:`TUNED` with the lowest mean score on ``df``'s trajectories
+    (score: mean of the :data:`SPLIT_METRICS` ratios to ``ekf-tuned``, run by run)."""
+    from fuzzynav.pages.scores import scores_to
+
+    sub = df[df["filter"].isin(TUNED)]
+    if sub.empty:
+        raise ValueError("no equally tuned classical filter in the fold's rows")
+    scores = scores_to(sub, "ekf-tuned", SPLIT_METRICS)
+    return scores.groupby("filter")["score"].mean().idxmin()
+
+
+def with_best(df: pd.DataFrame) -> tuple:
+    """``df`` with the rows of each fold's best equally tuned classical filter copied
+    under :data:`BEST_LABEL`, and fold -> that filter's name."""
+    best = {fold: best_tuned(sub) for fold, sub in df.groupby("fold", sort=False)}
+    rows = [sub[sub["filter"] == best[fold]].assign(filter=BEST_LABEL)
+            for fold, sub in df.groupby("fold", sort=False)]
+    return pd.concat([df, *rows], ignore_index=True), best
 
 
 def _cell(values) -> str:
@@ -91,25 +99,53 @@ def fold_table(df: pd.DataFrame, key: str = "rms_pos_h_m") -> str:
     return render(["fold", "held out", "filter", "vs EKF"], rows, markdown=True)
 
 
-def heldout_frame(folds=FOLDS, apso_folds=APSO_FOLDS) -> pd.DataFrame:
-    """Both folds' held-out rows of the fuzzy and the APSO studies."""
-    return pd.concat([fuzzy_fold(p) for p in folds] + [apso_fold(p) for p in apso_folds],
-                     ignore_index=True)
+def heldout_frame(folds=AKIT_FOLDS, cache=None) -> tuple:
+    """Both folds' held-out rows (with the best equally tuned classical filter's rows
+    under :data:`BEST_LABEL`) and fold -> that filter."""
+    return with_best(pd.concat([fold_frame(f, cache) for f in folds], ignore_index=True))
 
 
-def section(df: pd.DataFrame) -> list:
-    """The markdown lines of the held-out section."""
-    filters = ["ekf", "huber", TUNED_LABEL, APSO_LABEL]
+def paired_best(df: pd.DataFrame, key: str = "rms_pos_h_m") -> list:
+    """Rows: per fold and over both, the fuzzy controller minus the best equally tuned
+    classical filter on the same trajectories (difference in ``key``, 95 % CI over the
+    trajectories) and the relative change."""
+    rows = []
+    groups = [*df.groupby("fold", sort=False), ("both folds", df)]
+    for fold, sub in groups:
+        piv = sub.pivot_table(index="trajectory", columns="filter", values=key)
+        est = mean_ci((piv[TUNED_LABEL] - piv[BEST_LABEL]).to_numpy())
+        ci = f"{est.mean:+.3f} [{est.lo:+.3f}, {est.hi:+.3f}]" if est.n > 1 else \
+            f"{est.mean:+.3f}"
+        rows.append([fold, ",".join(map(str, piv.index)), ci,
+                     _imp(piv[BEST_LABEL], piv[TUNED_LABEL]), str(est.n)])
+    return rows
+
+
+def section(frame: tuple) -> list:
+    """The markdown lines of the held-out section (``frame``: :func:`heldout_frame`)."""
+    df, best = frame
+    filters = ["ekf", "huber", TUNED_LABEL, BEST_LABEL, APSO_LABEL]
+    chosen = "; ".join(f"{fold}: `{name}`" for fold, name in best.items())
+    head = ["fold", "held out", "fuzzy − best, horizontal RMS (m) [95 % CI]",
+            "fuzzy vs best (positive = fuzzy smaller)", "trajectories"]
     return ["### Trained on four A-KIT trajectories, judged on the other four", "",
             "The fuzzy DVL R-scaling study (`studies/paper004_fuzzy.toml`, trained on "
             "trajectories 1–4; `paper004_fuzzy_rev.toml`, trained on 5–8; 150 TPE trials "
-            "each) and the APSO of the Q/R multipliers (`studies/paper004_apso.toml` / "
-            "`_rev`: 8 particles × 8 iterations, inertia 0.9 → 0.4) run with what they "
-            "found on the trajectories they did not see. Horizontal RMS (m) per held-out "
-            "trajectory; pooled over the eight (each held out once); paired change vs the "
-            "EKF, positive = smaller error:", "",
+            "each), the classical filters tuned with the same budget, pruner and objective "
+            "on the same four (`studies/paper004_baselines.toml` / `_rev`: `ekf-tuned`, "
+            "`sage-husa-tuned`, `vb-tuned`, `huber-tuned`, 150 TPE trials each) and the APSO "
+            "of the Q/R multipliers (`studies/paper004_apso.toml` / `_rev`: 8 particles × 8 "
+            "iterations, inertia 0.9 → 0.4) run with what they found on the trajectories "
+            f"they did not see. The best equally tuned classical filter per fold ({chosen}) "
+            "is chosen on the held-out trajectories by the studies' objective (which favours "
+            "it). Horizontal RMS (m) per held-out trajectory; pooled over the eight (each "
+            "held out once); paired change vs the EKF, positive = smaller error:", "",
             heldout_table(df, filters=filters), "",
             "End error as % of the distance travelled:", "",
             heldout_table(df, "end_pos_h_pct", filters), "",
+            "The fuzzy controller against the best equally tuned classical filter, paired "
+            "on the held-out trajectories (four per fold: a wide CI, Student t with 3 "
+            "degrees of freedom):", "",
+            render(head, paired_best(df), markdown=True), "",
             "Per fold (horizontal RMS, paired change vs the EKF on the fold's four held-out "
             "trajectories):", "", fold_table(df), ""]
