@@ -17,35 +17,77 @@ import pandas as pd
 
 from fuzzynav.pages import scores as sr
 
-__all__ = ["designs_lines", "design_tally", "variance_lines", "pooled_differences",
+__all__ = ["MARKS", "designs_lines", "design_tally", "variance_lines", "pooled_differences",
            "pooled_lines", "budget_lines", "budget_sentences"]
 
 
-def design_tally(scores, scenarios, design) -> dict:
-    """Verdict -> count of ``design`` against each set's best classical filter."""
+def _best(scores, scenario, best, pool) -> str:
+    """``best`` (one filter chosen beforehand, e.g. on the training runs) or else the best
+    classical filter of ``scenario`` among ``pool`` on these scores."""
+    return best if best is not None else sr.best_classical(scores, scenario, pool)
+
+
+def design_tally(scores, scenarios, design, best=None, pool=None) -> dict:
+    """Verdict -> count of ``design`` against each set's best classical filter (``best`` for
+    every set, else chosen per set among ``pool``: see :func:`designs_lines`)."""
     tally = {"wins against": 0, "draws with": 0, "loses to": 0}
     for s in scenarios:
-        v = sr.verdict(sr.paired(scores, s, design, sr.best_classical(scores, s)))
+        v = sr.verdict(sr.paired(scores, s, design, _best(scores, s, best, pool)))
         tally[v] = tally.get(v, 0) + 1
     return tally
 
 
-def designs_lines(scores, scenarios, designs) -> list:
-    """Markdown: scenario x design, the paired difference to the best classical filter."""
-    lines = ["| scenario | best classical | " + " | ".join(f"`{d}` − best" for d in designs)
+#: the table's word for each verdict of :func:`~fuzzynav.pages.scores.verdict`
+MARKS = {"wins against": "**win**", "draws with": "draw", "loses to": "loss",
+         "is not told apart (one seed) from": "one seed"}
+
+
+def designs_lines(scores, scenarios, designs, best=None, pool=None, labels=None) -> list:
+    """Markdown: scenario x design, the paired difference to the best classical filter.
+
+    Each cell is the mean over the scenario's seeds of the per-seed difference
+    ``score(design) - score(best)`` with its 95 % CI, and the verdict
+    (:func:`~fuzzynav.pages.scores.verdict`: a win needs the CI below zero and the mean at
+    least :data:`~fuzzynav.pages.scores.MIN_EFFECT` below); a tally per design follows.
+
+    Parameters
+    ----------
+    scores : DataFrame
+        ``scenario, seed, filter, score`` (:func:`~fuzzynav.pages.scores.scores_to`).
+    scenarios, designs : sequence of str
+        The rows and the fuzzy filters compared.
+    best : str, optional
+        The classical filter to compare with on every scenario, chosen beforehand (on the
+        training runs: :func:`~fuzzynav.pages.scores.best_on_training`).  None: per
+        scenario, the one with the lowest mean score on these runs (the held-out data,
+        which favours the classical side).
+    pool : sequence of str, optional
+        With ``best`` None, the filters it is chosen from (default: every classical one).
+    labels : mapping, optional
+        Filter name -> the name printed (default: the filter name, a design's in a code
+        span).
+    """
+    labels = dict(labels or {})
+
+    def name(f, span=True):
+        return labels.get(f, f"`{f}`" if span else f)
+
+    lines = ["| scenario | best classical | " + " | ".join(f"{name(d)} − best" for d in designs)
              + " |", "|---|---|" + "---|" * len(designs)]
     for s in scenarios:
-        best = sr.best_classical(scores, s)
+        b = _best(scores, s, best, pool)
         cells = []
         for d in designs:
-            est = sr.paired(scores, s, d, best)
-            mark = {"wins against": " **win**", "loses to": " loss"}.get(sr.verdict(est), "")
-            cells.append(f"{est.mean:+.3f} [{est.lo:+.3f}, {est.hi:+.3f}]{mark}")
-        lines.append(f"| `{s}` | {best} | " + " | ".join(cells) + " |")
-    lines += ["", "| design | wins | draws | losses (of the held-out sets) |", "|---|---|---|---|"]
+            est = sr.paired(scores, s, d, b)
+            cells.append(f"{est.mean:+.3f} [{est.lo:+.3f}, {est.hi:+.3f}] "
+                         f"{MARKS[sr.verdict(est)]}")
+        lines.append(f"| `{s}` | {name(b, span=False)} | " + " | ".join(cells) + " |")
+    lines += ["", f"| design | wins | draws | losses (of the {len(scenarios)} sets) |",
+              "|---|---|---|---|"]
     for d in designs:
-        t = design_tally(scores, scenarios, d)
-        lines.append(f"| `{d}` | {t['wins against']} | {t['draws with']} | {t['loses to']} |")
+        t = design_tally(scores, scenarios, d, best, pool)
+        lines.append(f"| {name(d)} | {t['wins against']} | {t['draws with']} | "
+                     f"{t['loses to']} |")
     return lines
 
 

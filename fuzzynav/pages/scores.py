@@ -2,8 +2,12 @@
 difference of two filters per scenario with its 95 % CI, and the markdown built from them."""
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import pandas as pd
 
+from fuzzynav.errors import InputFileError
 from fuzzynav.metrics import mean_ci
 from fuzzynav.report import ci_cell
 
@@ -18,14 +22,19 @@ MIN_EFFECT = 0.005
 METRICS = ("rms_pos_m", "rms_vel_mps", "rms_att_deg")
 
 
-def scores_to(df: pd.DataFrame, ref: str, metrics=METRICS) -> pd.DataFrame:
-    """Per run and filter: mean over ``metrics`` (pos/vel/att) of the RMS ratio to ``ref``."""
+def scores_to(df: pd.DataFrame, ref: str, metrics=METRICS, weights=None) -> pd.DataFrame:
+    """Per run and filter: the mean over ``metrics`` (pos/vel/att) of the RMS ratio to
+    ``ref`` on the same run, weighted by ``weights`` (one per metric; default equal), as a
+    study's objective weighs its groups."""
     key = ["scenario", "seed"]
     metrics = list(metrics)
+    weights = [1.0] * len(metrics) if weights is None else [float(w) for w in weights]
+    if len(weights) != len(metrics) or sum(weights) <= 0:
+        raise ValueError(f"weights {weights} do not fit the metrics {metrics}")
     base = df[df["filter"] == ref][[*key, *metrics]]
     out = df[[*key, "filter", *metrics]].merge(base, on=key, suffixes=("", "_ref"))
-    ratios = [out[m] / out[m + "_ref"] for m in metrics]
-    out["score"] = sum(ratios) / len(ratios)
+    ratios = [w * out[m] / out[m + "_ref"] for m, w in zip(metrics, weights)]
+    out["score"] = sum(ratios) / sum(weights)
     return out[["scenario", "seed", "filter", "score"]]
 
 
@@ -49,10 +58,36 @@ def is_classical(names: pd.Series) -> pd.Series:
     return ~names.isin(NOT_CLASSICAL) & ~names.str.startswith("fuzzy")
 
 
-def best_classical(scores: pd.DataFrame, scenario: str) -> str:
-    """The classical filter with the lowest mean score on ``scenario``."""
-    sub = scores[(scores["scenario"] == scenario) & is_classical(scores["filter"])]
+def best_classical(scores: pd.DataFrame, scenario: str, pool=None) -> str:
+    """The classical filter with the lowest mean score on ``scenario``: among ``pool`` (the
+    filter names allowed, e.g. the equally tuned ones) or else among every filter
+    :func:`is_classical` calls classical."""
+    chosen = is_classical(scores["filter"]) if pool is None else scores["filter"].isin(pool)
+    sub = scores[(scores["scenario"] == scenario) & chosen]
+    if sub.empty:
+        raise ValueError(f"no classical filter of {sorted(pool or [])} ran on {scenario!r}")
     return sub.groupby("filter")["score"].mean().idxmin()
+
+
+def best_on_training(path, pool) -> tuple:
+    """The filter of ``pool`` with the lowest training score in a baseline study's output
+    (``train_score`` of ``studies/*_baselines.json``: the objective on the training runs,
+    the same for every filter of the study), and every filter of ``pool`` -> its score.
+
+    Raises
+    ------
+    InputFileError
+        The file has no ``train_score`` for a filter of ``pool``.
+    """
+    doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    # a pool entry may name the file (``NAME@FILE``): the study's key is the bare name
+    train = {n: (doc.get("train_score") or {}).get(n.split("@", 1)[0]) for n in pool}
+    missing = [n for n in pool if not isinstance(train[n], (int, float))]
+    if missing:
+        raise InputFileError(path, "$.train_score", f"no score for {', '.join(missing)}; "
+                             "run the baseline study that tunes it")
+    best = min(pool, key=lambda n: train[n])
+    return best, {n: float(train[n]) for n in pool}
 
 
 def paired(scores: pd.DataFrame, scenario: str, a: str, b: str):

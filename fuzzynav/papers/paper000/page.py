@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from fuzzynav.papers.paper000.claims import PAPER000_TABLE2
 from fuzzynav.experiment import monte_carlo
+from fuzzynav.pages.best_classical import paper_lines, provenance_score
 from fuzzynav.pages.common import machine
 from fuzzynav.report import NAV_ROWS, ci_cell, improvement_cell, ratio_table, render
 
@@ -23,8 +24,45 @@ FILTERS = {  # short label -> filter spec
     "VB": "vb",
     "Huber": "huber",
     "fading memory": "fading-memory",
+    "EKF, tuned Q and R": "ekf-tuned",
+    "Sage–Husa, tuned": "sage-husa-tuned",
+    "VB, tuned": "vb-tuned",
+    "Huber, tuned": "huber-tuned",
+    "strong tracking, tuned": "strong-tracking-tuned",
+    "fuzzy Sage–Husa supervisor, tuned": "fuzzy-sage-husa-tuned",
+    "fuzzy VB supervisor, tuned": "fuzzy-vb-tuned",
+    "fuzzy Huber supervisor, tuned": "fuzzy-huber-tuned",
     "EKF, true noise (oracle)": "ekf-true",
 }
+#: the tuned fuzzy designs and the classical filters tuned as they were (same training
+#: runs paper000-steps/-coloured/-outliers seeds 0-2, objective, TPE sampler, Wilcoxon
+#: pruner, 300 trials): studies/paper000_tune.toml, paper000_rscale_tune.toml,
+#: paper000_fuzzy_*.toml and paper000_baselines.toml
+DESIGNS = ("FAKF, tuned α", "fuzzy R-scaling, tuned", "fuzzy Sage–Husa supervisor, tuned",
+           "fuzzy VB supervisor, tuned", "fuzzy Huber supervisor, tuned")
+POOL = ("EKF, tuned Q and R", "Sage–Husa, tuned", "VB, tuned", "Huber, tuned",
+        "strong tracking, tuned")
+#: the rule file whose provenance holds each design's training score
+DESIGN_FILES = {"FAKF, tuned α": f"{R}paper000_alpha_tuned_gps.json",
+                "fuzzy R-scaling, tuned": f"{R}paper000_rscale_tuned.json",
+                "fuzzy Sage–Husa supervisor, tuned": f"{R}supervisor_sage_husa_tuned.json",
+                "fuzzy VB supervisor, tuned": f"{R}supervisor_vb_tuned.json",
+                "fuzzy Huber supervisor, tuned": f"{R}supervisor_huber_tuned.json"}
+BASELINES = "studies/paper000_baselines.json"
+EQUAL_TUNING = (
+    "Every tuned filter here was tuned on the same training runs (`paper000-steps`, "
+    "`-coloured`, `-outliers`, seeds 0–2, none of them on this page), with the same "
+    "objective (mean of the position, velocity and attitude RMS ratios to the EKF), sampler "
+    "(TPE, seed 0), pruner (Wilcoxon) and budget (300 trials): `studies/paper000_tune.toml` "
+    "(α), `paper000_rscale_tune.toml` (R-scaling), `paper000_fuzzy_sage_husa.toml`, "
+    "`_vb.toml`, `_huber.toml` (supervisors) and `paper000_baselines.toml` (the classical "
+    "filters, read from `studies/paper000_baselines.json`). Differences: the supervisors are "
+    "warm-started — every candidate supervises the tuned classical parent and the first "
+    "trial is the parent itself — so their 300 trials come on top of the parent's 300; the "
+    "α study tunes two controllers (GPS and compass) in one search; the supervisors and the "
+    "classical filters are the first (sampler seed 0) of the three tunings of "
+    "`docs/science.md`, the α and R-scaling files of a single tuning made with the package "
+    "of 2026-11-22. ALS (not searched) is left out of the pool.")
 
 
 def _pivot(df, key):
@@ -67,4 +105,21 @@ def build(ctx, mc: int = 50, mc_variants: int = 20) -> str:
         "Ratios per seed of the 3-D position, velocity and attitude RMS to the EKF's on the "
         "same data and initial error, averaged over seeds.", "",
         ratio_table(dfs, FILTERS, ("rms_pos_m", "rms_vel_mps", "rms_att_deg"),
-                    "pos / vel / att")])
+                    "pos / vel / att"), "", *tuned_lines(dfs)])
+
+
+def tuned_lines(dfs) -> list:
+    """The section on the tuned fuzzy designs against the best equally tuned classical
+    filter (empty when :data:`FILTERS` lacks one of them)."""
+    if not all(k in FILTERS for k in (*DESIGNS, *POOL)):
+        return []
+    return ["### The tuned fuzzy designs against the best equally tuned classical filter",
+            "", EQUAL_TUNING, "",
+            *paper_lines(dfs, designs=[FILTERS[d] for d in DESIGNS],
+                         pool=[FILTERS[c] for c in POOL], params=BASELINES,
+                         metrics=("rms_pos_m", "rms_vel_mps", "rms_att_deg"),
+                         labels={v: k for k, v in FILTERS.items()},
+                         score_text="the mean of the position, velocity and attitude RMS "
+                                    "ratios to the EKF (the studies' objective)",
+                         design_train={FILTERS[d]: provenance_score(f)
+                                       for d, f in DESIGN_FILES.items()})]

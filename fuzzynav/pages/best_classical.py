@@ -1,0 +1,92 @@
+"""The papers' "best equally tuned classical filter" section: each tuned fuzzy design
+against the classical filters tuned with the same budget, training runs and objective
+(a baseline study's ``studies/*_baselines.json``), paired per seed with 95 % CIs.
+
+The table itself is :func:`fuzzynav.pages.science_sections.designs_lines`, the one used by
+the science page; this module only puts a paper page's runs into its shape and says how the
+best classical filter was chosen.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pandas as pd
+
+from fuzzynav.errors import InputFileError
+from fuzzynav.pages import scores as sr
+from fuzzynav.pages.science_sections import designs_lines
+
+__all__ = ["paper_lines", "provenance_score"]
+
+
+def provenance_score(path) -> float:
+    """The training score a tuned rule file's study gave it (``provenance.objective.value``).
+
+    Raises
+    ------
+    InputFileError
+        The file has no such number.
+    """
+    doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    value = ((doc.get("provenance") or {}).get("objective") or {}).get("value")
+    if not isinstance(value, (int, float)):
+        raise InputFileError(path, "$.provenance.objective.value", "missing: not a study's "
+                             "export, so its training score is unknown")
+    return float(value)
+
+
+def paper_lines(dfs: dict, *, designs, pool, params, metrics, weights=None,
+                labels=None, ref: str = "ekf", score_text: str = "",
+                design_train=None) -> list:
+    """Markdown of the section: the scores, then the paired table twice (best classical
+    chosen on the training runs, and per scenario on the page's own runs).
+
+    Parameters
+    ----------
+    dfs : dict
+        Scenario name -> the page's runs of it (:func:`fuzzynav.experiment.monte_carlo`).
+    designs : sequence of str
+        The tuned fuzzy filters (specs, as in the runs' ``filter`` column).
+    pool : sequence of str
+        The equally tuned classical filters (specs), each tuned in the baseline study whose
+        output is ``params``.
+    params : path
+        That study's output; its ``train_score`` picks the best on the training runs.
+    metrics, weights
+        The score of a run: the weighted mean of these metrics' ratios to ``ref``
+        (:func:`~fuzzynav.pages.scores.scores_to`); ``score_text`` says it in words.
+    labels : mapping, optional
+        Spec -> the name printed.
+    design_train : mapping, optional
+        Design spec -> its training score (:func:`provenance_score`), printed beside the
+        classical filters' ones.
+    """
+    labels = dict(labels or {})
+    scores = sr.scores_to(pd.concat(list(dfs.values()), ignore_index=True), ref, metrics,
+                          weights)
+    scenarios = list(dfs)
+    best, train = sr.best_on_training(params, pool)
+    name = labels.get(best, best)
+    order = [*designs, *pool]
+    table = sr.ratio_table(scores.assign(filter=scores["filter"].map(lambda f: labels.get(f, f))),
+                           [labels.get(f, f) for f in order], scenarios)
+    trained = {**dict(design_train or {}), **train}
+    train_line = ("Training scores (the objective on the training runs, as the studies "
+                  "report them): " + ", ".join(f"{labels.get(f, f)} {v:.3f}"
+                                               for f, v in trained.items()) + ".")
+    return [
+        train_line, "",
+        f"Score of a run: {score_text or 'the mean of the RMS ratios to ' + ref} on the same "
+        "run (< 1 beats it); mean over seeds ± the 95 % CI:", "", *table, "",
+        f"**Chosen on the training runs.** The best equally tuned classical filter is the one "
+        f"with the lowest training score in `{params}` (the objective every filter of that "
+        f"study was tuned on): {name} ({train[best]:.3f}). Each cell is the mean over the "
+        "scenario's seeds of the per-seed difference of scores, design − best, with its "
+        f"95 % CI; a win or a loss needs the CI to exclude zero and |mean| ≥ "
+        f"{sr.MIN_EFFECT}:", "",
+        *designs_lines(scores, scenarios, designs, best=best, labels=labels), "",
+        "**Chosen on these runs.** The same with, per scenario, the equally tuned classical "
+        "filter of lowest mean score on the page's own (held-out) runs — a choice made on "
+        "the test data, which favours the classical side:", "",
+        *designs_lines(scores, scenarios, designs, pool=pool, labels=labels)]
