@@ -15,6 +15,7 @@ from fuzzynav.errors import UnknownNameError
 from fuzzynav.filters.named import FilterContext, FilterSetup
 from fuzzynav.filters.runner import InitialState
 from fuzzynav.metrics import errors_vs_trajectory, improvement_ci, mean_ci, rms_metrics
+from fuzzynav.metrics_rscale import usage_metrics
 from fuzzynav.nav import attitude, earth
 from fuzzynav.runpath import RunInputs, RunOutcome, check_outcomes, make_setup, run
 from fuzzynav.sim.sensor_log import SensorLog, component_rng, simulate
@@ -94,7 +95,10 @@ class SimulatedSource(OnSimulatedLog):
                          perturbed_initial_state(self.log, setup))
 
     def score(self, result) -> dict:
-        return rms_metrics(errors_vs_trajectory(result, self.log.truth), self.t_start_s)
+        metrics = rms_metrics(errors_vs_trajectory(result, self.log.truth), self.t_start_s)
+        # how much the run still uses its magnetometer (a study may penalise switching it off)
+        metrics.update(usage_metrics(result, self.log.sensors))
+        return metrics
 
 
 

@@ -44,9 +44,11 @@ PRUNERS = ("none", "median", "wilcoxon")
 #: objective groups and the metric each is measured by
 GROUP_METRICS = {"pos": "rms_pos_m", "vel": "rms_vel_mps", "att": "rms_att_deg"}
 #: further groups a single-objective study may weight (paper 003's ship: heading and the
-#: horizontal channels, where the 3-D figures are swamped by roll/pitch and the height)
+#: horizontal channels, where the 3-D figures are swamped by roll/pitch and the height;
+#: paper 001: ``r_use``, the magnetometer's R departing from nominal on calm epochs, a
+#: penalty on switching the sensor off, :mod:`fuzzynav.metrics_rscale`)
 EXTRA_GROUP_METRICS = {"hdg": "rms_heading_deg", "vel_h": "rms_vel_h_mps",
-                       "pos_h": "rms_pos_h_m"}
+                       "pos_h": "rms_pos_h_m", "r_use": "r_use_dev_calm"}
 #: a study name becomes a file name (the journal) and an Optuna study name
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,99}$")
 
