@@ -16,7 +16,7 @@ import dataclasses
 import numpy as np
 
 from fuzzynav import units
-from fuzzynav.align import coarse, alignment_run as R
+from fuzzynav.align import alignment_run as R
 from fuzzynav.align.fine import run_fine
 from fuzzynav.align.fuzzy_r import policy_for
 from fuzzynav.align.mechanize import mechanize
@@ -25,7 +25,7 @@ from fuzzynav.errors import FuzzynavError
 from fuzzynav.experiment import OnSimulatedLog
 from fuzzynav.filters.runner import InitialState
 from fuzzynav.metrics import errors_vs_trajectory, rms_metrics
-from fuzzynav.nav import attitude
+from fuzzynav.nav import attitude, coarse
 from fuzzynav.runpath import RunInputs, run
 from fuzzynav.sim.imu import ImuData
 
