@@ -17,8 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fuzzynav.align.fast import fast_azimuth, level_history
-from fuzzynav.align.fine import Epochs, FineResult, run_fine
-from fuzzynav.align.fuzzy_r import policy_for
+from fuzzynav.align.fine import Epochs, FineResult, r_policy, run_fine
 from fuzzynav.align.alignment_states import LAYOUT_10, LAYOUT_12, NORTH, UP
 from fuzzynav.align.mechanize import mechanize
 from fuzzynav.align.scenario import AlignScenario
@@ -127,7 +126,7 @@ def run_align_filter(name: str, scn: AlignScenario, log: AlignLog, ep: Epochs,
                      rules=None, fast_kw=None) -> AlignRun:
     """Run a named alignment filter on prepared epochs and score it against the truth."""
     spec = get_align_filter(name)
-    res = run_fine(ep, spec.layout, scn.noise, policy=policy_for(spec.fuzzy, rules))
+    res = run_fine(ep, spec.layout, scn.noise, policy=r_policy(rules) if spec.fuzzy else None)
     phi_hat = np.array(res.estimate("att"))
     if spec.fast:
         floor = scn.noise.gyro_bias_sigma_rps / earth.omega_ie_n(ep.lat_rad)[NORTH]

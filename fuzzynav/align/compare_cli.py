@@ -5,7 +5,7 @@ import json
 
 from fuzzynav.align.monte_carlo import ALIGN_ROWS, monte_carlo_alignment
 from fuzzynav.align.scenario import load_alignment_scenario
-from fuzzynav.align.fuzzy_r import AlignRScaling
+from fuzzynav.align.fine import r_policy
 from fuzzynav.align.alignment_run import get_align_filter
 from fuzzynav.errors import FuzzynavError, brief
 from fuzzynav.metrics import mean_ci
@@ -38,7 +38,7 @@ def compare_alignment(args, filters, claims=None, claim_labels=(), rows=()) -> i
         raise FuzzynavError(f"--rules: no filter of {', '.join(filters)} takes a rule file "
                             "(the fuzzy ones do: align-fuzzy, align-fuzzy-fast)")
     if args.rules:
-        AlignRScaling(args.rules[0])  # a file that is not a ROR -> t controller: refused now
+        r_policy(args.rules[0])  # a file that is not an R-scaling controller: refused now
     thr = getattr(args, "align_threshold", None)
     if thr is not None and not 0 < thr <= MAX_THRESHOLD_ARCMIN:
         raise FuzzynavError(f"--align-threshold must be in (0, {MAX_THRESHOLD_ARCMIN:g}] "
@@ -89,7 +89,7 @@ def parse_align_spec(text: str):
         raise FuzzynavError(f"--align {brief(text)}: {name} takes no rule file (the fuzzy "
                             "aligners do: align-fuzzy, align-fuzzy-fast)")
     if rules:
-        AlignRScaling(rules)  # refused now if it is not a ROR -> t controller
+        r_policy(rules)  # refused now if it is not an R-scaling controller
     return name, rules or None
 
 
