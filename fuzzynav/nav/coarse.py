@@ -140,7 +140,7 @@ def level(imu, t0, t1, slack_s=0.0):
     return float(pitch), float(roll), f, w
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def body_chain(dtheta):
     """Quaternions of ``C_b0_bk``, the body at sample k relative to the body at sample 0,
     from the increments ``dtheta`` (K, 3) [rad]: (K+1, 4)."""
