@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from fuzzynav.errors import UnknownNameError
+from fuzzynav.errors import FuzzynavError, UnknownNameError
 from fuzzynav.filters.named import FilterContext, FilterSetup
 from fuzzynav.filters.runner import InitialState
 from fuzzynav.metrics import errors_vs_trajectory, improvement_ci, mean_ci, rms_metrics
@@ -128,13 +128,14 @@ def run_on_log(log, filter_name: str, options=None, t_start_s: float = 0.0,
 
 
 def monte_carlo(scenario, filters, seeds, options=None, cache_dir=None, t_start_s=0.0,
-                progress=False, refuse_diverged=False) -> pd.DataFrame:
+                progress=False, refuse_diverged=False, seed_runs=None) -> pd.DataFrame:
     """Metrics of every filter on every seed, one row per (filter, seed).
 
     Parameters
     ----------
     scenario : Scenario or str
-        A scenario object, a built-in name or a TOML path.
+        A scenario object, a built-in name or a TOML path (with ``seed_runs``: any object
+        with a ``name``, e.g. an alignment scenario).
     filters : sequence of str
         Named filters, or ``NAME@RULES[+RULES]`` (a named filter with its own rule files);
         per-filter options may be given as ``options[name]`` (a dict) in addition to shared
@@ -148,25 +149,53 @@ def monte_carlo(scenario, filters, seeds, options=None, cache_dir=None, t_start_
         Refuse the table when a run diverged (:func:`fuzzynav.runpath.check_outcomes`,
         ``RunDivergedError``), as the command line does; by default such runs are rows
         with their non-finite metrics.
+    seed_runs : callable, optional
+        ``seed_runs(seed) -> run``, ``run(filter) -> metrics``: the runs of one seed, for
+        filters that are not navigation filters on a simulated log (the alignment's:
+        :func:`fuzzynav.align.alignment_run.seed_runs`); ``options``, ``cache_dir``,
+        ``t_start_s`` and ``refuse_diverged`` are then its own business and refused here.
     """
-    scn = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
-    options = dict(options or {})
-    rows, outcomes = [], []
+    outcomes = []
+    if seed_runs is None:
+        scn = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+        seed_runs = _navigation_runs(scn, dict(options or {}), cache_dir, t_start_s, outcomes)
+    else:
+        given = [k for k, v in (("options", options), ("cache_dir", cache_dir),
+                                ("t_start_s", t_start_s), ("refuse_diverged", refuse_diverged))
+                 if v]
+        if given:  # not silently ignored: the runs of seed_runs take their own
+            raise FuzzynavError(f"monte_carlo: {', '.join(given)} apply to navigation filters "
+                                "on simulated logs, not to seed_runs")
+        scn = scenario
+    rows = []
     seeds = list(seeds)
     bar = _progress(len(seeds) * len(filters), progress, f"{scn.name}")
     for seed in seeds:
-        log = simulate(scn, int(seed), cache_dir)
+        run_one = seed_runs(int(seed))
         for name in filters:
-            opts = {k: v for k, v in options.items() if not isinstance(v, dict)}
-            opts.update(options.get(name, {}) if isinstance(options.get(name), dict) else {})
-            out = run_on_log(log, name, opts, t_start_s)  # NAME@FILE: resolved by the run
-            rows.append({"scenario": scn.name, "filter": name, "seed": int(seed), **out.metrics})
-            outcomes.append(out)
+            rows.append({"scenario": scn.name, "filter": name, "seed": int(seed),
+                         **run_one(name)})
             bar.update(1)
     bar.close()
     if refuse_diverged:
         check_outcomes(outcomes)
     return pd.DataFrame(rows)
+
+
+def _navigation_runs(scn, options, cache_dir, t_start_s, outcomes):
+    """``seed -> (filter -> metrics)`` of named navigation filters on ``scn``'s logs (each
+    run's outcome appended to ``outcomes``)."""
+    def of_seed(seed):
+        log = simulate(scn, seed, cache_dir)
+
+        def run_one(name):
+            opts = {k: v for k, v in options.items() if not isinstance(v, dict)}
+            opts.update(options.get(name, {}) if isinstance(options.get(name), dict) else {})
+            out = run_on_log(log, name, opts, t_start_s)  # NAME@FILE: resolved by the run
+            outcomes.append(out)
+            return out.metrics
+        return run_one
+    return of_seed
 
 
 def _progress(total, enabled, desc):

@@ -85,15 +85,17 @@ def simulated(out, seeds, scenarios):
 
 def alignment(out, seeds):
     from fuzzynav.align.chain import run_aligned
-    from fuzzynav.align.monte_carlo import monte_carlo_alignment
-    from fuzzynav.align.alignment_run import ALIGN_FILTERS
+    from fuzzynav.align.alignment_run import ALIGN_FILTERS, seed_runs
+    from fuzzynav.experiment import monte_carlo
     from fuzzynav.align.scenario import load_alignment_scenario
     from fuzzynav.sim.sensor_log import simulate
     from fuzzynav.sim.scenario import load_scenario
 
-    df = monte_carlo_alignment(load_alignment_scenario("paper002"), list(ALIGN_FILTERS), seeds)
+    scn = load_alignment_scenario("paper002")
+    df = monte_carlo(scn, list(ALIGN_FILTERS), seeds, seed_runs=seed_runs(scn))
     for row in df.to_dict("records"):
         f, seed = row.pop("filter"), row.pop("seed")
+        row.pop("scenario")
         out[f"paper002/{seed}/{f}"] = _clean(row)
     log = simulate(load_scenario("paper000"), 0)
     out["chain/paper000/0/align-kf->ekf"] = _guard(lambda: run_aligned(log, "ekf").metrics)

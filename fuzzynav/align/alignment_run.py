@@ -9,6 +9,13 @@ The named alignment filters (``compare paper002 --filters align-kf,align-fuzzy,.
 ``align-fuzzy``    align-kf with the fuzzy R-scaling (ROR -> t rule file)
 ``align-fuzzy-fast`` align-fuzzy with the fast azimuth estimate
 =================  ==========================================================
+
+The metric that matters is the **azimuth alignment time**: the first epoch after which the
+azimuth error stays within the threshold (scenario ``threshold_arcmin``, 10 arcmin by
+default) to the end of the run.  A run whose final error is outside never aligned: its
+time is censored at the run length and ``aligned_pct`` (100 or 0 per run) says how many did.
+Final errors are absolute values at the last epoch [arcmin].  Monte-Carlo tables are
+:func:`fuzzynav.experiment.monte_carlo` with ``seed_runs=`` :func:`seed_runs`.
 """
 from __future__ import annotations
 
@@ -16,10 +23,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fuzzynav import units
 from fuzzynav.align.fast import fast_azimuth, level_history
-from fuzzynav.align.fine import Epochs, FineResult, run_fine
-from fuzzynav.align.fuzzy_r import policy_for
-from fuzzynav.align.alignment_states import LAYOUT_10, LAYOUT_12, NORTH, UP
+from fuzzynav.align.fine import Epochs, FineResult, r_policy, run_fine
+from fuzzynav.align.alignment_states import EAST, LAYOUT_10, LAYOUT_12, NORTH, UP
 from fuzzynav.align.mechanize import mechanize
 from fuzzynav.align.scenario import AlignScenario
 from fuzzynav.align.simulate import AlignLog, simulate_alignment
@@ -28,7 +35,16 @@ from fuzzynav.registry import Registry
 from fuzzynav.sim.sensor_log import component_rng
 
 __all__ = ["AlignFilter", "ALIGN_FILTERS", "get_align_filter", "AlignRun", "simulate",
-           "epochs", "true_misalignment", "run_align_filter", "true_state", "nees"]
+           "epochs", "true_misalignment", "run_align_filter", "true_state", "nees",
+           "ALIGN_ROWS", "alignment_time", "metrics", "seed_runs"]
+
+#: (row label, metric key) of the comparison table
+ALIGN_ROWS = (
+    ("azimuth alignment time [s]", "align_time_s"),
+    ("final |azimuth error| [arcmin]", "final_azimuth_arcmin"),
+    ("final |east level error| [arcmin]", "final_level_e_arcmin"),
+    ("final |north level error| [arcmin]", "final_level_n_arcmin"),
+)
 
 
 @dataclass(frozen=True)
@@ -127,7 +143,7 @@ def run_align_filter(name: str, scn: AlignScenario, log: AlignLog, ep: Epochs,
                      rules=None, fast_kw=None) -> AlignRun:
     """Run a named alignment filter on prepared epochs and score it against the truth."""
     spec = get_align_filter(name)
-    res = run_fine(ep, spec.layout, scn.noise, policy=policy_for(spec.fuzzy, rules))
+    res = run_fine(ep, spec.layout, scn.noise, policy=r_policy(rules) if spec.fuzzy else None)
     phi_hat = np.array(res.estimate("att"))
     if spec.fast:
         floor = scn.noise.gyro_bias_sigma_rps / earth.omega_ie_n(ep.lat_rad)[NORTH]
@@ -155,3 +171,46 @@ def nees(run: AlignRun, truth: np.ndarray) -> np.ndarray:
     """Normalised estimation error squared at every epoch, (K+1,)."""
     e = truth - run.result.x
     return np.einsum("ki,ki->k", e, np.linalg.solve(run.result.P, e[..., None])[..., 0])
+
+
+def alignment_time(time_s, err_u, threshold_rad) -> float:
+    """First time after which ``|err_u| <= threshold`` to the end (NaN: never)."""
+    bad = np.flatnonzero(np.abs(err_u) > threshold_rad)
+    if bad.size == 0:
+        return float(time_s[0])
+    if bad[-1] == time_s.size - 1:
+        return float("nan")
+    return float(time_s[bad[-1] + 1])
+
+
+def metrics(run: AlignRun, threshold_arcmin: float) -> dict:
+    """The metrics of one run."""
+    e = run.error
+    t = run.result.time_s
+    t_al = alignment_time(t, e[:, UP], threshold_arcmin * units.ARCMIN)
+    return {"align_time_s": float(t[-1]) if np.isnan(t_al) else t_al,
+            "aligned_pct": 0.0 if np.isnan(t_al) else 100.0,
+            "final_azimuth_arcmin": abs(e[-1, UP]) / units.ARCMIN,
+            "final_level_e_arcmin": abs(e[-1, EAST]) / units.ARCMIN,
+            "final_level_n_arcmin": abs(e[-1, NORTH]) / units.ARCMIN}
+
+
+def seed_runs(scn: AlignScenario, rules=None, threshold_arcmin=None):
+    """The alignment runs of one seed for :func:`fuzzynav.experiment.monte_carlo`:
+    ``seed -> (filter name -> metrics)``, each seed simulated once for all filters.
+
+    Parameters
+    ----------
+    scn : AlignScenario
+    rules : str, path or FuzzySystem, optional
+        Rule file of the fuzzy filters (default: the paper's).
+    threshold_arcmin : float, optional
+        Overrides the scenario's threshold.
+    """
+    thr = scn.threshold_arcmin if threshold_arcmin is None else threshold_arcmin
+
+    def of_seed(seed):
+        log = simulate(scn, seed)
+        ep = epochs(scn, log, seed)
+        return lambda name: metrics(run_align_filter(name, scn, log, ep, rules=rules), thr)
+    return of_seed

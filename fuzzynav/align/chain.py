@@ -16,16 +16,15 @@ import dataclasses
 import numpy as np
 
 from fuzzynav import units
-from fuzzynav.align import coarse, alignment_run as R
-from fuzzynav.align.fine import run_fine
-from fuzzynav.align.fuzzy_r import policy_for
+from fuzzynav.align import alignment_run as R
+from fuzzynav.align.fine import r_policy, run_fine
 from fuzzynav.align.mechanize import mechanize
 from fuzzynav.align.model import AlignNoise
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.experiment import OnSimulatedLog
 from fuzzynav.filters.runner import InitialState
 from fuzzynav.metrics import errors_vs_trajectory, rms_metrics
-from fuzzynav.nav import attitude
+from fuzzynav.nav import attitude, coarse
 from fuzzynav.runpath import RunInputs, run
 from fuzzynav.sim.imu import ImuData
 
@@ -85,7 +84,7 @@ def align_on_rest(log, align_filter="align-kf", rules=None):
     C, v, f = mechanize(_slice_imu(imu, k0, k1), c.C_bn, lat, h, step)
     ep = R.Epochs(imu.time_s[k0:k1 + 1:step], C, v, f, lat)
     noise = _noise(log, c.cov_phi)
-    res = run_fine(ep, spec.layout, noise, policy=policy_for(spec.fuzzy, rules))
+    res = run_fine(ep, spec.layout, noise, policy=r_policy(rules) if spec.fuzzy else None)
     phi = res.estimate("att")[-1]
     return k1, attitude.rotvec_to_dcm(phi) @ C[-1], res.sigma("att")[-1]
 

@@ -3,11 +3,11 @@ from __future__ import annotations
 
 import json
 
-from fuzzynav.align.monte_carlo import ALIGN_ROWS, monte_carlo_alignment
 from fuzzynav.align.scenario import load_alignment_scenario
-from fuzzynav.align.fuzzy_r import AlignRScaling
-from fuzzynav.align.alignment_run import get_align_filter
+from fuzzynav.align.alignment_run import ALIGN_ROWS, get_align_filter, seed_runs
+from fuzzynav.align.fine import r_policy
 from fuzzynav.errors import FuzzynavError, brief
+from fuzzynav.experiment import monte_carlo
 from fuzzynav.metrics import mean_ci
 from fuzzynav.report import comparison_rows, render
 
@@ -38,14 +38,14 @@ def compare_alignment(args, filters, claims=None, claim_labels=(), rows=()) -> i
         raise FuzzynavError(f"--rules: no filter of {', '.join(filters)} takes a rule file "
                             "(the fuzzy ones do: align-fuzzy, align-fuzzy-fast)")
     if args.rules:
-        AlignRScaling(args.rules[0])  # a file that is not a ROR -> t controller: refused now
+        r_policy(args.rules[0])  # a file that is not an R-scaling controller: refused now
     thr = getattr(args, "align_threshold", None)
     if thr is not None and not 0 < thr <= MAX_THRESHOLD_ARCMIN:
         raise FuzzynavError(f"--align-threshold must be in (0, {MAX_THRESHOLD_ARCMIN:g}] "
                             f"arcmin, got {thr}")
     seeds = list(range(args.seed, args.seed + args.mc))
-    df = monte_carlo_alignment(scn, filters, seeds, rules=(args.rules or [None])[0],
-                               threshold_arcmin=thr, progress=not args.json and args.mc > 1)
+    df = monte_carlo(scn, filters, seeds, progress=not args.json and args.mc > 1,
+                     seed_runs=seed_runs(scn, (args.rules or [None])[0], thr))
     thr = scn.threshold_arcmin if thr is None else thr
     if args.json:
         out = {"scenario": scn.name, "seeds": seeds, "threshold_arcmin": thr, "filters": {}}
@@ -89,7 +89,7 @@ def parse_align_spec(text: str):
         raise FuzzynavError(f"--align {brief(text)}: {name} takes no rule file (the fuzzy "
                             "aligners do: align-fuzzy, align-fuzzy-fast)")
     if rules:
-        AlignRScaling(rules)  # refused now if it is not a ROR -> t controller
+        r_policy(rules)  # refused now if it is not an R-scaling controller
     return name, rules or None
 
 

@@ -3,9 +3,13 @@
 The mechanization (:mod:`.mechanize`) runs from the coarse attitude without feedback; at
 each filter epoch the filter predicts with ``Phi = expm(A T)`` (``A`` at the epoch's
 attitude and mean specific force) and updates with the solution's velocity against zero
-(the base does not move on average).  An optional *policy* rescales ``R`` before each
-update (:mod:`.fuzzy_r`).  ``x`` estimates the misalignment of the open-loop attitude,
-so the attitude after alignment is ``(I + [phi_hat x]) C_calc``.
+(the base does not move on average).  An optional policy rescales ``R`` before each
+update: the package's one R-scaling policy, paper 002's ``R(k) = t(k) R(k-1)`` with
+``t = FIS(ROR)`` (:class:`~fuzzynav.filters.adaptation.r_scaling.FuzzyRScaling`, stepped
+per epoch by :class:`~fuzzynav.filters.adaptation.epoch.EpochPolicy`, the kernel the
+navigation loop runs), with the alignment's bounds :data:`SCALE_BOUNDS` and ``t = 1`` until
+its window is full.  ``x`` estimates the misalignment of the open-loop attitude, so the
+attitude after alignment is ``(I + [phi_hat x]) C_calc``.
 """
 from __future__ import annotations
 
@@ -15,9 +19,43 @@ import numpy as np
 
 from fuzzynav.align.alignment_states import AlignLayout
 from fuzzynav.align.model import AlignNoise, measurement_matrix, transition
+from fuzzynav.errors import FuzzynavError
+from fuzzynav.filters.adaptation.epoch import EpochPolicy
+from fuzzynav.filters.adaptation.r_scaling import FuzzyRScaling
 from fuzzynav.filters.reference import predict, update
 
-__all__ = ["Epochs", "FineResult", "run_fine"]
+__all__ = ["DEFAULT_RULES", "SCALE_BOUNDS", "Epochs", "FineResult", "r_policy", "run_fine"]
+
+#: the rule file shipped with the paper's three hand rules (ROR -> t)
+DEFAULT_RULES = "paper002_ror.json"
+#: bounds of ``tr R / tr R0`` in the alignment (the paper leaves R free; the navigation
+#: loop's default floor is 1e-3)
+SCALE_BOUNDS = (1e-2, 1e3)
+
+
+def r_policy(rules=None) -> FuzzyRScaling:
+    """The R-scaling policy of the fuzzy alignment filters.
+
+    Parameters
+    ----------
+    rules : str, path or FuzzySystem, optional
+        A rule file bound to the ``r-scaling`` adapter (default :data:`DEFAULT_RULES`);
+        its statistics must be innovation ones (``ror``, ``dom``, ``nis``, ``trend`` of the
+        velocity rows): the alignment has no motion or receiver context.
+    """
+    from fuzzynav.filters.catalog import find_rule_file
+    from fuzzynav.fuzzy import load_fis
+
+    fis, source = rules, None
+    if not hasattr(rules, "evaluate"):
+        source = str(find_rule_file(DEFAULT_RULES if rules is None else rules))
+        fis = load_fis(source)
+    policy = FuzzyRScaling(fis, source, scale_bounds=SCALE_BOUNDS, full_window=True)
+    needs = EpochPolicy(policy, ("vel",)).needs
+    if needs:
+        raise FuzzynavError(f"{source or fis.name}: reads {', '.join(needs)}; the alignment "
+                            "filters give only innovation statistics")
+    return policy
 
 
 @dataclass(frozen=True)
@@ -57,7 +95,7 @@ class FineResult:
     r_scale : ndarray (K+1,)
         ``tr R(k) / tr R0`` used at each update (1 without a policy).
     ror : ndarray (K+1,)
-        The policy's statistic (NaN without one or before its window is full).
+        The policy's (first) statistic at each update (NaN without a policy).
     layout : AlignLayout
     """
 
@@ -89,10 +127,9 @@ def run_fine(epochs: Epochs, layout: AlignLayout, noise: AlignNoise = AlignNoise
         ``LAYOUT_10`` (paper 002) or ``LAYOUT_12`` (velocity matching).
     noise : AlignNoise
         P0, Q, R0 and the period T (must match the epochs' spacing).
-    policy : object, optional
-        ``policy.reset(R0)`` once, then ``t = policy.factor(r, D)`` per epoch with the
-        innovation ``r`` and its theoretical covariance ``D = H P- H^T + R(k-1)``:
-        ``R(k) = t R(k-1)``; ``policy.last_ror`` is recorded.
+    policy : FuzzyRScaling, optional
+        The R-scaling (:func:`r_policy`), stepped per epoch on the innovation and
+        ``H P- H^T``: ``R(k) = s(k) R0``, ``s(k) = t(k) s(k-1)``.
     P0 : ndarray, optional
         Initial covariance (default ``noise.p0(layout)``), e.g. from coarse alignment.
     """
@@ -107,16 +144,16 @@ def run_fine(epochs: Epochs, layout: AlignLayout, noise: AlignNoise = AlignNoise
     x_hist, P_hist = np.zeros((K + 1, n)), np.zeros((K + 1, n, n))
     scale, ror = np.ones(K + 1), np.full(K + 1, np.nan)
     x_hist[0], P_hist[0] = x, P
-    if policy is not None:
-        policy.reset(R0)
+    stepper = None if policy is None else EpochPolicy(policy, ("vel",) * m)
     Phis = transition(layout, epochs.C_bn[:-1], epochs.f_n[1:], epochs.lat_rad,
                       noise.period_s)
     for k in range(1, K + 1):
         x, P = predict(x, P, Phis[k - 1], Qd)
         z = epochs.vel_n[k, :m]
-        if policy is not None:
-            R = policy.factor(z - H @ x, H @ P @ H.T + R) * R
-            ror[k] = policy.last_ror
+        if stepper is not None:
+            step = stepper.step(z - H @ x, H @ P @ H.T, R0)
+            R = step.R
+            ror[k] = step.diag[stepper.diag_names[2]]
         x, P = update(x, P, z, H, R)
         x_hist[k], P_hist[k] = x, P
         scale[k] = np.trace(R) / np.trace(R0)

@@ -2,7 +2,8 @@
 sway, the true noise of the zero-velocity reference and the filter's assumptions.
 
 Built-ins live in ``fuzzynav/papers/paper002/scenarios`` (``paper002`` and its variants); a file may
-start from a built-in with ``base = "paper002"`` (tables merge key by key).
+start from a built-in or a file next to it with ``base = "paper002"`` (tables merge key by
+key; the reader is the navigation scenarios', :func:`fuzzynav.sim.scenario.read_file`).
 """
 from __future__ import annotations
 
@@ -12,10 +13,10 @@ from pathlib import Path
 from fuzzynav import units
 from fuzzynav.align.model import AlignNoise
 from fuzzynav.align.simulate import Sway
-from fuzzynav.errors import InputFileError, UnknownNameError
+from fuzzynav.errors import InputFileError
 from fuzzynav.sim.imu import ImuSpec
-from fuzzynav.sim.scenario import builtin_files, merge_tables
-from fuzzynav.sim.tomltable import Table, parse_toml, read_toml, with_path
+from fuzzynav.sim.scenario import builtin_files, merge_base, read_file
+from fuzzynav.sim.tomltable import Table, read_toml, with_path
 
 #: [filter] keys in datasheet units -> (AlignNoise field, SI factor)
 _FILTER_KEYS = {
@@ -53,17 +54,6 @@ def list_alignment_scenarios() -> list[str]:
     return sorted(builtin_files(alignment=True))
 
 
-def _read(name_or_path):
-    s = str(name_or_path)
-    if s.endswith(".toml") or "/" in s:
-        return read_toml(Path(s), "alignment scenario"), Path(s).stem, s
-    if s not in list_alignment_scenarios():
-        raise UnknownNameError("alignment scenario", s[:100], list_alignment_scenarios())
-    label = f"<built-in {s}.toml>"
-    with with_path(label):
-        return parse_toml(builtin_files(alignment=True)[s].read_bytes()), s, label
-
-
 def is_alignment_scenario(name_or_path) -> bool:
     """Whether a name or file is an alignment scenario (built-in, or ``kind = "alignment"``)."""
     s = str(name_or_path)
@@ -78,13 +68,12 @@ def is_alignment_scenario(name_or_path) -> bool:
 
 
 def _document(name_or_path, depth=0):
-    doc, stem, label = _read(name_or_path)
-    if "base" in doc:
-        base = doc.pop("base")
-        if not isinstance(base, str) or base not in list_alignment_scenarios() or depth > 8:
-            raise InputFileError(label, "base", f"must name a built-in alignment scenario "
-                                                f"({', '.join(list_alignment_scenarios())})")
-        doc = merge_tables(_document(base, depth + 1)[0], doc)
+    """Document, stem and label of an alignment scenario, its ``base =`` merged in (the
+    navigation scenarios' reader, :func:`fuzzynav.sim.scenario.read_file`)."""
+    doc, stem, label, here = read_file(name_or_path, "alignment scenario",
+                                       builtin_files(alignment=True))
+    with with_path(label):
+        doc = merge_base(doc, stem, here, depth, lambda base, d: _document(base, d)[0])
     return doc, stem, label
 
 

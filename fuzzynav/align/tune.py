@@ -26,7 +26,6 @@ import numpy as np
 
 from fuzzynav import __version__
 from fuzzynav.align import alignment_run as R
-from fuzzynav.align.monte_carlo import metrics
 from fuzzynav.align.scenario import load_alignment_scenario
 from fuzzynav.fileio import publish
 from fuzzynav.fuzzy import load_fis
@@ -78,7 +77,7 @@ class Runs:
         vals, rows = [], []
         for name, seed, scn, log, ep in self.items:
             out = R.run_align_filter(filt, scn, log, ep, rules=fis)
-            m = metrics(out, scn.threshold_arcmin)
+            m = R.metrics(out, scn.threshold_arcmin)
             vals.append(m["align_time_s"] / scn.duration_s
                         + weight * m["final_azimuth_arcmin"] / scn.threshold_arcmin)
             rows.append({"scenario": name, "seed": seed, **m})

@@ -2,8 +2,8 @@
 
 * **Rest.**  The opening period in which the GNSS speed stays below ``rest_speed_mps``
   (or, without GNSS velocity, the IMU's rate and specific force stay steady).
-* **Level.**  Pitch and roll from the mean specific force ``f`` at rest, which points up:
-  ``f_b = |f| (-cos p sin r, sin p, cos p cos r)`` (RFU body, :mod:`fuzzynav.nav.attitude`).
+* **Level.**  Pitch and roll from the mean specific force ``f`` at rest, which points up
+  (:func:`fuzzynav.nav.coarse.level`, the package's one coarse alignment).
 * **Heading**, four ways (:mod:`fuzzynav.realdata.start_options` chooses, with every speed,
   window and threshold below):
 
@@ -33,12 +33,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba as nb
 import numpy as np
 
 from fuzzynav.errors import InputFileError
 from fuzzynav.nav import attitude, earth
-from fuzzynav.nav.strapdown import quat_mul, rv2q
+from fuzzynav.nav.coarse import body_chain, level
 from fuzzynav.realdata.start_options import StartOptions
 from fuzzynav.realdata import start_check
 
@@ -122,35 +121,10 @@ def opening_rest(imu, gnss, rest_speed_mps=0.2, min_rest_s=2.0, block_s=0.5,
     return t0, t_move
 
 
-def level(imu, t0, t1):
-    """Pitch, roll [rad], mean specific force [m/s^2] and mean rate [rad/s] over a rest."""
-    sel = (imu.time_s[:-1] >= t0) & (imu.time_s[1:] <= t1)
-    dt = np.sum(np.diff(imu.time_s)[sel])
-    f = imu.dv_b[sel].sum(0) / dt
-    w = imu.dtheta_b[sel].sum(0) / dt
-    pitch = np.arctan2(f[1], np.hypot(f[0], f[2]))
-    roll = np.arctan2(-f[0], f[2])
-    return float(pitch), float(roll), f, w
-
-
-@nb.njit(cache=True)
-def _chain(dtheta):
-    """Quaternions of C_b0_bk: body at sample k relative to body at sample 0."""
-    n = dtheta.shape[0]
-    q = np.empty((n + 1, 4))
-    q[0] = (1.0, 0.0, 0.0, 0.0)
-    for k in range(n):
-        r = rv2q(dtheta[k, 0], dtheta[k, 1], dtheta[k, 2])
-        a = quat_mul(q[k, 0], q[k, 1], q[k, 2], q[k, 3], r[0], r[1], r[2], r[3])
-        s = 1.0 / np.sqrt(a[0] ** 2 + a[1] ** 2 + a[2] ** 2 + a[3] ** 2)
-        q[k + 1] = (a[0] * s, a[1] * s, a[2] * s, a[3] * s)
-    return q
-
-
 def relative_attitude(imu, k0, k1, rate_bias_rps):
     """``C_b0_b`` at samples ``k0 .. k1`` from bias-corrected gyro increments, (K, 3, 3)."""
     dth = imu.dtheta_b[k0:k1] - rate_bias_rps * np.diff(imu.time_s[k0:k1 + 1])[:, None]
-    return attitude.quat_to_dcm(_chain(np.ascontiguousarray(dth)))
+    return attitude.quat_to_dcm(body_chain(np.ascontiguousarray(dth)))
 
 
 def _gnss_at(gnss, t):

@@ -248,39 +248,53 @@ def _base_path(base: str, here: Path) -> Path:
     return path
 
 
-def _read(name_or_path):
-    """Parsed document, stem, label and directory of a scenario file or built-in name."""
+def read_file(name_or_path, what: str = "scenario", builtins: dict | None = None):
+    """Parsed document, stem, label and directory (None for a built-in) of a scenario file
+    or built-in name; ``builtins`` (default: the navigation scenarios) and ``what`` (named
+    in errors) serve the alignment scenarios too (:mod:`fuzzynav.align.scenario`)."""
+    builtins = builtin_files() if builtins is None else builtins
     if _looks_like_path(name_or_path):
         path = Path(name_or_path)
-        return read_toml(path, "scenario file"), path.stem, str(path), path.parent
+        return read_toml(path, f"{what} file"), path.stem, str(path), path.parent
     name = str(name_or_path)
-    if name not in list_scenarios():
-        raise UnknownNameError("scenario", name, list_scenarios())
+    if name not in builtins:
+        raise UnknownNameError(what, name, sorted(builtins))
     label = f"<built-in {name}.toml>"
     with with_path(label):
-        doc = parse_toml(builtin_files()[name].read_bytes())
+        doc = parse_toml(builtins[name].read_bytes())
     return doc, name, label, None
 
 
+def merge_base(doc: dict, stem: str, here, depth: int, parent_doc) -> dict:
+    """``doc`` (from :func:`read_file`, inside its ``with_path``) on top of the document of
+    its ``base =``, if any: a built-in name, or a file next to this one (``here``) or below.
+
+    ``parent_doc(base, depth + 1)`` gives the base's document (its own base merged); the
+    file keeps its own name (its stem unless it says one), never the base's.
+    """
+    if "base" not in doc:
+        return doc
+    base = doc.pop("base")
+    if not isinstance(base, str):
+        raise InputFileError(None, "base", "must be a scenario name or a file path")
+    if depth >= 8:
+        raise InputFileError(None, "base", "scenarios derive from each other in a loop")
+    if _looks_like_path(base):
+        if here is None:
+            raise InputFileError(None, "base", "a built-in derives from built-ins only")
+        base = _base_path(base, here)
+    doc.setdefault("name", stem)
+    try:
+        parent = parent_doc(base, depth + 1)
+    except (UnknownNameError, DataMissingError) as exc:  # name this file and key
+        raise InputFileError(None, "base", str(exc)) from None
+    return merge_tables(parent, doc)
+
+
 def _load(name_or_path, depth=0) -> Scenario:
-    doc, stem, label, here = _read(name_or_path)
+    doc, stem, label, here = read_file(name_or_path)
     with with_path(label):
-        if "base" in doc:
-            base = doc.pop("base")
-            if not isinstance(base, str):
-                raise InputFileError(None, "base", "must be a scenario name or a file path")
-            if depth >= 8:
-                raise InputFileError(None, "base", "scenarios derive from each other in a loop")
-            if _looks_like_path(base):
-                if here is None:
-                    raise InputFileError(None, "base", "a built-in derives from built-ins only")
-                base = _base_path(base, here)
-            doc.setdefault("name", stem)
-            try:
-                parent = _load(base, depth + 1)
-            except (UnknownNameError, DataMissingError) as exc:  # name this file and key
-                raise InputFileError(None, "base", str(exc)) from None
-            doc = merge_tables(parent.to_dict(), doc)
+        doc = merge_base(doc, stem, here, depth, lambda base, d: _load(base, d).to_dict())
         return scenario_from_dict(doc, default_name=stem)
 
 

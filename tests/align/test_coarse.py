@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from fuzzynav import units
-from fuzzynav.align import coarse
+from fuzzynav.nav import coarse
 from fuzzynav.align.simulate import Sway, simulate_alignment
 from fuzzynav.nav import attitude, earth
 from fuzzynav.sim.imu import ImuSpec
@@ -74,3 +74,30 @@ def test_noisy_imu_errors_stay_within_the_stated_uncertainty():
     z = np.array(z)
     # 36 unit normals: the mean square lies in [0.4, 1.9] with probability > 0.999
     assert 0.4 < np.mean(z**2) < 1.9
+
+
+def _numpy_chain(dtheta):
+    """``C_b0_b`` by numpy quaternion products (the former numpy coarse alignment's chain,
+    kept as the reference of the compiled :func:`coarse.body_chain`)."""
+    q = np.empty((dtheta.shape[0] + 1, 4))
+    q[0] = (1.0, 0.0, 0.0, 0.0)
+    dq = attitude.rotvec_to_quat(dtheta)
+    for k in range(dtheta.shape[0]):
+        q[k + 1] = attitude.quat_normalize(attitude.quat_multiply(q[k], dq[k]))
+    return attitude.quat_to_dcm(q)
+
+
+def test_body_chain_of_a_constant_rate_is_the_rotation_by_its_angle():
+    # increments about one fixed axis commute: after k of them C_b0_b = exp([k dtheta x])
+    dtheta = np.tile([2e-3, -1e-3, 3e-3], (500, 1))
+    C = attitude.quat_to_dcm(coarse.body_chain(dtheta))
+    k = np.array([0, 1, 250, 500])
+    np.testing.assert_allclose(C[k], attitude.rotvec_to_dcm(k[:, None] * dtheta[0]),
+                               rtol=0, atol=1e-12)
+
+
+def test_body_chain_matches_the_numpy_quaternion_products():
+    dtheta = np.random.default_rng(3).normal(0.0, 5e-3, (2000, 3))
+    got = attitude.quat_to_dcm(coarse.body_chain(dtheta))
+    # the same products in another rounding order: 1e-15 apart after 2000 steps
+    np.testing.assert_allclose(got, _numpy_chain(dtheta), rtol=0, atol=1e-13)

@@ -2,24 +2,35 @@
 import dataclasses
 
 import numpy as np
+import pytest
 
 from fuzzynav import units
 from fuzzynav.align import alignment_run as R
-from fuzzynav.align.fuzzy_r import DEFAULT_RULES, AlignRScaling
+from fuzzynav.errors import FuzzynavError
+from fuzzynav.align.fine import DEFAULT_RULES, r_policy
 from fuzzynav.align.alignment_states import UP
 from fuzzynav.align.scenario import load_alignment_scenario
+from fuzzynav.filters.adaptation.epoch import EpochPolicy
+from fuzzynav.filters.adaptation.r_scaling import FuzzyRScaling
+from fuzzynav.filters.catalog import find_rule_file
+from fuzzynav.fuzzy import load_fis
 from fuzzynav.sim.imu import ImuSpec
 
 
+def _rules(window):
+    fis = load_fis(find_rule_file(DEFAULT_RULES))
+    return dataclasses.replace(fis, binding={**fis.binding, "window": window})
+
+
 def _factor_at(ror, window=4):
-    """The factor t when the measured innovations are exactly ``ror`` times ``D``."""
-    pol = AlignRScaling(DEFAULT_RULES, window=window)
-    pol.reset(np.eye(2))
-    D = np.eye(2)
+    """The factor t when the measured innovations are exactly ``ror`` times ``D``
+    (``H P- H^T = 0``, ``R0 = I``: ``D = R``)."""
+    pol = EpochPolicy(r_policy(_rules(window)), ("vel", "vel"))
     r = np.sqrt(ror) * np.array([1.0, 1.0])      # r r^T has trace 2 ror = ror tr D
     for _ in range(window - 1):
-        assert pol.factor(r, D) == 1.0           # window not full: R kept
-    return pol.factor(r, D), pol.last_ror
+        assert pol.step(r, np.zeros((2, 2)), np.eye(2)).diag["t"] == 1.0  # window filling
+    step = pol.step(r, np.zeros((2, 2)), np.eye(2))
+    return step.diag["t"], step.diag["ror"]
 
 
 def test_a_consistent_filter_keeps_R_and_a_mismatched_one_moves_it_the_right_way():
@@ -32,12 +43,21 @@ def test_a_consistent_filter_keeps_R_and_a_mismatched_one_moves_it_the_right_way
 
 
 def test_the_scale_of_R_stays_within_its_bounds():
-    pol = AlignRScaling(DEFAULT_RULES, window=2, scale_max=3.0)
-    pol.reset(np.eye(2))
-    scale = 1.0
+    fis = _rules(2)
+    pol = EpochPolicy(FuzzyRScaling(fis, scale_bounds=(1e-2, 3.0), full_window=True),
+                      ("vel", "vel"))
     for _ in range(50):
-        scale *= pol.factor(np.array([10.0, 10.0]), np.eye(2))
-    assert abs(scale - 3.0) < 1e-9
+        step = pol.step(np.array([10.0, 10.0]), np.zeros((2, 2)), np.eye(2))
+    np.testing.assert_array_equal(step.r_scale, [3.0, 3.0])
+    np.testing.assert_array_equal(step.R, 3.0 * np.eye(2))
+
+
+def test_the_alignment_refuses_a_rule_file_reading_motion_context():
+    fis = _rules(4)
+    name = fis.inputs[0].name
+    binding = {**fis.binding, "inputs": {name: {"statistic": "speed"}}}
+    with pytest.raises(FuzzynavError, match="speed"):
+        r_policy(dataclasses.replace(fis, binding=binding))
 
 
 def test_fuzzy_scaling_learns_a_reference_noisier_than_R0():

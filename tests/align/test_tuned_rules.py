@@ -8,7 +8,6 @@ from pathlib import Path
 import pytest
 
 from fuzzynav.align import alignment_run as R
-from fuzzynav.align.monte_carlo import metrics
 from fuzzynav.align.scenario import load_alignment_scenario
 from fuzzynav.align.tune import Runs
 from fuzzynav.cli import main
@@ -34,7 +33,7 @@ def check(path):
     log = R.simulate(scn, int(exp["seed"]))
     ep = R.epochs(scn, log, int(exp["seed"]))
     out = R.run_align_filter(exp["filter"], scn, log, ep, rules=load_fis(path))
-    got = metrics(out, scn.threshold_arcmin)
+    got = R.metrics(out, scn.threshold_arcmin)
     assert exp["metrics"]
     for key, value in exp["metrics"].items():
         assert got[key] == pytest.approx(value, rel=RTOL, abs=1e-9), (Path(path).name, key)

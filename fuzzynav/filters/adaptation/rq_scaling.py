@@ -15,7 +15,7 @@ from __future__ import annotations
 from fuzzynav.filters.adaptation import ADAPT_SIG, register
 from fuzzynav.filters.adaptation.fuzzy_common import log_inputs, scalars
 from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
-from fuzzynav.filters.adaptation.r_scaling import S_MAX, S_MIN, r_step
+from fuzzynav.filters.adaptation.r_scaling import R_STEP_FLOATS, S_MAX, S_MIN, r_step
 from fuzzynav.filters.numba_lazy import njit_signature
 
 #: bounds of the process-noise level
@@ -54,6 +54,7 @@ class FuzzyRQScaling(FuzzyPolicy):
     extra_roles = ("q_scale",)
     domains = (("r_scale", S_MIN, S_MAX), ("q_scale", Q_MIN, Q_MAX))
     diag_prefix = ("r_scale", "t", "q_scale")
+    floats = R_STEP_FLOATS  # r_step's bounds, no full-window hold
 
     def __init__(self, fis, source=None, binding=None):
         super().__init__(fis, source, binding)

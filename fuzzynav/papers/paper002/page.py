@@ -16,8 +16,9 @@ import pandas as pd
 
 from fuzzynav import units
 from fuzzynav.align import alignment_run as R
-from fuzzynav.align.monte_carlo import ALIGN_ROWS, monte_carlo_alignment
+from fuzzynav.align.alignment_run import ALIGN_ROWS
 from fuzzynav.align.scenario import load_alignment_scenario
+from fuzzynav.experiment import monte_carlo
 from fuzzynav.papers.claims import claims_for
 from fuzzynav.fileio import publish
 from fuzzynav.papers.paper002.page_text import TUNED, page
@@ -30,9 +31,9 @@ VARIANTS = ["paper002-rmismatch", "paper002-sway", "paper002-gusts", "paper002-m
 def results(name, seeds):
     """Metrics of every filter (and the tuned rules) on one scenario."""
     scn = load_alignment_scenario(name)
-    df = monte_carlo_alignment(scn, FILTERS, seeds)
+    df = monte_carlo(scn, FILTERS, seeds, seed_runs=R.seed_runs(scn))
     if TUNED.exists():
-        tuned = monte_carlo_alignment(scn, ["align-fuzzy"], seeds, rules=str(TUNED))
+        tuned = monte_carlo(scn, ["align-fuzzy"], seeds, seed_runs=R.seed_runs(scn, str(TUNED)))
         tuned["filter"] = "align-fuzzy tuned"
         df = pd.concat([df, tuned], ignore_index=True)
     return scn, df

@@ -67,9 +67,9 @@ against the filter's 3σ, with a three-seed Monte-Carlo beside the paper's claim
 | 10 states `[δvE δvN, φE φN φU, ∇E ∇N, εE εN εU]`, A from earth rate and g, T from C_bⁿ | `fuzzynav.align.model` (`LAYOUT_10`, named blocks), `expm(A T)` by a 6-term series |
 | zero-velocity measurement, H = [I₂ 0] | `fuzzynav.align.fine.run_fine` (predict and update: the package's plain numpy ones, `fuzzynav.filters.reference`) |
 | P0, Q0, R0, T = 1 s | `AlignNoise()` defaults, exactly the paper's numbers |
-| ROR = tr(C_r)/tr(D_r), R(k) = t(k) R(k−1), three rules | `fuzzynav.align.fuzzy_r` with `rules/paper002_ror.json` |
+| ROR = tr(C_r)/tr(D_r), R(k) = t(k) R(k−1), three rules | the `r-scaling` policy (`fuzzynav.filters.adaptation.r_scaling`, stepped by `fuzzynav.align.fine.r_policy`) with `rules/paper002_ror.json` |
 | δφ_U = (ω_U δφ_N − δφ̇_E)/ω_N after 30 s | `fuzzynav.align.fast` |
-| 45° N, 1° on every axis, gyro 0.02 °/h + 0.01 °/h, accel 1e-4 g + 0.5e-4 g, 400 s | scenario `paper002` (`fuzzynav/align/scenarios/paper002.toml`) |
+| 45° N, 1° on every axis, gyro 0.02 °/h + 0.01 °/h, accel 1e-4 g + 0.5e-4 g, 400 s | scenario `paper002` (`fuzzynav/papers/paper002/scenarios/paper002.toml`) |
 | — | a 12-state velocity-matching form (`align-kf12`, PSINS `alignvn`), coarse alignment (analytic and inertial-frame), variants, `run --align` |
 
 ## What the paper does not give, and what we chose

@@ -1,5 +1,13 @@
 """Coarse alignment: attitude from gravity and the earth rate, with its uncertainty.
 
+The package's one coarse alignment, on any IMU log (``time_s``, ``dtheta_b``, ``dv_b``):
+
+* :func:`level` -- pitch and roll from the mean specific force over a rest, which points up:
+  ``f_b = |f| (-cos p sin r, sin p, cos p cos r)`` (RFU body); the start from recorded data
+  (:mod:`fuzzynav.realdata.coarse_align`) levels with it and takes the heading from the
+  motion, the alignment (:mod:`fuzzynav.align.chain`) with :func:`analytic`;
+* :func:`body_chain` -- the body attitude relative to its start, ``C_b0_b``, from the gyro
+  increments (quaternion products, numba);
 * :func:`analytic` (stationary base; PSINS ``alignsb``): the mean specific force ``f_b``
   and rate ``w_b`` over the window are gravity and the earth rate seen in the body;
   ``C_bn`` takes the body triad built on ``f`` and ``f x w`` to the navigation one built on
@@ -25,12 +33,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 
+from fuzzynav.errors import FuzzynavError
 from fuzzynav.nav import attitude, earth
 from fuzzynav.nav.earth import OMEGA_IE
+from fuzzynav.nav.strapdown import quat_mul, rv2q
 
-__all__ = ["CoarseResult", "uncertainty", "analytic", "inertial_frame"]
+__all__ = ["CoarseResult", "uncertainty", "level", "body_chain", "analytic", "inertial_frame"]
+
+#: slack of a window given in seconds on a sample grid (the alignment's windows end on a
+#: sample whose time carries rounding): samples within it of the ends are inside
+GRID_SLACK_S = 1e-9
 
 
 @dataclass(frozen=True)
@@ -98,12 +113,46 @@ def uncertainty(lat_rad, window_s, gyro_bias, accel_bias, arw=0.0, vrw=0.0):
     return np.diag([tilt**2, tilt**2, az**2])
 
 
-def _window(imu, t0, t1):
-    sel = (imu.time_s[:-1] >= t0 - 1e-9) & (imu.time_s[1:] <= t1 + 1e-9)
-    k = np.flatnonzero(sel)
-    if k.size < 2:
-        raise ValueError(f"coarse alignment: fewer than two IMU samples in [{t0}, {t1}] s")
+def _select(imu, t0, t1, slack_s):
+    """The increments inside ``[t0, t1]`` (a boolean mask); at least two."""
+    sel = (imu.time_s[:-1] >= t0 - slack_s) & (imu.time_s[1:] <= t1 + slack_s)
+    if np.count_nonzero(sel) < 2:
+        raise FuzzynavError(f"coarse alignment: fewer than two IMU samples in "
+                            f"[{t0}, {t1}] s")
+    return sel
+
+
+def _window(imu, t0, t1, slack_s=GRID_SLACK_S):
+    """First and one-past-last increment inside ``[t0, t1]``."""
+    k = np.flatnonzero(_select(imu, t0, t1, slack_s))
     return k[0], k[-1] + 1
+
+
+def level(imu, t0, t1, slack_s=0.0):
+    """Pitch, roll [rad], mean specific force [m/s^2] and mean rate [rad/s] over a rest
+    ``[t0, t1]`` [s] (increments that end inside it; ``slack_s``: :data:`GRID_SLACK_S`)."""
+    sel = _select(imu, t0, t1, slack_s)
+    dt = np.sum(np.diff(imu.time_s)[sel])
+    f = imu.dv_b[sel].sum(0) / dt
+    w = imu.dtheta_b[sel].sum(0) / dt
+    pitch = np.arctan2(f[1], np.hypot(f[0], f[2]))
+    roll = np.arctan2(-f[0], f[2])
+    return float(pitch), float(roll), f, w
+
+
+@nb.njit(cache=True, error_model="numpy")
+def body_chain(dtheta):
+    """Quaternions of ``C_b0_bk``, the body at sample k relative to the body at sample 0,
+    from the increments ``dtheta`` (K, 3) [rad]: (K+1, 4)."""
+    n = dtheta.shape[0]
+    q = np.empty((n + 1, 4))
+    q[0] = (1.0, 0.0, 0.0, 0.0)
+    for k in range(n):
+        r = rv2q(dtheta[k, 0], dtheta[k, 1], dtheta[k, 2])
+        a = quat_mul(q[k, 0], q[k, 1], q[k, 2], q[k, 3], r[0], r[1], r[2], r[3])
+        s = 1.0 / np.sqrt(a[0] ** 2 + a[1] ** 2 + a[2] ** 2 + a[3] ** 2)
+        q[k + 1] = (a[0] * s, a[1] * s, a[2] * s, a[3] * s)
+    return q
 
 
 def analytic(imu, lat_rad, h_m, t0, t1, cov_phi) -> CoarseResult:
@@ -118,23 +167,11 @@ def analytic(imu, lat_rad, h_m, t0, t1, cov_phi) -> CoarseResult:
     cov_phi : ndarray (3, 3)
         Its uncertainty (see :func:`uncertainty`), returned with the attitude.
     """
-    k0, k1 = _window(imu, t0, t1)
-    T = imu.time_s[k1] - imu.time_s[k0]
-    f = imu.dv_b[k0:k1].sum(0) / T
-    w = imu.dtheta_b[k0:k1].sum(0) / T
+    _, k1 = _window(imu, t0, t1)
+    _, _, f, w = level(imu, t0, t1, GRID_SLACK_S)
     fn = np.array([0.0, 0.0, earth.gravity(lat_rad, h_m)])
     C = _triad(f, w, fn, earth.omega_ie_n(lat_rad))
     return CoarseResult(C, attitude.dcm_to_euler(C), cov_phi, float(imu.time_s[k1]), "analytic")
-
-
-def _chain(dtheta):
-    """``C_b0_b`` after each increment (K+1, 3, 3), by quaternion products."""
-    q = np.empty((dtheta.shape[0] + 1, 4))
-    q[0] = (1.0, 0.0, 0.0, 0.0)
-    dq = attitude.rotvec_to_quat(dtheta)
-    for k in range(dtheta.shape[0]):
-        q[k + 1] = attitude.quat_normalize(attitude.quat_multiply(q[k], dq[k]))
-    return attitude.quat_to_dcm(q)
 
 
 def _integral(dv, dt):
@@ -168,7 +205,7 @@ def inertial_frame(imu, lat_rad, h_m, t0, t1, cov_phi, n_vectors=50) -> CoarseRe
     k0, k1 = _window(imu, t0, t1)
     t = imu.time_s[k0:k1 + 1] - imu.time_s[k0]
     dt = np.diff(t)
-    C_b0b = _chain(imu.dtheta_b[k0:k1])
+    C_b0b = attitude.quat_to_dcm(body_chain(np.ascontiguousarray(imu.dtheta_b[k0:k1])))
     dv_b0 = np.einsum("kij,kj->ki", C_b0b[:-1], imu.dv_b[k0:k1]
                       + 0.5 * np.cross(imu.dtheta_b[k0:k1], imu.dv_b[k0:k1]))
     wn = earth.omega_ie_n(lat_rad)
