@@ -89,7 +89,7 @@ def usage_metrics(result, sensors) -> dict:
     result : FilterResult
         Its ``events`` name the streams as ``sensors`` does.
     sensors : dict
-        Sensor name -> :class:`~fuzzynav.sim.sensors.base.SensorData` of the log.
+        Sensor name -> :class:`~fuzzynav.sim.sensors.SensorData` of the log.
 
     Returns
     -------

@@ -64,7 +64,7 @@ def test_the_built_package_carries_the_named_filters_rules(tmp_path):
     # every paper folder's scenario files ship (fuzzynav scenarios lists them from there)
     built = sorted(p.relative_to(lib) for p in (lib / "fuzzynav" / "papers").rglob("*.toml"))
     assert built == sorted(p.relative_to(ROOT) for p in (ROOT / "fuzzynav" / "papers").rglob(
-        "scenarios/*.toml")) and len(built) == 30
+        "scenarios/*.toml")) and len(built) >= 30
     elsewhere = tmp_path / "elsewhere"  # no rules/ here, and not the checkout
     elsewhere.mkdir()
     # (no JIT: importing the filters would compile their kernels for this new path; only
