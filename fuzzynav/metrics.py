@@ -237,6 +237,42 @@ def mean_ci(values, level: float = 0.95) -> Estimate:
     return Estimate(m, m - h, m + h, int(x.size))
 
 
+def crossed_ci(values, level: float = 0.95) -> Estimate:
+    """Mean and confidence interval of a table of paired differences whose rows (say,
+    tunings) and columns (test seeds) are both random samples: a crossed two-way
+    random-effects design without replication.
+
+    ``values[i, j]`` is the difference on test seed ``j`` under tuning ``i``.  The variance
+    of the grand mean is ``(MS_rows + MS_cols - MS_resid) / (r c)`` (the expected mean
+    squares of the model), floored at ``MS_resid / (r c)``; its degrees of freedom are
+    Satterthwaite's.  The interval therefore covers the mean over *new* tunings as well as
+    new seeds -- wider than a paired test over seeds when tunings disagree.  With one row it
+    is :func:`mean_ci` over the columns; with one column, over the rows.
+    """
+    x = np.asarray(values, float)
+    if x.ndim != 2 or x.size == 0 or not np.isfinite(x).all():
+        raise ValueError(f"crossed_ci needs a finite 2-D table, got shape {x.shape}")
+    r, c = x.shape
+    if r == 1 or c == 1:
+        return mean_ci(x.ravel())
+    m = float(x.mean())
+    rows, cols = x.mean(axis=1), x.mean(axis=0)
+    ms_r = c * float(((rows - m) ** 2).sum()) / (r - 1)
+    ms_c = r * float(((cols - m) ** 2).sum()) / (c - 1)
+    resid = x - rows[:, None] - cols[None, :] + m
+    ms_e = float((resid ** 2).sum()) / ((r - 1) * (c - 1))
+    num = ms_r + ms_c - ms_e
+    if num <= ms_e:  # the estimate is no smaller than the residual noise alone
+        num, df = ms_e, (r - 1) * (c - 1)
+    else:
+        df = num ** 2 / (ms_r ** 2 / (r - 1) + ms_c ** 2 / (c - 1)
+                         + ms_e ** 2 / ((r - 1) * (c - 1)))
+    if num == 0.0:
+        return Estimate(m, m, m, int(x.size))
+    h = stats.t.ppf(0.5 + level / 2, df) * np.sqrt(num / (r * c))
+    return Estimate(m, m - h, m + h, int(x.size))
+
+
 def summary_json(values) -> dict:
     """The JSON of per-run values in every table: ``{"mean", "ci95": [lo, hi], "values"}``
     (:func:`mean_ci`; non-finite values stay as floats: see :func:`fuzzynav.fileio.

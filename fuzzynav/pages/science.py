@@ -66,17 +66,29 @@ def params_lines(params: Path) -> list:
     import json
 
     doc = json.loads(params.read_text())
+    from fuzzynav.tuning.baseline_config import bound_hits
+
     lines = ["| filter | training score (ratio to ekf) | parameters |", "|---|---|---|"]
+    hits = []
     for name, p in doc["filters"].items():
-        vals = ", ".join(f"{k} = {v:.3g}" for k, v in p.items())
+        ends = bound_hits(name, p)
+        vals = ", ".join(f"{k} = {v:.3g}" + (f" (at the {ends[k]} end)" if k in ends else "")
+                         for k, v in p.items())
         lines.append(f"| {name} | {doc['train_score'][name]:.3f} | {vals} |")
+        hits += [f"{name}'s {k}" for k in ends]
+    if hits:
+        lines += ["", f"At the end of its search range (within 1 %): {', '.join(hits)}. The "
+                  "best value may lie beyond what the study searched "
+                  "(`fuzzynav/tuning/baseline_config.py`, `SPACES`), so these filters could "
+                  "do better than shown here."]
     return lines
 
 
-def summary_lines(scores, per_tuning: dict, scenarios) -> list:
+def summary_lines(scores, per_tuning: dict, scenarios, pooled_wins=None) -> list:
     """The verdict of the goal (a design beating the best equally tuned classical filter,
     paired 95 % CI excluding zero, on at least 4 of the held-out sets), per design and
-    per tuning."""
+    per tuning, and pooled over tunings (``pooled_wins``: design -> wins,
+    :func:`~fuzzynav.pages.science_sections.pooled_lines`)."""
     n, need = len(scenarios), min(4, len(scenarios))
     lines = []
     for d in DESIGNS:
@@ -86,7 +98,9 @@ def summary_lines(scores, per_tuning: dict, scenarios) -> list:
         lines.append(f"- `{d}` wins {t['wins against']}, draws {t['draws with']} and loses "
                      f"{t['loses to']} of {n} held-out sets against the best classical "
                      f"filter of each (first tuning); wins per tuning: "
-                     f"{', '.join(map(str, wins))}.")
+                     f"{', '.join(map(str, wins))}" + (
+                         f"; pooled over tunings (tuning seed a random factor): "
+                         f"{pooled_wins[d]}" if pooled_wins else "") + ".")
     reached = [d for d in DESIGNS
                if all(sec.design_tally(per_tuning[s], scenarios, d)["wins against"] >= need
                       for s in per_tuning)]
@@ -138,7 +152,7 @@ def page_text(ctx: dict, scores_ref, scores_oracle, scenarios) -> str:
         "the lowest mean score there (chosen on the held-out data itself, which favours the "
         "baseline: a fuzzy design must beat the best one in hindsight).",
         f"- **Win / loss:** the paired 95 % CI excludes zero *and* the mean difference is at "
-        f"least {sr.MIN_EFFECT} (0.5 % of the reference's error); anything less is a draw "
+        f"least {sr.MIN_EFFECT} ({100 * sr.MIN_EFFECT:g} % of the reference's error); anything less is a draw "
         "(a supervisor that stays at its parent differs by ~1e-5 with an equally narrow CI).",
         "", "## Tuned parameters (first tuning)", "", *params_lines(ctx["params"]), "",
         *ctx["design_table"], "",
@@ -294,6 +308,8 @@ def build(page_ctx, trials: int = 300, workers: int = 2, work: str | None = None
                        fuzzy_systems_at(*tuned[0].fuzzy[label], trials)[0])
                for label in SUPERVISOR_STUDIES}
         systems = fuzzy_systems_at(*tuned[0].fuzzy[FUZZY], trials)[0]
+        pooled, pooled_wins = sec.pooled_lines(per_tuning, list(dict.fromkeys(
+            s for s, _ in test)), DESIGNS)
     opts = SimpleNamespace(data=str(page_ctx.data_dir), mc_recordings=mc_recordings,
                            car_rules=car_rules, auv_rules=auv_rules)
     recs, rec_rows = recordings_section(opts, params, systems, sup) if recordings else (
@@ -308,8 +324,8 @@ def build(page_ctx, trials: int = 300, workers: int = 2, work: str | None = None
                resumed=resumed, recordings=recs, recording_rows=rec_rows is not None,
                quick=quick, command=page_ctx.command, best_design=best_design,
                design_table=design_rows,
-               variance=sec.variance_lines(per_tuning, DESIGNS, _tuned_classical(first),
-                                           scenarios),
+               variance=[*sec.variance_lines(per_tuning, DESIGNS, _tuned_classical(first),
+                                             scenarios), "", *pooled],
                budget=[f"The first tuning's studies of the fuzzy design and the tuned "
                        f"classical filter with the lowest mean held-out score (`{best_design}`"
                        f", `{best_classic}`) are continued to {curve_trials} trials; each "
@@ -320,7 +336,7 @@ def build(page_ctx, trials: int = 300, workers: int = 2, work: str | None = None
                        *sec.budget_sentences(points)],
                summary=summary_lines(scores_ref, {k: scores_to(df[df["tuning_seed"] == k],
                                                                REF) for k in per_tuning},
-                                     scenarios))
+                                     scenarios, pooled_wins))
     for name, frame in (("science_runs.csv", df), ("science_budget.csv", points),
                         ("science_recordings.csv", rec_rows)):
         if frame is not None:

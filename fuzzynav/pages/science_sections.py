@@ -4,7 +4,9 @@
   held-out set (paired per seed, 95 % CI), with a tally per design;
 * :func:`variance_lines` -- the tuning variance: each tuning's held-out score per filter,
   the spread between tunings, and each design's verdict against the best classical filter
-  per tuning (the paired test reported per tuning, not pooled over tunings);
+  per tuning;
+* :func:`pooled_lines` -- the paired test pooled over tunings, the tuning seed and the test
+  seed as crossed random factors (:func:`fuzzynav.metrics.crossed_ci`);
 * :func:`budget_lines` -- the budget curves: training and held-out score against the trials
   a study was given, as a table and a figure.
 """
@@ -15,8 +17,8 @@ import pandas as pd
 
 from fuzzynav.pages import scores as sr
 
-__all__ = ["designs_lines", "design_tally", "variance_lines", "budget_lines",
-           "budget_sentences"]
+__all__ = ["designs_lines", "design_tally", "variance_lines", "pooled_differences",
+           "pooled_lines", "budget_lines", "budget_sentences"]
 
 
 def design_tally(scores, scenarios, design) -> dict:
@@ -83,6 +85,47 @@ def variance_lines(per_tuning: dict, designs, classical, scenarios) -> list:
     return lines
 
 
+def pooled_differences(per_tuning: dict, scenario: str, design: str):
+    """``(best classical, estimate)``: ``design`` against the classical filter with the
+    lowest mean score on ``scenario`` over every tuning, the paired difference per tuning
+    and test seed, its CI with both as crossed random factors."""
+    from fuzzynav.metrics import crossed_ci
+
+    both = pd.concat([s.assign(tuning_seed=k) for k, s in per_tuning.items()])
+    best = sr.best_classical(both, scenario)
+    rows = []
+    for k, s in per_tuning.items():
+        sub = s[s["scenario"] == scenario].pivot(index="seed", columns="filter",
+                                                 values="score").sort_index()
+        rows.append((sub[design] - sub[best]).to_numpy())
+    return best, crossed_ci(np.vstack(rows))
+
+
+def pooled_lines(per_tuning: dict, scenarios, designs) -> tuple:
+    """Markdown rows (scenario x design) of :func:`pooled_differences`, and the tally
+    design -> wins against the best classical filter."""
+    n = len(per_tuning)
+    lines = [f"Each fuzzy design against the best classical filter of each held-out set, "
+             f"pooled over the {n} tunings: the paired difference per tuning and test seed, "
+             "with a 95 % CI that treats the tuning seed and the test seed as crossed random "
+             "factors (two-way random-effects model, Satterthwaite degrees of freedom), so "
+             "it covers what another tuning would give, not only other seeds; the best "
+             "classical filter is chosen on the mean over every tuning:", "",
+             "| scenario | best classical | " + " | ".join(f"`{d}` − best" for d in designs)
+             + " |", "|---|---|" + "---|" * len(designs)]
+    wins = dict.fromkeys(designs, 0)
+    for s in scenarios:
+        cells, best = [], None
+        for d in designs:
+            best, est = pooled_differences(per_tuning, s, d)
+            v = sr.verdict(est)
+            wins[d] += v == "wins against"
+            mark = {"wins against": " **win**", "loses to": " loss"}.get(v, "")
+            cells.append(f"{est.mean:+.3f} [{est.lo:+.3f}, {est.hi:+.3f}]{mark}")
+        lines.append(f"| `{s}` | {best} | " + " | ".join(cells) + " |")
+    return lines, wins
+
+
 def _figure(points: pd.DataFrame, path) -> None:
     import matplotlib
 
@@ -132,8 +175,9 @@ def budget_sentences(points: pd.DataFrame, tol: float = 0.001) -> list:
         best = int(h.index[(h <= h.min() + tol).to_numpy()][0])
         text = (f"- `{name}`: held-out score {' → '.join(f'{v:.3f}' for v in h)}"
                 f" and training {' → '.join(f'{v:.3f}' for v in tr)} at "
-                f"{', '.join(str(int(n)) for n in g.index)} trials; no budget after {best} "
-                f"improves the held-out score by more than {tol}.")
+                f"{', '.join(str(int(n)) for n in g.index)} trials" + (
+                    f"; no budget after {best} improves the held-out score by more than "
+                    f"{tol}." if best != int(g.index[-1]) else "."))
         worse = [(int(a), int(b)) for a, b in zip(g.index[:-1], g.index[1:])
                  if tr[b] < tr[a] - tol and h[b] > h[a] + tol]
         if worse:

@@ -20,6 +20,7 @@ searched: its Q and R come from autocovariance least squares on the training run
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -38,7 +39,7 @@ from fuzzynav.tuning.objective import TrialObjective
 
 __all__ = ["TUNABLE", "Q_BOUNDS", "R_BOUNDS", "SPACES", "BaselineConfig", "is_baseline_config",
            "load_baseline_config", "training_channels", "space_of", "suggest", "run_params",
-           "BaselineObjective", "sub_config", "best_params", "write_params", "train_score"]
+           "BaselineObjective", "sub_config", "best_params", "write_params", "train_score", "bound_hits"]
 
 #: filters a baseline study can tune: the searched ones, the ALS estimate and paper 004's
 #: APSO (the ``apso`` filter's Q/R multipliers, best with ``sampler = "pso"``)
@@ -60,6 +61,24 @@ SPACES = {
     "strong-tracking-tuned": {"rho": (0.5, 0.99, False), "beta": (1.0, 20.0, True),
                               "lam_max": (1.01, 100.0, True)},
 }
+
+
+def bound_hits(name: str, params: dict, rel: float = 0.01) -> dict:
+    """Parameter -> ``"lower"``/``"upper"`` for each of ``params`` (tuned values of baseline
+    ``name``) within ``rel`` of its search range's end (on the log scale where searched on
+    it): the optimum may lie outside what was searched.  Unsearched keys are left out."""
+    out = {}
+    for key, value in params.items():
+        lo, hi, scale = SPACES.get(name, {}).get(key, (None, None, None))
+        if lo is None:
+            continue
+        f = (math.log(value / lo) / math.log(hi / lo) if scale is True
+             else (value - lo) / (hi - lo))
+        if f <= rel:
+            out[key] = "lower"
+        elif f >= 1.0 - rel:
+            out[key] = "upper"
+    return out
 
 
 @dataclass(frozen=True)

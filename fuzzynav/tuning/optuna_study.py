@@ -95,6 +95,10 @@ def make_storage(url: str, heartbeat: bool = True):
         except OSError as exc:  # /proc, read-only, no permission: one line, not a traceback
             raise FuzzynavError(f"storage {url}: cannot open the journal file "
                                 f"({exc.strerror or type(exc).__name__})") from None
+    if "://" not in url:  # a bare path: SQLAlchemy's "could not parse" says nothing useful
+        raise FuzzynavError(f"storage {url}: not a storage URL; for a journal file write "
+                            f"journal:{url}, for a database a URL such as "
+                            "sqlite:///study.db or postgresql://user@host/db")
     kw = {}
     if heartbeat:
         kw = dict(heartbeat_interval=10, grace_period=60,

@@ -57,7 +57,7 @@ def test_budget_sentences_find_overfitting_and_the_best_budget():
     assert "no budget after 100 improves" in over and "100 to 300, 300 to 1000" in over
     assert "overfits" in over
     still = sec.budget_sentences(_points([0.9, 0.8, 0.7, 0.6], [0.9, 0.85, 0.8, 0.7]))[0]
-    assert "no budget after 1000 improves" in still and "still helped" in still
+    assert "no budget after" not in still and "still helped" in still
 
 
 def test_budget_changes_under_the_tolerance_are_flat():
@@ -97,3 +97,39 @@ def test_best_of_first_n_is_what_a_budget_of_n_would_have_returned():
     assert [t.number for t in firsts] == [0, 1, 2]
     assert min(t.value for t in firsts) == 3.0
     assert best_of_first(study, None) is study
+
+
+def test_pooled_differences_pair_each_tuning_with_its_own_classical_filter():
+    # the fuzzy design is 0.05 below the classical filter in every tuning and seed, while
+    # both move together between tunings (+0.2): the pairs cancel the tuning effect
+    t0 = _scores({"fuzzy-a": {"s1": [0.70, 0.72, 0.71]},
+                  "vb-tuned": {"s1": [0.75, 0.77, 0.76]}})
+    t1 = _scores({"fuzzy-a": {"s1": [0.90, 0.92, 0.91]},
+                  "vb-tuned": {"s1": [0.95, 0.97, 0.96]}})
+    best, est = sec.pooled_differences({0: t0, 1: t1}, "s1", "fuzzy-a")
+    assert best == "vb-tuned" and est.n == 6
+    assert est.mean == pytest.approx(-0.05) and est.hi - est.lo < 1e-9
+    lines, wins = sec.pooled_lines({0: t0, 1: t1}, ["s1"], ["fuzzy-a"])
+    assert wins == {"fuzzy-a": 1} and "**win**" in lines[-1]
+
+
+def test_a_difference_that_flips_between_tunings_is_no_pooled_win():
+    # tuning 0: fuzzy 0.1 better on every seed; tuning 1: 0.1 worse -- per tuning one win
+    # and one loss, pooled over tunings a draw
+    t0 = _scores({"fuzzy-a": {"s1": [0.70, 0.71, 0.72]}, "vb-tuned": {"s1": [0.8, 0.81, 0.82]}})
+    t1 = _scores({"fuzzy-a": {"s1": [0.90, 0.91, 0.92]}, "vb-tuned": {"s1": [0.8, 0.81, 0.82]}})
+    _, est = sec.pooled_differences({0: t0, 1: t1}, "s1", "fuzzy-a")
+    assert est.lo < 0 < est.hi
+    assert sec.pooled_lines({0: t0, 1: t1}, ["s1"], ["fuzzy-a"])[1] == {"fuzzy-a": 0}
+
+
+def test_tuned_values_at_the_end_of_their_search_range_are_flagged():
+    from fuzzynav.tuning.baseline_config import SPACES, bound_hits
+
+    lo_b, hi_b, _ = SPACES["sage-husa-tuned"]["b"]
+    lo_c, hi_c, _ = SPACES["sage-husa-tuned"]["cap"]   # searched on the log scale
+    hits = bound_hits("sage-husa-tuned", {"b": lo_b, "floor": 0.5, "cap": hi_c * 0.995,
+                                          "extra": 1.0})
+    assert hits == {"b": "lower", "cap": "upper"}
+    # 1 % of the log range above the lower end of cap is not 1 % of its linear range
+    assert bound_hits("sage-husa-tuned", {"cap": lo_c * (hi_c / lo_c) ** 0.02}) == {}

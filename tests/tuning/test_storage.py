@@ -227,6 +227,15 @@ def test_an_unreachable_database_is_one_clear_error(tmp_path):
     assert "secret" not in str(err.value)
 
 
+def test_a_bare_path_as_storage_says_how_to_write_a_journal(tmp_path):
+    cfg = load_study_config(write_study(tmp_path))
+    bare = str(tmp_path / "study.journal")
+    with pytest.raises(FuzzynavError, match=f"storage {bare}: not a storage URL; for a "
+                                            f"journal file write journal:{bare}"):
+        open_study(cfg, storage_url=bare, create=True)
+    assert not (tmp_path / "study.journal").exists()
+
+
 @pytest.mark.parametrize("where, message", [
     ("dir", "is a directory; name a journal file"),
     ("/proc/fuzzynav-no/journal.log", "cannot open the journal file"),
