@@ -20,8 +20,9 @@ import os
 
 from fuzzynav.errors import InputFileError
 
-__all__ = ["BYTES_PER_IMU_SAMPLE", "BYTES_PER_BLOCK_SAMPLE", "BYTES_PER_EPOCH_COLUMN", "MAX_SPELLS", "DEFAULT_SHARE",
-           "ENV_VAR", "memory_limit", "human_bytes", "check_run_size"]
+__all__ = ["BYTES_PER_IMU_SAMPLE", "BYTES_PER_BLOCK_SAMPLE", "BYTES_PER_EPOCH_COLUMN",
+           "MAX_SPELLS", "DEFAULT_SHARE", "ENV_VAR", "memory_limit", "human_bytes",
+           "check_run_size"]
 
 #: bytes held per IMU sample of the whole run through simulation and filtering, beyond the
 #: generator's block (marginal tracemalloc peaks of runs longer than a block: paper003
