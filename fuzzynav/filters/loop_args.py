@@ -123,7 +123,7 @@ class Carry(NamedTuple):
     :class:`BankState`: the navigation state, the strapdown's previous increments, the
     sensor states, the attitude matrix, the propagation accumulators and every scratch
     array (some hold values between epochs, e.g. the last adaptation diagnostics), the
-    clock scalars and the counters (:data:`fuzzynav.filters.loop.CN_EVENT` ...).  Made by
+    clock scalars and the counters (``CN_EVENT`` ... in :mod:`fuzzynav.filters.loop`).  Made by
     :func:`new_carry`; the loop fills it on its first chunk and updates it in place."""
 
     nav: np.ndarray
