@@ -14,7 +14,8 @@ import pandas as pd
 from fuzzynav.errors import FuzzynavError, UnknownNameError
 from fuzzynav.filters.named import FilterContext, FilterSetup
 from fuzzynav.filters.runner import InitialState
-from fuzzynav.metrics import errors_vs_trajectory, improvement_ci, mean_ci, rms_metrics
+from fuzzynav.metrics import (StreamingRms, errors_vs_trajectory, improvement_ci, mean_ci,
+                              rms_metrics)
 from fuzzynav.metrics_rscale import usage_metrics
 from fuzzynav.nav import attitude, earth
 from fuzzynav.runpath import RunInputs, RunOutcome, check_outcomes, make_setup, run
@@ -94,9 +95,24 @@ class SimulatedSource(OnSimulatedLog):
         return RunInputs(self.log.imu, self.log.sensors if self.aided else {},
                          perturbed_initial_state(self.log, setup))
 
+    # the streaming options of fuzzynav run apply to a simulated log (its truth scores
+    # chunk by chunk)
+    SETTINGS = OnSimulatedLog.SETTINGS | {"output_rate", "chunk"}
+
     def score(self, result) -> dict:
         metrics = rms_metrics(errors_vs_trajectory(result, self.log.truth), self.t_start_s)
         # how much the run still uses its magnetometer (a study may penalise switching it off)
+        metrics.update(usage_metrics(result, self.log.sensors))
+        return metrics
+
+    def streaming_scorer(self) -> StreamingRms:
+        """A streaming form of :meth:`score`: fed each chunk of the result."""
+        return StreamingRms(self.t_start_s, self.log.truth)
+
+    def score_streamed(self, result, scorer: StreamingRms) -> dict:
+        """:meth:`score` of a run scored chunk by chunk: the accumulated error metrics and
+        the sensor-usage ones (from the event logs, which are kept whole)."""
+        metrics = scorer.metrics()
         metrics.update(usage_metrics(result, self.log.sensors))
         return metrics
 
@@ -121,14 +137,16 @@ def setup_for(log, filter_name: str, options=None) -> FilterSetup:
 
 
 def run_on_log(log, filter_name: str, options=None, t_start_s: float = 0.0,
-               setup: FilterSetup | None = None) -> RunOutcome:
+               setup: FilterSetup | None = None, **streaming) -> RunOutcome:
     """Run one named filter (or an explicit ``setup``) on a log and score it
-    (:func:`fuzzynav.runpath.run` on :func:`as_source`)."""
-    return run(as_source(log, t_start_s), filter_name, options, setup)
+    (:func:`fuzzynav.runpath.run` on :func:`as_source`; ``streaming``: its
+    ``chunk_samples`` and ``output_rate_hz``)."""
+    return run(as_source(log, t_start_s), filter_name, options, setup, **streaming)
 
 
 def monte_carlo(scenario, filters, seeds, options=None, cache_dir=None, t_start_s=0.0,
-                progress=False, refuse_diverged=False, seed_runs=None) -> pd.DataFrame:
+                progress=False, refuse_diverged=False, seed_runs=None,
+                streaming=None) -> pd.DataFrame:
     """Metrics of every filter on every seed, one row per (filter, seed).
 
     Parameters
@@ -154,14 +172,19 @@ def monte_carlo(scenario, filters, seeds, options=None, cache_dir=None, t_start_
         filters that are not navigation filters on a simulated log (the alignment's:
         :func:`fuzzynav.align.alignment_run.seed_runs`); ``options``, ``cache_dir``,
         ``t_start_s`` and ``refuse_diverged`` are then its own business and refused here.
+    streaming : dict, optional
+        ``chunk_samples`` and ``output_rate_hz`` of every navigation run
+        (:func:`run_on_log`).
     """
     outcomes = []
     if seed_runs is None:
         scn = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
-        seed_runs = _navigation_runs(scn, dict(options or {}), cache_dir, t_start_s, outcomes)
+        seed_runs = _navigation_runs(scn, dict(options or {}), cache_dir, t_start_s, outcomes,
+                                     dict(streaming or {}))
     else:
         given = [k for k, v in (("options", options), ("cache_dir", cache_dir),
-                                ("t_start_s", t_start_s), ("refuse_diverged", refuse_diverged))
+                                ("t_start_s", t_start_s), ("refuse_diverged", refuse_diverged),
+                                ("streaming", streaming))
                  if v]
         if given:  # not silently ignored: the runs of seed_runs take their own
             raise FuzzynavError(f"monte_carlo: {', '.join(given)} apply to navigation filters "
@@ -182,7 +205,7 @@ def monte_carlo(scenario, filters, seeds, options=None, cache_dir=None, t_start_
     return pd.DataFrame(rows)
 
 
-def _navigation_runs(scn, options, cache_dir, t_start_s, outcomes):
+def _navigation_runs(scn, options, cache_dir, t_start_s, outcomes, streaming):
     """``seed -> (filter -> metrics)`` of named navigation filters on ``scn``'s logs (each
     run's outcome appended to ``outcomes``)."""
     def of_seed(seed):
@@ -191,7 +214,8 @@ def _navigation_runs(scn, options, cache_dir, t_start_s, outcomes):
         def run_one(name):
             opts = {k: v for k, v in options.items() if not isinstance(v, dict)}
             opts.update(options.get(name, {}) if isinstance(options.get(name), dict) else {})
-            out = run_on_log(log, name, opts, t_start_s)  # NAME@FILE: resolved by the run
+            # NAME@FILE: resolved by the run
+            out = run_on_log(log, name, opts, t_start_s, **streaming)
             outcomes.append(out)
             return out.metrics
         return run_one

@@ -39,8 +39,8 @@ from fuzzynav.filters.named import FilterContext, FilterSetup, get_filter, parse
 from fuzzynav.filters.runner import InitialState, run_filter
 from fuzzynav.filters.sensor_states import with_sensor_states
 
-__all__ = ["RUN_SETTINGS", "RunInputs", "RunOutcome", "Source", "check_outcomes", "make_setup",
-           "nonfinite", "refuse_settings", "run"]
+__all__ = ["RUN_SETTINGS", "STREAMING_SETTINGS", "RunInputs", "RunOutcome", "Source",
+           "check_outcomes", "keep_every", "make_setup", "nonfinite", "refuse_settings", "run"]
 
 
 @dataclass(frozen=True)
@@ -157,7 +157,8 @@ def _from(data, t0: float):
 
 
 def run(source: Source, filter_spec: str, options=None,
-        setup: FilterSetup | None = None) -> RunOutcome:
+        setup: FilterSetup | None = None, chunk_samples: int | None = None,
+        output_rate_hz: float | None = None) -> RunOutcome:
     """Run one named filter (or an explicit ``setup``) on a source and score it.
 
     Parameters
@@ -170,18 +171,58 @@ def run(source: Source, filter_spec: str, options=None,
     setup : FilterSetup, optional
         A configuration made elsewhere (a study's candidate); its sensor states are the
         caller's.
+    chunk_samples : int, optional
+        Run the compiled loop over chunks of this many IMU samples, carrying its state
+        (:class:`~fuzzynav.filters.runner.FilterRun`: the same result to the last bit);
+        default one chunk.
+    output_rate_hz : float, optional
+        Keep the recorded solution at this rate only (``--output-rate``): it must divide
+        the filter's output rate (``config.out_rate_hz``).  The metrics are then
+        accumulated chunk by chunk at the filter's output rate (the source's
+        ``streaming_scorer()``, :class:`~fuzzynav.metrics.StreamingRms`, finished by its
+        ``score_streamed(result, scorer)``), so they are those of the undecimated run
+        up to the order of summation; a source without a ``scorer`` refuses it.
+
+    Raises
+    ------
+    FuzzynavError
+        An output rate that does not divide the filter's, or a source that cannot score
+        chunk by chunk.
     """
     setup = setup or make_setup(source, filter_spec, options)
     inp = source.inputs(setup)
     sensors = setup.sensors_for(inp.sensors)
     if inp.from_s is not None:
         sensors = {nm: _from(d, inp.from_s) for nm, d in sensors.items()}
-    res = run_filter(inp.imu, sensors, inp.init, inp.config or setup.config, setup.adapters,
-                     _merged(setup.sensor_options, inp.sensor_options))
-    metrics = source.score(res)
+    config = inp.config or setup.config
+    keep, scorer = 1, None
+    if output_rate_hz is not None:
+        keep = keep_every(config.out_rate_hz, output_rate_hz)
+        if not hasattr(source, "streaming_scorer"):
+            raise FuzzynavError(f"--output-rate: {source.KIND} score their whole result, "
+                                "so their output cannot be decimated")
+        scorer = source.streaming_scorer()
+    res = run_filter(inp.imu, sensors, inp.init, config, setup.adapters,
+                     _merged(setup.sensor_options, inp.sensor_options),
+                     chunk_samples=chunk_samples, keep_every=keep,
+                     on_chunk=None if scorer is None else scorer.add_result)
+    metrics = source.score(res) if scorer is None else source.score_streamed(res, scorer)
     metrics["completed"] = float(res.ok)
     return RunOutcome(filter_spec, source.name, int(source.seed), res, metrics,
                       nonfinite(source, metrics))
+
+
+def keep_every(filter_rate_hz: float, output_rate_hz: float) -> int:
+    """How many of the filter's recorded outputs (at ``filter_rate_hz``) make one kept at
+    ``output_rate_hz``; refused unless a whole number >= 1."""
+    ratio = float(filter_rate_hz) / float(output_rate_hz) if output_rate_hz > 0 else math.nan
+    keep = round(ratio) if math.isfinite(ratio) else 0
+    if keep < 1 or abs(ratio - keep) > 1e-9 * ratio:
+        raise FuzzynavError(f"--output-rate {output_rate_hz:g} Hz: must be the filter's "
+                            f"output rate {filter_rate_hz:g} Hz divided by a whole number "
+                            f"(e.g. {filter_rate_hz:g}, {filter_rate_hz / 2:g}, "
+                            f"{filter_rate_hz / 10:g} Hz)")
+    return int(keep)
 
 
 def nonfinite(source: Source, metrics: dict) -> tuple:
@@ -261,4 +302,10 @@ RUN_SETTINGS = {
     "mounting": "mounting file of the recording (IMU to body, lever arm)",
     "imu_delay": "IMU sample-to-logger delay [s]",
     "span": "stretch of the recording used [s]",
+    "output_rate": "rate of the kept recorded solution [Hz] (metrics streamed)",
+    "chunk": "IMU seconds per chunk of the compiled loop",
 }
+
+#: the run settings of a streaming run (:func:`run`'s ``output_rate_hz`` and
+#: ``chunk_samples``): only sources that can score chunk by chunk take them
+STREAMING_SETTINGS = frozenset({"output_rate", "chunk"})

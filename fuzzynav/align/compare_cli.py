@@ -102,7 +102,8 @@ def run_with_alignment(args) -> int:
     from fuzzynav.sim.sensor_log import simulate
     from fuzzynav.sim.scenario import load_scenario
 
-    _refuse(args, ("plot", "--plot"), ("json", "--json"), ("t_start", "--t-start"))
+    _refuse(args, ("plot", "--plot"), ("json", "--json"), ("t_start", "--t-start"),
+            ("output_rate", "--output-rate"), ("chunk", "--chunk"))
     scn = load_scenario(args.scenario)
     seeds = list(range(args.seed, args.seed + args.mc))
     align, rules = parse_align_spec(args.align)

@@ -26,6 +26,7 @@ def register(sub) -> None:
                         "(align-kf, align-fuzzy, ...; align-fuzzy@FILE with its own rule "
                         "file) and start the navigation from it")
     add_common_arguments(p)
+    add_streaming_arguments(p)
     add_recording_arguments(p)
     p.set_defaults(func=_cmd_run)
     p = sub.add_parser("compare", help="compare filters on a scenario (the papers' table layout)")
@@ -57,6 +58,43 @@ def add_recording_arguments(p) -> None:
     except ImportError:  # pragma: no cover - real-data support not installed
         return
     add_arguments(p)
+
+
+#: IMU seconds per chunk of a run with ``--output-rate`` and no ``--chunk``: a few minutes,
+#: so a chunk's output arrays stay small whatever the run's length
+DEFAULT_CHUNK_S = 300.0
+
+
+def add_streaming_arguments(p) -> None:
+    """``--output-rate`` and ``--chunk`` of ``fuzzynav run`` on a simulated scenario."""
+    g = p.add_argument_group("long runs (simulated scenarios)")
+    g.add_argument("--output-rate", type=float, metavar="HZ",
+                   help="keep the filter's recorded solution at this rate only (its output "
+                        "rate, 10 Hz by default, divided by a whole number: 5, 2, 1, 0.1 ...); the "
+                        "metrics are then accumulated chunk by chunk at the full output rate "
+                        "(running sums for the RMS, exact maxima), equal to a whole-run "
+                        "report up to rounding (a few ulps). Default: keep every output")
+    g.add_argument("--chunk", type=float, metavar="S",
+                   help="feed the filter its IMU in chunks of S seconds, carrying its whole "
+                        "state across: the same result to the last bit, with the recorded "
+                        "output held one chunk at a time (default: one chunk, or "
+                        f"{DEFAULT_CHUNK_S:g} s with --output-rate)")
+
+
+def streaming_options(args, imu_rate_hz: float) -> dict:
+    """``run``'s ``chunk_samples`` / ``output_rate_hz`` from ``--chunk`` / ``--output-rate``
+    (empty when neither is given); refuses a non-positive or non-finite value."""
+    rate, chunk = getattr(args, "output_rate", None), getattr(args, "chunk", None)
+    out = {}
+    for flag, value in (("--output-rate", rate), ("--chunk", chunk)):
+        if value is not None and not (0.0 < value < float("inf")):
+            raise FuzzynavError(f"{flag} must be a positive number, got {value:g}")
+    if rate is not None:
+        out["output_rate_hz"] = float(rate)
+        chunk = DEFAULT_CHUNK_S if chunk is None else chunk
+    if chunk is not None:
+        out["chunk_samples"] = max(1, int(round(chunk * imu_rate_hz)))
+    return out
 
 
 def add_common_arguments(p) -> None:
@@ -213,7 +251,8 @@ def run_scenario_filters(args, filters, baseline=None, claims=None, claim_labels
     seeds = list(range(args.seed, args.seed + args.mc))
     # a diverged run: no table at all, exit 3
     df = monte_carlo(scn, filters, seeds, filter_options(args), args.cache, args.t_start,
-                     progress=not args.json and args.mc > 1, refuse_diverged=True)
+                     progress=not args.json and args.mc > 1, refuse_diverged=True,
+                     streaming=streaming_options(args, scn.imu.rate_hz))
     if args.json:
         print(json.dumps(_json_summary(df, scn, filters, seeds), indent=2, allow_nan=False))
     else:

@@ -30,7 +30,8 @@ from fuzzynav.filters.feedback import bias_totals, feedback
 from fuzzynav.filters.layout import AUX_FORCE, AUX_RATE, AUX_XS
 # the argument bundles, named here too: callers build them as loop.Imu(...), ...
 from fuzzynav.filters.loop_args import (  # noqa: F401
-    Bank, BankState, EventOutputs, Events, Imu, Model, Outputs, Sensors, Settings, Start)
+    Bank, BankState, Carry, EventOutputs, Events, Imu, Model, Outputs, Sensors, Settings, Start,
+    new_carry)
 from fuzzynav.filters.record import record_output
 from fuzzynav.nav.state_layout import PREV_SIZE
 from fuzzynav.nav.strapdown import init_prev, mech_step, quat_to_dcm_into
@@ -42,6 +43,12 @@ NO_ADAPTER = -1
 EV_PENDING, EV_ACCEPTED, EV_GATED, EV_EMPTY, EV_BAD_S, EV_BEFORE_START = 0, 1, 2, 3, 4, 5
 # loop status
 ST_OK, ST_COVARIANCE = 0, 1
+# the scalars a run carries from chunk to chunk (:class:`Carry`): ``clock`` (float) holds
+# the covariance propagation interval accumulated so far and the time of the last fusion;
+# ``count`` (int) the next event, samples since the last output, the fusion state, the
+# samples done before this chunk, the first output row of this chunk's ``out``, started
+CL_TAU, CL_T_FUSED = 0, 1
+CN_EVENT, CN_SINCE_OUT, CN_FSTATE, CN_K0, CN_ROW0, CN_STARTED = 0, 1, 2, 3, 4, 5
 
 
 def _make_loop(BANK: bool, ST: bool):
@@ -56,16 +63,21 @@ def _make_loop(BANK: bool, ST: bool):
 
     @nb.njit(cache=True, error_model="numpy")
     def run_loop(imu, start, model, events, sensors, bank, state, meas_fns, adapt_fns, settings,
-                 out, evout):
-        """Run the filter bank over all IMU samples; returns ``(status, samples_done)``.
+                 out, evout, chunk):
+        """Run the filter bank over one chunk of IMU samples; returns ``(status,
+        samples_done)``, counted from the run's first sample.
 
         Arguments are the named tuples above (:class:`Imu`, :class:`Start`, :class:`Model`,
         :class:`Events`, :class:`Sensors`, :class:`Bank`, :class:`BankState`,
-        :class:`Settings`, :class:`Outputs`, :class:`EventOutputs`) and the kernel tuples of the
-        measurement models and adaptation policies.  ``imu.time_s`` has N+1 entries (increment
-        k spans ``time_s[k]..time_s[k+1]``).  Outputs are written into the preallocated ``out``
-        arrays (every ``out_stride`` samples, starting with the initial state) and ``evout``
-        (one row per event); ``sensors.ast`` (adapter states) and ``state`` are updated in place.
+        :class:`Settings`, :class:`Outputs`, :class:`EventOutputs`, :class:`Carry`) and the
+        kernel tuples of the measurement models and adaptation policies.  ``imu.time_s`` has
+        N+1 entries (increment k spans ``time_s[k]..time_s[k+1]``); the next chunk starts at
+        this one's last time.  Outputs are written into the preallocated ``out`` arrays
+        (every ``out_stride`` samples of the run, starting with the initial state; row 0 of
+        ``out`` is the run's row ``chunk.count[CN_ROW0]``) and ``evout`` (one row per event
+        of the run); ``sensors.ast`` (adapter states), ``state`` and ``chunk`` (everything
+        else the loop keeps between samples) are updated in place, so calling the loop again
+        with the next chunk continues the run exactly: a run in one chunk is the special case.
         """
         # plain local names: the loop body reads as the algorithm, and numba sees bare arrays
         dth, dv, time_s = imu
@@ -88,58 +100,40 @@ def _make_loop(BANK: bool, ST: bool):
         carry = BANK and NL > 1 and (reset == 0 or period > 0.0)
         # only a policy may scale the predicted covariance by the noise since the last update
         keep_q = np.any(s_adapt != NO_ADAPTER)
-        nav = nav0.copy()
-        prev = np.zeros(PREV_SIZE)
-        init_prev(nav, prev)
-        xs = xs0.copy()
-        C = np.zeros((3, 3))
-        quat_to_dcm_into(nav, C)
-        sumC = np.zeros((3, 3))
-        sumf = np.zeros(3)
-        dv_sf = np.zeros(3)
-        Cm = np.zeros((3, 3))
-        fm = np.zeros(3)
-        F = np.zeros((n, n))
-        Phi = np.zeros((n, n))
-        Qd = np.zeros((n, n))
-        Qacc3 = np.zeros((NL, n, n))
-        Qc, work, AP = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
-        H, z, R = np.zeros((M, n)), np.zeros(M), np.zeros(M)
-        chan = np.zeros(M, dtype=np.int64)
-        PHt = np.zeros((n, M))
-        APHt = np.zeros((n, M))
-        K = np.zeros((n, M))
-        HPH, S, L = np.zeros((M, M)), np.zeros((M, M)), np.zeros((M, M))
-        dx = np.zeros(n)
-        wv = np.zeros(max(n, M))
-        out_a = np.zeros(2 + M)
-        diag = np.zeros(ev_diag.shape[1])
-        ctx = np.zeros(context.size(M, ev_data.shape[1]))  # what a policy sees besides r
-        ctx[context.CTX_M] = M
-        aux = np.zeros(AUX_XS + xs.size)  # rate, force, then the sensor states (for the models)
-        bg = np.zeros(3)
-        ba = np.zeros(3)
-        dth_c = np.zeros(3)
-        dv_c = np.zeros(3)
-        fwork = fusion_work(n)
-        Pf = np.zeros((n, n))
-        xf = np.zeros(n)
-        xphi = np.zeros(n)
-        fstate = SHARED  # every local starts from P0 / beta_i
-        t_fused = -math.inf
-        tau = 0.0
-        e = 0
-        # bias totals change only with xs (feedback, Gauss-Markov decay): formed then, not
-        # per sample
-        bias_totals(xs, blk_start, blk_kind, bg, ba)
-        since_out = 0  # samples since the last recorded output
-        while e < E and ev_t[e] < time_s[0] - 1e-9:
-            ev_flag[e] = EV_BEFORE_START
-            e += 1
-        record_output(0, time_s[0], nav, xs, state,
-                      master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork) if BANK and NL > 1
-                      else P3[0],
-                      beta, out, em)
+        # everything the loop keeps between samples lives in ``chunk`` (:class:`Carry`), so a
+        # run over consecutive chunks of the IMU is the same arithmetic as one over the whole
+        (nav, prev, xs, C, sumC, sumf, dv_sf, Cm, fm, F, Phi, Qd, Qacc3, Qc, work, AP, H, z, R,
+         chan, PHt, APHt, K, HPH, S, L, dx, wv, out_a, diag, ctx, aux, bg, ba, dth_c, dv_c,
+         fwork, Pf, xf, xphi, clock, count) = chunk
+        k0, row0 = count[CN_K0], count[CN_ROW0]
+        if count[CN_STARTED] == 0:  # the run's first chunk: its start
+            count[CN_STARTED] = 1
+            nav[:] = nav0
+            init_prev(nav, prev)
+            xs[:] = xs0
+            quat_to_dcm_into(nav, C)
+            ctx[context.CTX_M] = M
+            count[CN_FSTATE] = SHARED  # every local starts from P0 / beta_i
+            clock[CL_T_FUSED] = -math.inf
+            clock[CL_TAU] = 0.0
+            # bias totals change only with xs (feedback, Gauss-Markov decay): formed then,
+            # not per sample
+            bias_totals(xs, blk_start, blk_kind, bg, ba)
+            count[CN_SINCE_OUT] = 0  # samples since the last recorded output
+            e = 0
+            while e < E and ev_t[e] < time_s[0] - 1e-9:
+                ev_flag[e] = EV_BEFORE_START
+                e += 1
+            count[CN_EVENT] = e
+            record_output(0 - row0, time_s[0], nav, xs, state,
+                          master_covariance(P3, X, beta, Pg, SHARED, Pf, xf, fwork)
+                          if BANK and NL > 1 else P3[0],
+                          beta, out, em)
+        fstate = count[CN_FSTATE]
+        t_fused = clock[CL_T_FUSED]
+        tau = clock[CL_TAU]
+        e = count[CN_EVENT]
+        since_out = count[CN_SINCE_OUT]
         for k in range(N):
             dt = time_s[k + 1] - time_s[k]
             for i in range(3):
@@ -248,7 +242,8 @@ def _make_loop(BANK: bool, ST: bool):
                 quat_to_dcm_into(nav, C)
                 bias_totals(xs, blk_start, blk_kind, bg, ba)
                 if not ok:
-                    return ST_COVARIANCE, k + 1
+                    _park(chunk, fstate, t_fused, tau, e, since_out, k0 + k + 1)
+                    return ST_COVARIANCE, k0 + k + 1
             if tau >= max_prop_dt - 1e-12:
                 propagate_locals(state, Qacc3, keep_q, carry, xs, nav, sumC, sumf, tau, Cm, fm, F,
                                  Phi, Qd, work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
@@ -258,12 +253,24 @@ def _make_loop(BANK: bool, ST: bool):
             since_out += 1
             if since_out == out_stride:
                 since_out = 0
-                record_output((k + 1) // out_stride, t, nav, xs, state,
+                record_output((k0 + k + 1) // out_stride - row0, t, nav, xs, state,
                               master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork)
                               if BANK and NL > 1 else P3[0], beta, out, em)
-        return ST_OK, N
+        _park(chunk, fstate, t_fused, tau, e, since_out, k0 + N)
+        return ST_OK, k0 + N
 
     return memoise_table_types(run_loop)  # the kernel tables: typed once per tuple
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _park(chunk, fstate, t_fused, tau, e, since_out, done):
+    """Store the loop's scalars in ``chunk`` for the next chunk (``done`` samples so far)."""
+    chunk.clock[CL_TAU] = tau
+    chunk.clock[CL_T_FUSED] = t_fused
+    chunk.count[CN_EVENT] = e
+    chunk.count[CN_SINCE_OUT] = since_out
+    chunk.count[CN_FSTATE] = fstate
+    chunk.count[CN_K0] = done
 
 
 #: the plain loop (a single filter, phi model: the EKF and the policies) and the full one;

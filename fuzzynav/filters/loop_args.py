@@ -116,3 +116,76 @@ class EventOutputs(NamedTuple):
     nis: np.ndarray
     flag: np.ndarray
     diag: np.ndarray
+
+
+class Carry(NamedTuple):
+    """Everything the loop keeps from one IMU sample to the next that is not in
+    :class:`BankState`: the navigation state, the strapdown's previous increments, the
+    sensor states, the attitude matrix, the propagation accumulators and every scratch
+    array (some hold values between epochs, e.g. the last adaptation diagnostics), the
+    clock scalars and the counters (``CN_EVENT`` ... in :mod:`fuzzynav.filters.loop`).  Made by
+    :func:`new_carry`; the loop fills it on its first chunk and updates it in place."""
+
+    nav: np.ndarray
+    prev: np.ndarray
+    xs: np.ndarray
+    C: np.ndarray
+    sumC: np.ndarray
+    sumf: np.ndarray
+    dv_sf: np.ndarray
+    Cm: np.ndarray
+    fm: np.ndarray
+    F: np.ndarray
+    Phi: np.ndarray
+    Qd: np.ndarray
+    Qacc3: np.ndarray
+    Qc: np.ndarray
+    work: np.ndarray
+    AP: np.ndarray
+    H: np.ndarray
+    z: np.ndarray
+    R: np.ndarray
+    chan: np.ndarray
+    PHt: np.ndarray
+    APHt: np.ndarray
+    K: np.ndarray
+    HPH: np.ndarray
+    S: np.ndarray
+    L: np.ndarray
+    dx: np.ndarray
+    wv: np.ndarray
+    out_a: np.ndarray
+    diag: np.ndarray
+    ctx: np.ndarray
+    aux: np.ndarray
+    bg: np.ndarray
+    ba: np.ndarray
+    dth_c: np.ndarray
+    dv_c: np.ndarray
+    fwork: tuple
+    Pf: np.ndarray
+    xf: np.ndarray
+    xphi: np.ndarray
+    clock: np.ndarray
+    count: np.ndarray
+
+
+def new_carry(n: int, n_local: int, M: int, n_diag: int, ctx_size: int) -> Carry:
+    """A fresh :class:`Carry` for ``n`` error states, ``n_local`` locals, ``M`` measurement
+    rows at most, ``n_diag`` adaptation diagnostics and a policy context of ``ctx_size``
+    (every array zero: the loop's first chunk sets the start)."""
+    from fuzzynav.filters.bank_fusion import fusion_work
+    from fuzzynav.filters.layout import AUX_XS, N_CORE
+    from fuzzynav.nav.state_layout import NAV_SIZE, PREV_SIZE
+
+    z = np.zeros
+    return Carry(
+        nav=z(NAV_SIZE), prev=z(PREV_SIZE), xs=z(n - N_CORE), C=z((3, 3)), sumC=z((3, 3)),
+        sumf=z(3), dv_sf=z(3), Cm=z((3, 3)), fm=z(3), F=z((n, n)), Phi=z((n, n)),
+        Qd=z((n, n)), Qacc3=z((n_local, n, n)), Qc=z((n, n)), work=z((n, n)), AP=z((n, n)),
+        H=z((M, n)), z=z(M), R=z(M), chan=z(M, dtype=np.int64), PHt=z((n, M)),
+        APHt=z((n, M)), K=z((n, M)), HPH=z((M, M)), S=z((M, M)), L=z((M, M)), dx=z(n),
+        wv=z(max(n, M)), out_a=z(2 + M), diag=z(n_diag), ctx=z(ctx_size),
+        aux=z(AUX_XS + n - N_CORE), bg=z(3), ba=z(3), dth_c=z(3), dv_c=z(3),
+        fwork=fusion_work(n), Pf=z((n, n)), xf=z(n), xphi=z(n), clock=z(2),
+        count=z(6, dtype=np.int64))

@@ -1,6 +1,7 @@
 """Run a filter: pack Python objects into arrays, call the compiled loop, bundle the result."""
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -8,7 +9,7 @@ from scipy.stats import chi2
 
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.filters import adaptation, measurements
-from fuzzynav.filters.adaptation import N_DIAG, NoAdaptation
+from fuzzynav.filters.adaptation import N_DIAG, NoAdaptation, context
 from fuzzynav.filters.bank_beta import share_control
 from fuzzynav.filters.config import FilterConfig
 from fuzzynav.filters.error_st import EM_ST, error_model_code, st_covariance
@@ -106,7 +107,8 @@ def _sensor_tables(sensors, adapters, options, gate_probability):
 
 
 def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterConfig(),
-               adapters=None, sensor_options=None) -> FilterResult:
+               adapters=None, sensor_options=None, chunk_samples: int | None = None,
+               keep_every: int = 1, on_chunk=None) -> FilterResult:
     """Run the closed-loop error-state filter.
 
     Parameters
@@ -123,43 +125,152 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
         Adaptation policy per sensor (default: none, the plain EKF).
     sensor_options : mapping name -> dict, optional
         Options for the measurement models (e.g. ``{"gnss": {"use_velocity": False}}``).
+    chunk_samples : int, optional
+        Run the loop over consecutive chunks of this many IMU samples (:class:`FilterRun`;
+        the same result to the last bit); default one chunk, the whole run.
+    keep_every : int
+        Keep every ``keep_every``-th recorded output (:class:`FilterRun`).
+    on_chunk : callable, optional
+        Called with each chunk's :class:`FilterResult` before it is decimated.
 
     Returns
     -------
     FilterResult
     """
     time_s, dth, dv, dt_nom = _imu_arrays(imu)
-    tb = _sensor_tables(dict(sensors), dict(adapters or {}), dict(sensor_options or {}),
-                        config.gate_probability)
-    blk_start, blk_kind, blk_inv_tau = config.model.block_arrays()
-    n = config.model.n_states
-    em = error_model_code(config.error_model)
-    bank, state = _bank(config, tb["names"], init, em)
-    stride = max(1, int(round(1.0 / (config.out_rate_hz * dt_nom))))
-    K, NL = dth.shape[0] // stride + 1, bank.beta.size
-    E, M = tb["ev_t"].size, tb["M"]
-    # the loop writes whole output rows, in order; the time column (NaN until written) tells
-    # how many it wrote, so the other arrays need no filling
-    KL = K if NL > 1 else 1  # a bank of one records no local outputs (record.record_output)
-    out = dict(t=np.full(K, np.nan), nav=np.empty((K, NAV_SIZE)), xs=np.empty((K, n - N_CORE)),
-               sig=np.empty((K, n)), xl=np.empty((KL, NL, n)), sigl=np.empty((KL, NL, n)),
-               beta=np.empty((KL, NL)))
-    ev = dict(r=np.full((E, M), np.nan), S=np.full((E, M), np.nan), nis=np.full(E, np.nan),
-              flag=np.zeros(E, np.int64), diag=np.full((E, N_DIAG), np.nan))
-    nav0 = strapdown.make_nav(init.lla, init.vel_n, init.q_bn)
-    adapt_fns, _ = adaptation.kernel_table(used=tb["s_adapt"])  # the used policies only
-    # the loop without the bank's / the ST model's code when the run has none (cold start)
-    run_loop = loop.loop_for(NL, em, bank.ctl.on)
-    status, done = run_loop(
-        loop.Imu(dth, dv, time_s), loop.Start(nav0, np.zeros(n - N_CORE)),
-        loop.Model(blk_start, blk_kind, blk_inv_tau, em),
-        loop.Events(tb["ev_t"], tb["ev_s"], tb["ev_data"]),
-        loop.Sensors(tb["s_meas"], tb["s_mpar"], tb["s_adapt"], tb["afp"], tb["afp_off"],
-                     tb["aip"], tb["aip_off"], tb["ast"], tb["ast_off"], tb["gate"]),
-        bank, state, tb["meas_fns"], adapt_fns,
-        loop.Settings(float(config.max_prop_dt_s), int(stride)),
-        loop.Outputs(**out), loop.EventOutputs(**ev))
-    return _bundle(out, ev, tb, config, status, done, time_s, state, bank.beta)
+    fr = FilterRun(sensors, init, config, adapters, sensor_options, dt_nom, keep_every,
+                   on_chunk)
+    N = dth.shape[0]
+    step = N if chunk_samples is None else int(chunk_samples)
+    if step < 1 and N:
+        raise FuzzynavError(f"chunk_samples must be a positive number of IMU samples, "
+                            f"got {chunk_samples}")
+    for a in range(0, max(N, 1), max(step, 1)):
+        b = min(a + step, N)
+        fr.feed_arrays(time_s[a:b + 1], dth[a:b], dv[a:b])
+    return fr.result()
+
+
+class FilterRun:
+    """A run of the compiled filter fed its IMU in consecutive chunks.
+
+    Everything the loop keeps between samples (navigation state, error state and
+    covariance of every local, adaptation windows and policy states, share-controller
+    rings, propagation accumulators, counters: :class:`~fuzzynav.filters.loop.Carry`) is
+    carried from one chunk to the next, so feeding a run in chunks of any size gives the
+    result of one call over the whole run, to the last bit (:func:`run_filter` is the
+    one-chunk case).  The measurement streams are held whole (they are epochs, not IMU
+    samples); the recorded outputs of each chunk are handed to ``on_chunk`` and kept
+    decimated by ``keep_every``, so memory is bounded by the chunk, the streams and the
+    kept outputs.
+
+    Parameters
+    ----------
+    sensors, init, config, adapters, sensor_options
+        As :func:`run_filter`.
+    dt_nom_s : float
+        Nominal IMU interval [s]; sets the output stride (``config.out_rate_hz``).
+    keep_every : int
+        Keep recorded output rows ``0, keep_every, 2 keep_every, ...`` of the run.
+    on_chunk : callable, optional
+        Called with a :class:`FilterResult` of each chunk's recorded outputs (every one,
+        before decimation; no events) — e.g. a streaming metric accumulator.
+    """
+
+    def __init__(self, sensors, init: InitialState, config: FilterConfig = FilterConfig(),
+                 adapters=None, sensor_options=None, dt_nom_s: float = 0.01,
+                 keep_every: int = 1, on_chunk=None):
+        if int(keep_every) != keep_every or keep_every < 1:
+            raise FuzzynavError(f"keep_every must be a positive integer, got {keep_every}")
+        self.config, self.keep_every, self.on_chunk = config, int(keep_every), on_chunk
+        self.tb = tb = _sensor_tables(dict(sensors), dict(adapters or {}),
+                                      dict(sensor_options or {}), config.gate_probability)
+        blk_start, blk_kind, blk_inv_tau = config.model.block_arrays()
+        self.n = n = config.model.n_states
+        self.em = em = error_model_code(config.error_model)
+        self.bank, self.state = _bank(config, tb["names"], init, em)
+        self.stride = max(1, int(round(1.0 / (config.out_rate_hz * dt_nom_s))))
+        NL, E, M = self.bank.beta.size, tb["ev_t"].size, tb["M"]
+        self.ev = dict(r=np.full((E, M), np.nan), S=np.full((E, M), np.nan),
+                       nis=np.full(E, np.nan), flag=np.zeros(E, np.int64),
+                       diag=np.full((E, N_DIAG), np.nan))
+        self.start = loop.Start(strapdown.make_nav(init.lla, init.vel_n, init.q_bn),
+                                np.zeros(n - N_CORE))
+        self.model = loop.Model(blk_start, blk_kind, blk_inv_tau, em)
+        self.events = loop.Events(tb["ev_t"], tb["ev_s"], tb["ev_data"])
+        self.sens = loop.Sensors(tb["s_meas"], tb["s_mpar"], tb["s_adapt"], tb["afp"],
+                                 tb["afp_off"], tb["aip"], tb["aip_off"], tb["ast"],
+                                 tb["ast_off"], tb["gate"])
+        self.adapt_fns, _ = adaptation.kernel_table(used=tb["s_adapt"])  # the used ones only
+        # the loop without the bank's / the ST model's code when the run has none (cold start)
+        self.run_loop = loop.loop_for(NL, em, self.bank.ctl.on)
+        self.settings = loop.Settings(float(config.max_prop_dt_s), int(self.stride))
+        self.carry = loop.new_carry(n, NL, M, N_DIAG,
+                                    context.size(M, tb["ev_data"].shape[1]))
+        self.status, self.stop_t, self.t_end = loop.ST_OK, None, None
+        self.parts = []
+
+    def feed(self, imu) -> None:
+        """Run the next chunk: an object with ``time_s`` (N+1,), ``dtheta_b``, ``dv_b``
+        (N, 3), starting at the previous chunk's last time."""
+        time_s, dth, dv, _ = _imu_arrays(imu)
+        self.feed_arrays(time_s, dth, dv)
+
+    def feed_arrays(self, time_s, dth, dv) -> None:
+        """:meth:`feed` with checked, contiguous float arrays."""
+        if self.t_end is not None and time_s[0] != self.t_end:
+            raise FuzzynavError(f"IMU chunk starts at t = {time_s[0]!r} s, not at the previous "
+                                f"chunk's last sample time {self.t_end!r} s")
+        self.t_end = time_s[-1]
+        if self.status != loop.ST_OK:  # the run stopped: later chunks record nothing
+            return
+        count = self.carry.count
+        k0, N, first = int(count[loop.CN_K0]), dth.shape[0], count[loop.CN_STARTED] == 0
+        row0 = 0 if first else k0 // self.stride + 1
+        rows = (k0 + N) // self.stride - row0 + 1
+        count[loop.CN_ROW0] = row0
+        NL = self.bank.beta.size
+        KL = rows if NL > 1 else 1  # a bank of one records no local outputs
+        n = self.n
+        out = dict(t=np.full(rows, np.nan), nav=np.empty((rows, NAV_SIZE)),
+                   xs=np.empty((rows, n - N_CORE)), sig=np.empty((rows, n)),
+                   xl=np.empty((KL, NL, n)), sigl=np.empty((KL, NL, n)),
+                   beta=np.empty((KL, NL)))
+        status, done = self.run_loop(
+            loop.Imu(dth, dv, time_s), self.start, self.model, self.events, self.sens,
+            self.bank, self.state, self.tb["meas_fns"], self.adapt_fns, self.settings,
+            loop.Outputs(**out), loop.EventOutputs(**self.ev), self.carry)
+        if status != loop.ST_OK:
+            self.status, self.stop_t = status, time_s[done - k0]
+        # rows are written in order from the first: the written ones are a prefix
+        kept = int(np.count_nonzero(np.isfinite(out["t"])))
+        if kept < rows:
+            per_row = _PER_ROW + (_PER_LOCAL if NL > 1 else ())
+            out = {k: (v[:kept] if k in per_row else v) for k, v in out.items()}
+        if self.on_chunk is not None:
+            self.on_chunk(_solution(out, self.config, self.state, self.bank.beta))
+        if self.keep_every > 1:
+            sel = np.flatnonzero((row0 + np.arange(kept)) % self.keep_every == 0)
+            per_row = _PER_ROW + (_PER_LOCAL if NL > 1 else ())
+            out = {k: (v.take(sel, 0) if k in per_row else v) for k, v in out.items()}
+        self.parts.append(out)
+
+    def result(self) -> FilterResult:
+        """The run's :class:`FilterResult`: the kept outputs of every chunk and the events."""
+        if len(self.parts) == 1:
+            out = self.parts[0]
+        else:
+            out = {k: np.concatenate([p[k] for p in self.parts]) for k in self.parts[0]}
+        msg = "ok" if self.status == loop.ST_OK else (
+            f"stopped at t = {self.stop_t:.2f} s: covariance lost positive definiteness")
+        return dataclasses.replace(_solution(out, self.config, self.state, self.bank.beta),
+                                   events=_events(self.ev, self.tb), status=msg)
+
+
+#: the output arrays with one row per recorded output whatever the bank, and those of a
+#: bank of several locals only (a bank of one leaves them placeholders)
+_PER_ROW = ("t", "nav", "xs", "sig")
+_PER_LOCAL = ("xl", "sigl", "beta")
 
 
 def _adapter_ids(bounds) -> np.ndarray:
@@ -194,10 +305,8 @@ def _bank(config: FilterConfig, names, init: InitialState, em: int):
     return loop.Bank(local, b.copy(), int(reset), period, ctl), state
 
 
-def _bundle(out, ev, tb, config, status, done, time_s, state, beta) -> FilterResult:
-    # rows are written in order from the first: the written ones are a prefix, kept as views
-    kept = int(np.count_nonzero(np.isfinite(out["t"])))
-    keep = slice(0, kept)
+def _events(ev, tb) -> dict:
+    """The per-sensor :class:`EventLog` of the run's event arrays."""
     events = {}
     for i, (nm, mdl, bd) in enumerate(zip(tb["names"], tb["models"], tb["bounds"])):
         # an index array: take() gathers the rows several times faster than a boolean mask
@@ -207,15 +316,17 @@ def _bundle(out, ev, tb, config, status, done, time_s, state, beta) -> FilterRes
                               flag=ev["flag"].take(sel),
                               diag=ev["diag"][:, :len(bd.diag_names)].take(sel, 0),
                               diag_names=bd.diag_names, channels=mdl.channels)
-    nav = out["nav"][keep]
-    msg = "ok" if status == loop.ST_OK else (
-        f"stopped at t = {time_s[done]:.2f} s: covariance lost positive definiteness")
+    return events
+
+
+def _solution(out, config, state, beta) -> FilterResult:
+    """A :class:`FilterResult` of recorded output rows ``out`` (no events)."""
+    nav, kept = out["nav"], out["t"].shape[0]
     layout = config.model.layout
-    return FilterResult(time_s=out["t"][keep], lla=nav[:, LLA_SLICE], vel_n=nav[:, VEL_SLICE],
-                        q_bn=nav[:, Q_SLICE], sensor_states=out["xs"][keep],
-                        sigma=out["sig"][keep], state_labels=layout.labels(), events=events,
-                        status=msg, layout=layout,
-                        locals=_locals(out, keep, kept, state, beta))
+    return FilterResult(time_s=out["t"], lla=nav[:, LLA_SLICE], vel_n=nav[:, VEL_SLICE],
+                        q_bn=nav[:, Q_SLICE], sensor_states=out["xs"], sigma=out["sig"],
+                        state_labels=layout.labels(), layout=layout,
+                        locals=_locals(out, slice(None), kept, state, beta))
 
 
 def _locals(out, keep, kept, state, beta) -> LocalStates:

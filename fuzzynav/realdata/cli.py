@@ -56,7 +56,8 @@ def add_arguments(p) -> None:
 #: option dest -> flag of the run settings (:data:`fuzzynav.runpath.RUN_SETTINGS`) a source
 #: may refuse
 _FLAGS = {**{d: "--" + d.replace("_", "-") for d in _SETTINGS}, "imu_delay": "--imu-delay",
-          "span": "--span", "mounting": "--mounting", "t_start": "--t-start", "mc": "--mc"}
+          "span": "--span", "mounting": "--mounting", "t_start": "--t-start", "mc": "--mc",
+          "output_rate": "--output-rate", "chunk": "--chunk"}
 
 
 def given_settings(args) -> dict:

@@ -20,7 +20,7 @@ from fuzzynav.filters.named import FilterContext
 from fuzzynav.filters.runner import InitialState
 from fuzzynav.nav import attitude, earth
 from fuzzynav.realdata.mems import CONSUMER_MEMS, MemsModel
-from fuzzynav.runpath import RUN_SETTINGS, RunInputs
+from fuzzynav.runpath import RUN_SETTINGS, STREAMING_SETTINGS, RunInputs
 from fuzzynav.realdata import coarse_align
 from fuzzynav.sim.imu import ImuData
 
@@ -116,10 +116,12 @@ class GnssSource:
     needed: Callable
     use_velocity: bool = True
 
-    # every run setting applies: the validation protocol degrades what the receiver logged
-    SETTINGS = frozenset(RUN_SETTINGS)
+    # every run setting applies (the validation protocol degrades what the receiver logged)
+    # but the streaming ones: a recording is scored against its reference whole
+    SETTINGS = frozenset(RUN_SETTINGS) - STREAMING_SETTINGS
     KIND = "rtklib recordings"
-    SETTINGS_NOTE = ""
+    SETTINGS_NOTE = "they are scored against the reference in one piece; --output-rate " \
+                    "and --chunk are for simulated scenarios"
 
     def context(self, options=None) -> FilterContext:
         return self.make_context(options)

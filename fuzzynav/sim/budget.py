@@ -1,8 +1,10 @@
 """Memory budget of a simulated run: refuse a scenario that cannot fit before allocating it.
 
-A run holds, per IMU sample, the truth and the corrupted increments (about 40 float64
-arrays' worth once the quadrature temporaries, the filter's output and the cache file are
-counted: :data:`BYTES_PER_IMU_SAMPLE`), and per aiding-sensor epoch a few rows of
+A run holds, per IMU sample, the truth and the corrupted increments, the IMU and sensor
+simulation's temporaries and the filter's output and events (:data:`BYTES_PER_IMU_SAMPLE`);
+the trajectory generator's quadrature temporaries are held for one block of
+:data:`fuzzynav.sim.trajectory.BLOCK_SAMPLES` samples at most
+(:data:`BYTES_PER_BLOCK_SAMPLE` each); and per aiding-sensor epoch a few rows of
 measurements, sigmas and truth (:data:`BYTES_PER_EPOCH_COLUMN` per measurement column).
 The estimate is made from the sample counts alone (duration x rate), so a scenario of
 10^11 samples is refused in microseconds with the estimate in the message, not after a
@@ -18,12 +20,18 @@ import os
 
 from fuzzynav.errors import InputFileError
 
-__all__ = ["BYTES_PER_IMU_SAMPLE", "BYTES_PER_EPOCH_COLUMN", "MAX_SPELLS", "DEFAULT_SHARE",
-           "ENV_VAR", "memory_limit", "human_bytes", "check_run_size"]
+__all__ = ["BYTES_PER_IMU_SAMPLE", "BYTES_PER_BLOCK_SAMPLE", "BYTES_PER_EPOCH_COLUMN",
+           "MAX_SPELLS", "DEFAULT_SHARE", "ENV_VAR", "memory_limit", "human_bytes",
+           "check_run_size"]
 
-#: bytes held per IMU sample through simulation and filtering (measured peak about
-#: 3.6 kB on paper000 at 100 Hz: 2.6 kB simulating, 1 kB more filtering; rounded up)
-BYTES_PER_IMU_SAMPLE = 4096
+#: bytes held per IMU sample of the whole run through simulation and filtering, beyond the
+#: generator's block (marginal tracemalloc peaks of runs longer than a block: paper003
+#: 536 B simulating + 429 B filtering its 1.4 sensor epochs per sample, paper000 424 + 92;
+#: their sum, rounded up: tests/sim/test_budget.py checks it bounds a real run)
+BYTES_PER_IMU_SAMPLE = 1024
+#: bytes per sample of the trajectory generator's block (its quadrature nodes, profiles and
+#: Picard sweeps: a 2.95 kB traced peak against 184 B kept on paper003; rounded up)
+BYTES_PER_BLOCK_SAMPLE = 3072
 #: bytes held per aiding-sensor epoch and measurement column (z, sigma, truth, temporaries)
 BYTES_PER_EPOCH_COLUMN = 128
 #: most outage or cloud windows a sensor may have in one run
@@ -90,9 +98,12 @@ def check_run_size(duration_s: float, imu_rate_hz: float, sensors: dict) -> None
     InputFileError
         Without a file; ``where`` is the key that sets the size.
     """
+    from fuzzynav.sim.trajectory import BLOCK_SAMPLES
+
     n_imu = duration_s * imu_rate_hz
     _refuse("imu.rate_hz", f"[imu] rate_hz x duration = {imu_rate_hz:g} Hz x {duration_s:g} s "
-                           f"= {n_imu:.3g} samples", n_imu * BYTES_PER_IMU_SAMPLE)
+                           f"= {n_imu:.3g} samples",
+            n_imu * BYTES_PER_IMU_SAMPLE + min(n_imu, BLOCK_SAMPLES) * BYTES_PER_BLOCK_SAMPLE)
     for name, spec in sensors.items():
         where = f"sensors.{name}"
         epochs = duration_s * spec.rate_hz

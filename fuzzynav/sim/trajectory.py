@@ -26,6 +26,12 @@ __all__ = ["Trajectory", "generate"]
 _GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(5)
 #: fixed-point sweeps for latitude, whose rate depends weakly on latitude itself
 _PICARD_SWEEPS = 4
+#: IMU samples per block of :func:`generate`: a longer trajectory is made block by block,
+#: the quadrature's temporaries (about 2.8 kB per sample) held for one block only and the
+#: running integrals carried across, so the result is the one-block arithmetic to the last
+#: bit (tests/sim/test_trajectory_blocks.py); 2**18 samples (87 min at 50 Hz, 44 min at
+#: 100 Hz) holds every shipped scenario in one block
+BLOCK_SAMPLES = 2 ** 18
 
 @dataclass(frozen=True)
 class Trajectory:
@@ -129,9 +135,19 @@ class _Quadrature:
         w = self.w if f.ndim == 2 else self.w[..., None]
         return np.sum(f * w, axis=1)
 
-    def cumulative(self, y0, f):
-        """Running integral at the edges, starting from ``y0``."""
-        return y0 + np.concatenate([np.zeros((1,) + f.shape[2:]), np.cumsum(self.integrals(f), 0)])
+    def cumulative(self, y0, f, carry=None):
+        """Running integral at the edges, starting from ``y0``, and its running sum at the
+        last edge; ``carry``: that sum at the first edge (a later block), else 0.
+
+        A later block continues the sum where the block before left it (``cumsum`` adds in
+        order), so its values are those of one sum over the whole run.
+        """
+        parts = self.integrals(f)
+        if carry is None:
+            run = np.concatenate([np.zeros((1,) + f.shape[2:]), np.cumsum(parts, 0)])
+        else:
+            run = np.cumsum(np.concatenate([np.reshape(carry, (1,) + parts.shape[1:]), parts]), 0)
+        return y0 + run, run[-1]
 
     def at_nodes(self, y_edges, dy_edges):
         """Hermite interpolation of an edge function to the nodes."""
@@ -140,21 +156,30 @@ class _Quadrature:
                         dy_edges[1:, None], self.h[:, None], f)
 
 
-def _integrate_position(quad: _Quadrature, vel_edges, vel_nodes, lla0):
-    """Latitude, longitude, height at edges and nodes by quadrature of the velocity."""
-    h_e = quad.cumulative(lla0[2], vel_nodes[..., 2])
+def _integrate_position(quad: _Quadrature, vel_edges, vel_nodes, lla0, carry=None):
+    """Latitude, longitude, height at edges and nodes by quadrature of the velocity, and
+    the running sums to carry into the next block (``carry``: those of the block before:
+    height, each latitude sweep, longitude)."""
+    carry = carry or (None,) * (_PICARD_SWEEPS + 2)
+    sums = []
+    h_e, c = quad.cumulative(lla0[2], vel_nodes[..., 2], carry[0])
+    sums.append(c)
     h_n = quad.at_nodes(h_e, vel_edges[:, 2])
+    # every sweep starts from the start latitude everywhere, in every block
     lat_e = np.full(h_e.shape, lla0[0])
-    for _ in range(_PICARD_SWEEPS):
+    for sweep in range(_PICARD_SWEEPS):
         rm_e, _ = earth.radii(lat_e)
         lat_n = quad.at_nodes(lat_e, vel_edges[:, 1] / (rm_e + h_e))
         rm_n, _ = earth.radii(lat_n)
-        lat_e = quad.cumulative(lla0[0], vel_nodes[..., 1] / (rm_n + h_n))
+        lat_e, c = quad.cumulative(lla0[0], vel_nodes[..., 1] / (rm_n + h_n), carry[1 + sweep])
+        sums.append(c)
     rm_e, _ = earth.radii(lat_e)
     lat_n = quad.at_nodes(lat_e, vel_edges[:, 1] / (rm_e + h_e))
     _, rn_n = earth.radii(lat_n)
-    lon_e = quad.cumulative(lla0[1], vel_nodes[..., 0] / ((rn_n + h_n) * np.cos(lat_n)))
-    return np.stack([lat_e, lon_e, h_e], -1), lat_n, h_n
+    lon_e, c = quad.cumulative(lla0[1], vel_nodes[..., 0] / ((rn_n + h_n) * np.cos(lat_n)),
+                               carry[-1])
+    sums.append(c)
+    return np.stack([lat_e, lon_e, h_e], -1), lat_n, h_n, tuple(sums)
 
 
 def _body_rate_and_force(prof_nodes, lat_n, h_n):
@@ -208,21 +233,48 @@ def generate(start_lla_rad, segments, imu_rate_hz, initial_speed_mps=0.0,
     b = b[(b > 0.0) & (b < time_s[-1])]
     b = b[np.abs(b / dt - np.round(b / dt)) > 1e-9]
     edges = np.union1d(time_s, b)
+    on_grid = np.searchsorted(edges, time_s)
+    lla0 = np.asarray(start_lla_rad, float)
+    if n <= BLOCK_SAMPLES:  # one block: no copies into the run's arrays
+        lla, vel_n, att, omega_nb_b, dtheta_b, dv_b, _ = _block(edges, time_s, on_grid,
+                                                               evaluate, lla0, None)
+    else:
+        lla, vel_n, att, omega_nb_b = (np.empty((n + 1, 3)) for _ in range(4))
+        dtheta_b, dv_b = np.empty((n, 3)), np.empty((n, 3))
+        carry = None
+        for k0 in range(0, n, BLOCK_SAMPLES):
+            k1 = min(k0 + BLOCK_SAMPLES, n)
+            e0, e1 = on_grid[k0], on_grid[k1]
+            part = _block(edges[e0:e1 + 1], time_s[k0:k1 + 1], on_grid[k0:k1 + 1] - e0,
+                          evaluate, lla0, carry)
+            for whole, got in zip((lla, vel_n, att, omega_nb_b), part[:4]):
+                whole[k0:k1 + 1] = got  # a block's first sample is the last one's end
+            dtheta_b[k0:k1], dv_b[k0:k1], carry = part[4], part[5], part[6]
+    return Trajectory(time_s=time_s, lla=lla, vel_n=vel_n, att=att,
+                      q_bn=attitude.euler_to_quat(att), dtheta_b=dtheta_b, dv_b=dv_b,
+                      omega_nb_b=omega_nb_b, imu_rate_hz=float(imu_rate_hz),
+                      segments=tuple(segments), sea=sea)
+
+
+def _block(edges, time_s, on_grid, evaluate, lla0, carry):
+    """One block of :func:`generate`: the samples ``time_s`` (M+1) and the quadrature
+    ``edges`` between them (``on_grid``: the samples' indices in ``edges``), from the
+    running integrals ``carry`` of the block before (None: the run's start).
+
+    Returns lla, vel_n, att (heading wrapped), omega_nb_b at the samples, dtheta_b and
+    dv_b of the M increments, and the running integrals at the block's end.
+    """
     quad = _Quadrature(edges)
     vel_e, _, _, _ = _kinematics(evaluate(edges))
     prof_nodes = evaluate(quad.t)
     vel_nodes, _, _, _ = _kinematics(prof_nodes)
-    lla_e, lat_n, h_n = _integrate_position(quad, vel_e, vel_nodes, np.asarray(start_lla_rad, float))
+    lla_e, lat_n, h_n, carry = _integrate_position(quad, vel_e, vel_nodes, lla0, carry)
     omega_ib_b, f_b = _body_rate_and_force(prof_nodes, lat_n, h_n)
     owner = np.searchsorted(time_s, edges[:-1] + 0.5 * quad.h) - 1
-    starts = np.searchsorted(owner, np.arange(n))
+    starts = np.searchsorted(owner, np.arange(time_s.size - 1))
     dtheta_b = np.add.reduceat(quad.integrals(omega_ib_b), starts, axis=0)
     dv_b = np.add.reduceat(quad.integrals(f_b), starts, axis=0)
-    on_grid = np.searchsorted(edges, time_s)
     vel_n, _, att, omega_nb_b = _kinematics(evaluate(time_s))
     att = att.copy()
     att[:, 2] = attitude.wrap_2pi(att[:, 2])
-    return Trajectory(time_s=time_s, lla=lla_e[on_grid], vel_n=vel_n, att=att,
-                      q_bn=attitude.euler_to_quat(att), dtheta_b=dtheta_b, dv_b=dv_b,
-                      omega_nb_b=omega_nb_b, imu_rate_hz=float(imu_rate_hz),
-                      segments=tuple(segments), sea=sea)
+    return lla_e[on_grid], vel_n, att, omega_nb_b, dtheta_b, dv_b, carry

@@ -35,12 +35,13 @@ def _write(path, text):
 
 def test_the_estimate_is_samples_times_bytes_and_names_the_limit(tmp_path, monkeypatch):
     monkeypatch.setenv(budget.ENV_VAR, "0.5")
-    # 100 Hz x 20 000 s = 2e6 samples x 4096 B = 7.63 GiB, computed by hand
+    # 100 Hz x 20 000 s = 2e6 samples x 1024 B + one block of 2**18 samples x 3072 B
+    # = 2 048 000 000 + 805 306 368 B = 2.66 GiB, computed by hand
     path = _write(tmp_path / "big.toml", RUN.format(rate=100, duration=20000))
     with pytest.raises(InputFileError) as exc:
         load_scenario(path)
     assert exc.value.where == "imu.rate_hz"
-    assert "= 2e+06 samples needs ~7.63 GB" in exc.value.what
+    assert "= 2e+06 samples needs ~2.66 GB" in exc.value.what
     assert "the limit is 512 MB ($FUZZYNAV_MAX_MEMORY_GB)" in exc.value.what
     monkeypatch.setenv(budget.ENV_VAR, "8")
     assert load_scenario(path).duration_s == 20000.0
@@ -61,23 +62,39 @@ def test_the_default_limit_is_half_the_physical_memory(monkeypatch):
 
 
 def _traced_peak(path):
+    """The traced peak of simulating ``path`` and of running the EKF on it after."""
+    from fuzzynav.experiment import run_on_log
+
     scn = load_scenario(path)
     tracemalloc.start()
     try:
-        simulate(scn, 0)
-        return tracemalloc.get_traced_memory()[1]
+        log = simulate(scn, 0)
+        sim = tracemalloc.get_traced_memory()[1]
+        tracemalloc.reset_peak()
+        run_on_log(log, "ekf")
+        return sim, tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
 
 
-def test_the_per_sample_figure_bounds_a_real_simulation(tmp_path):
-    # the marginal memory of a simulated sample (peak growth between a 40-s and an 80-s
-    # run, after a warm-up that pays the one-off imports) stays under the budget's figure
+@pytest.mark.parametrize("block", [None, 500])
+def test_the_per_sample_figures_bound_a_real_run(tmp_path, monkeypatch, block):
+    # the marginal memory of a sample (peak growth between a 40-s and an 80-s run, after a
+    # warm-up that pays the one-off imports) stays under the budget's figures: within one
+    # block of the trajectory generator (the shipped runs) the block's figure counts too;
+    # with blocks of 500 samples (a long run) the per-sample figure alone
+    from fuzzynav.sim import trajectory
+
+    if block:
+        monkeypatch.setattr(trajectory, "BLOCK_SAMPLES", block)
     paths = [_write(tmp_path / f"{d}.toml", RUN.format(rate=50, duration=d)) for d in (1, 40, 80)]
-    simulate(load_scenario(paths[0]), 0)
+    _traced_peak(paths[0])
     small, large = _traced_peak(paths[1]), _traced_peak(paths[2])
-    per_sample = (large - small) / (40 * 50)
-    assert 0 < per_sample < budget.BYTES_PER_IMU_SAMPLE
+    sim, run = ((b - a) / (40 * 50) for a, b in zip(small, large))
+    bound = budget.BYTES_PER_IMU_SAMPLE + (0 if block else budget.BYTES_PER_BLOCK_SAMPLE)
+    assert 0 < sim < bound and 0 < run < bound
+    # the figures are of a whole run: the simulation's and the filter's peaks together
+    assert sim + run < bound
 
 
 def test_base_files_stay_inside_the_scenario_directory(tmp_path):

@@ -1,0 +1,161 @@
+"""Streaming metrics and decimated output (``fuzzynav run --output-rate HZ [--chunk S]``).
+
+:class:`~fuzzynav.metrics.StreamingRms` is checked against :func:`rms_metrics` on errors
+cut into uneven chunks (sums in another order: a few ulps; maxima and the last error
+exact), and a decimated run against every k-th row of the whole run.
+"""
+import dataclasses
+
+import numpy as np
+import pytest
+
+from fuzzynav.cli import main
+from fuzzynav.errors import FuzzynavError
+from fuzzynav.experiment import SimulatedSource
+from fuzzynav.metrics import NavErrors, StreamingRms, rms_metrics
+from fuzzynav.runpath import keep_every, run
+from fuzzynav.sim.scenario import load_scenario
+from fuzzynav.sim.sensor_log import simulate
+
+_EXACT = ("max_pos_h_m", "final_pos_h_m")
+
+
+def _errors(n, seed=0):
+    rng = np.random.default_rng(seed)
+    return NavErrors(np.arange(n) * 0.1, rng.normal(0, 3, (n, 3)), rng.normal(0, 0.1, (n, 3)),
+                     rng.normal(0, 1e-3, (n, 3)))
+
+
+def _cut(err, edges):
+    for a, b in zip(edges[:-1], edges[1:]):
+        yield NavErrors(err.time_s[a:b], err.pos_m[a:b], err.vel_mps[a:b], err.att_rad[a:b])
+
+
+@pytest.mark.parametrize("t_start_s", [0.0, 37.05])
+def test_streaming_rms_is_rms_metrics_over_chunks(t_start_s):
+    err = _errors(2000)
+    ref = rms_metrics(err, t_start_s)
+    acc = StreamingRms(t_start_s)
+    for part in _cut(err, [0, 1, 250, 371, 1500, 2000]):  # t_start falls inside a chunk
+        acc.add(part)
+    got = acc.metrics()
+    assert list(got) == list(ref)  # the same names in the same order
+    for k in ref:
+        if k in _EXACT:
+            assert got[k] == ref[k], k
+        else:
+            assert got[k] == pytest.approx(ref[k], rel=1e-12), k
+    # a hand-made figure besides: the RMS of the east error from its definition
+    sel = err.time_s >= t_start_s
+    assert got["rms_pos_e_m"] == pytest.approx(np.sqrt(np.mean(err.pos_m[sel, 0] ** 2)),
+                                               rel=1e-12)
+
+
+def test_streaming_rms_in_one_chunk_is_rms_metrics_to_the_bit():
+    err = _errors(999, seed=3)
+    acc = StreamingRms()
+    acc.add(err)
+    assert acc.metrics() == rms_metrics(err)
+
+
+def test_streaming_rms_nan_sticks_and_empty_is_nan():
+    err = _errors(300)
+    err.pos_m[120, 0] = np.nan  # a diverged epoch in the second chunk
+    acc = StreamingRms()
+    for part in _cut(err, [0, 100, 200, 300]):
+        acc.add(part)
+    assert np.isnan(acc.metrics()["max_pos_h_m"]) and np.isnan(acc.metrics()["rms_pos_m"])
+    assert np.isnan(rms_metrics(err)["max_pos_h_m"])
+    empty = StreamingRms(t_start_s=1e9)
+    empty.add(err)
+    assert all(np.isnan(v) for v in empty.metrics().values())
+
+
+@pytest.mark.parametrize("filt", ["ekf", "federated-fuzzy-beta"])
+def test_decimated_run_keeps_every_kth_row_and_the_metrics(filt, sim_cache):
+    scenario = "paper001" if filt.startswith("federated") else "paper000"
+    src = SimulatedSource(simulate(load_scenario(scenario), 0, sim_cache))
+    whole = run(src, filt)
+    dec = run(src, filt, chunk_samples=777, output_rate_hz=1.0)
+    k = 10  # the filters' 10 Hz output kept at 1 Hz
+    rw, rd = whole.result, dec.result
+    for f in ("time_s", "lla", "vel_n", "q_bn", "sensor_states", "sigma"):
+        np.testing.assert_array_equal(getattr(rd, f), getattr(rw, f)[::k], err_msg=f)
+    if rw.locals.x.ndim == 3:  # a bank's locals are decimated alike
+        np.testing.assert_array_equal(rd.locals.x, rw.locals.x[::k])
+    for nm in rw.events:  # the events are every event
+        np.testing.assert_array_equal(rd.events[nm].nis, rw.events[nm].nis)
+    for m, v in whole.metrics.items():  # scored at 10 Hz chunk by chunk, not at 1 Hz
+        if m in _EXACT or m == "completed":
+            assert dec.metrics[m] == v, m
+        else:
+            assert dec.metrics[m] == pytest.approx(v, rel=1e-12), m
+
+
+def test_output_rate_must_divide_the_filters():
+    assert keep_every(10.0, 1.0) == 10 and keep_every(10.0, 10.0) == 1
+    assert keep_every(10.0, 0.1) == 100
+    for bad in (3.0, 20.0, 0.0, -1.0, float("nan")):
+        with pytest.raises(FuzzynavError, match="must be the filter's output rate 10 Hz"):
+            keep_every(10.0, bad)
+
+
+def _cli(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_cli_output_rate_gives_the_whole_runs_table(capsys, sim_cache):
+    base = ("run", "paper000", "--filter", "ekf", "--cache", str(sim_cache), "--json")
+    code, whole, _ = _cli(capsys, *base)
+    assert code == 0
+    code, dec, _ = _cli(capsys, *base, "--output-rate", "2", "--chunk", "61.3")
+    assert code == 0
+    import json
+
+    a, b = json.loads(whole)["filters"]["ekf"], json.loads(dec)["filters"]["ekf"]
+    for m in a:
+        assert b[m]["mean"] == pytest.approx(a[m]["mean"], rel=1e-12), m
+
+
+@pytest.mark.parametrize("argv, fragment", [
+    (["run", "paper000", "--output-rate", "3"], "--output-rate 3 Hz: must be the filter's"),
+    (["run", "paper000", "--chunk", "0"], "--chunk must be a positive number"),
+    (["run", "paper000", "--output-rate", "-1"], "--output-rate must be a positive number"),
+    (["run", "paper000", "--align", "align-kf", "--output-rate", "1"],
+     "--output-rate: not available with alignment"),
+    (["run", "--data", "rtklib:{dir}", "--chunk", "60"],
+     "--chunk: does not apply to rtklib recordings"),
+    (["run", "--data", "akit:{dir}", "--output-rate", "1"],
+     "--output-rate: does not apply to"),
+])
+def test_cli_streaming_options_refused_with_one_line(capsys, argv, fragment, sim_cache,
+                                                     tmp_path):
+    argv = [a.format(dir=tmp_path) for a in argv]  # a directory: refused before it is read
+    code, _, err = _cli(capsys, *argv, "--cache", str(sim_cache))
+    assert code == 2, err
+    assert fragment in err and err.count("\n") == 1, err
+
+
+def test_decimating_refuses_a_source_that_scores_whole(sim_cache):
+    log = simulate(load_scenario("paper000"), 0, sim_cache)
+
+    @dataclasses.dataclass(frozen=True)
+    class Whole(SimulatedSource):  # a source without a streaming scorer
+        streaming_scorer = property()  # hides the attribute: hasattr() is False
+
+    with pytest.raises(FuzzynavError, match="score their whole result"):
+        run(Whole(log), "ekf", output_rate_hz=1.0)
+
+
+def test_streamed_run_keeps_the_sensor_usage_metrics(tmp_path):
+    # the r_use_* figures come from the event logs, not the solution: a decimated, chunked
+    # run must give the same ones as the whole run (and every metric the whole run has)
+    log = simulate(load_scenario("paper001"), 0, tmp_path)
+    whole = run(SimulatedSource(log), "fuzzy-mag").metrics
+    streamed = run(SimulatedSource(log), "fuzzy-mag", chunk_samples=3000,
+                   output_rate_hz=1.0).metrics
+    assert set(streamed) == set(whole)
+    usage = [k for k in whole if k.startswith("r_use_")]
+    assert usage and all(streamed[k] == whole[k] for k in usage)
