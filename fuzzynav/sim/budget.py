@@ -22,6 +22,7 @@ from fuzzynav.errors import InputFileError
 
 __all__ = ["BYTES_PER_IMU_SAMPLE", "BYTES_PER_BLOCK_SAMPLE", "BYTES_PER_EPOCH_COLUMN",
            "MAX_SPELLS", "DEFAULT_SHARE", "ENV_VAR", "memory_limit", "human_bytes",
+           "DEFAULT_CACHE_FILE_MB", "CACHE_ENV_VAR", "cache_file_limit",
            "check_run_size"]
 
 #: bytes held per IMU sample of the whole run through simulation and filtering, beyond the
@@ -39,6 +40,9 @@ MAX_SPELLS = 10_000
 #: default share of the physical memory one run may use
 DEFAULT_SHARE = 0.5
 ENV_VAR = "FUZZYNAV_MAX_MEMORY_GB"
+#: the largest simulation cache file written [MB]: a longer log is regenerated from its seed
+DEFAULT_CACHE_FILE_MB = 512.0
+CACHE_ENV_VAR = "FUZZYNAV_CACHE_MAX_MB"
 
 
 def _physical_bytes() -> float:
@@ -48,20 +52,36 @@ def _physical_bytes() -> float:
         return 8.0 * 2**30
 
 
+def _positive_env(name: str, unit: str):
+    """The positive finite number in ``$name``, or ``None`` when unset or empty."""
+    value = os.environ.get(name)
+    if not value:
+        return None
+    try:
+        x = float(value)
+    except ValueError:
+        x = float("nan")
+    if not x > 0.0 or x == float("inf"):
+        raise InputFileError(None, name, f"must be a positive number of {unit}, got {value!r}")
+    return x
+
+
 def memory_limit() -> tuple[float, str]:
     """The memory one simulated run may use [bytes] and where that figure comes from."""
-    value = os.environ.get(ENV_VAR)
-    if value:
-        try:
-            gb = float(value)
-        except ValueError:
-            gb = float("nan")
-        if not gb > 0.0 or gb == float("inf"):
-            raise InputFileError(None, ENV_VAR, f"must be a positive number of GB, "
-                                                f"got {value!r}")
+    gb = _positive_env(ENV_VAR, "GB")
+    if gb is not None:
         return gb * 2**30, f"${ENV_VAR}"
     return DEFAULT_SHARE * _physical_bytes(), f"half the physical memory; set ${ENV_VAR} " \
                                               "to change it"
+
+
+def cache_file_limit() -> float:
+    """The largest simulation cache file written [bytes] (``$FUZZYNAV_CACHE_MAX_MB``, else
+    :data:`DEFAULT_CACHE_FILE_MB`): a longer log is not cached but regenerated from its seed
+    each time (the same data: the generators are seeded per component), so a study whose
+    training set holds long runs does not fill the disk."""
+    mb = _positive_env(CACHE_ENV_VAR, "MB")
+    return (DEFAULT_CACHE_FILE_MB if mb is None else mb) * 2**20
 
 
 def human_bytes(n: float) -> str:

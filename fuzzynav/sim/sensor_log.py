@@ -10,7 +10,9 @@ Cache: one ``.npz`` per (scenario, seed), named ``<scenario>-<seed>-<key>.npz`` 
 ``os.replace``; a full disk or a read-only directory is one
 :class:`fuzzynav.errors.OutputError`, with the old file intact) and read with
 ``allow_pickle=False``; a file that is unreadable, incomplete or made for another key is
-regenerated, never trusted.
+regenerated, never trusted.  A log larger than :func:`fuzzynav.sim.budget.cache_file_limit`
+(``$FUZZYNAV_CACHE_MAX_MB``, default 512 MB) is not written: it is simulated again from its
+seed when needed, which gives the same data.
 """
 from __future__ import annotations
 
@@ -26,6 +28,7 @@ import numpy as np
 
 from fuzzynav.errors import InputFileError
 from fuzzynav.fileio import make_dir, output_errors, publish, safe_stem
+from fuzzynav.sim.budget import CACHE_ENV_VAR, cache_file_limit, human_bytes
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.sim.scenario import Scenario
 from fuzzynav.sim.sensors import SensorData
@@ -207,6 +210,19 @@ def simulate(scenario: Scenario, seed: int, cache_dir=None) -> SensorLog:
     log = _read_cache(path, key, scenario, seed)
     if log is None:
         log = _generate(scenario, seed)
-        _write_cache(path, _to_arrays(log, key))
+        arrays = _to_arrays(log, key)
+        size = sum(np.asarray(a).nbytes for a in arrays.values())
+        if size <= cache_file_limit():
+            _write_cache(path, arrays)
+        else:  # regenerated from the seed next time: the same data, no disk filled
+            _tell_not_cached(scenario, seed, size)
     return log
+
+
+def _tell_not_cached(scenario: Scenario, seed: int, size: float) -> None:
+    import sys
+
+    print(f"not cached: {scenario.name} seed {seed} is {human_bytes(size)}, above the "
+          f"{human_bytes(cache_file_limit())} limit of one cache file (${CACHE_ENV_VAR}); it "
+          "is simulated again from its seed when needed (the same data)", file=sys.stderr)
 
