@@ -10,6 +10,11 @@ block (``kind = "alignment"``: one scenario and seed, its metrics) that
 ``tests/align/test_tuned_rules.py`` re-runs.  ``fuzzynav study export`` writes the rule file
 of the best (or a chosen) trial elsewhere, ``fuzzynav study report`` a trials table.
 
+The same file with ``filter = "align-kf-tuned"`` tunes the classical counterpart instead:
+a trial is the constant multipliers of :mod:`fuzzynav.align.tuned` (its ``SPACE``), scored
+by the same :func:`objective` on the same runs, and the study writes a tuned-parameter file
+(:func:`tuned_constants` is its summary against the untuned ``align-kf``).
+
 The search space keeps the paper's three rules and changes only numbers: the centre of
 t's ``less1`` in [0.5, 0.99] and of ``more1`` in [1.01, 2.0] (``equal1`` stays at 1 so that a
 consistent filter keeps R), where ``more1`` starts to rise on the ROR axis ([1.0, 2.0]) and

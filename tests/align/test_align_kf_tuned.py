@@ -17,14 +17,8 @@ from fuzzynav.align.tune import Runs
 from fuzzynav.align.tuned import NAME, scaled_noise, tuned_params
 from fuzzynav.cli import main
 from fuzzynav.errors import FuzzynavError, InputFileError
+from tests.align.test_tuned_rules import SHORT  # the short alignment scenario of the studies
 
-SHORT = """kind = "alignment"
-base = "paper002-rmismatch"
-name = "short"
-duration_s = 80.0
-[imu]
-rate_hz = 10.0
-"""
 
 
 @pytest.fixture(scope="module")
@@ -153,9 +147,10 @@ test = []
     assert doc["trials"] == {NAME: 3}
     assert doc["train_score"][NAME] == summary["train"]["tuned"]
     # re-scored independently of the study: the file's filter on the training runs
-    rescored, _ = Runs([(str(scn), 0), (str(scn), 1)]).score(None, f"{NAME}@{tmp_path / 'tuned.json'}", 1.0)
+    train = Runs([(str(scn), 0), (str(scn), 1)])
+    rescored, _ = train.score(None, f"{NAME}@{tmp_path / 'tuned.json'}", 1.0)
     assert rescored == pytest.approx(summary["train"]["tuned"], rel=1e-12)
-    plain, _ = Runs([(str(scn), 0), (str(scn), 1)]).score(None, "align-kf", 1.0)
+    plain, _ = train.score(None, "align-kf", 1.0)
     assert summary["train"]["align-kf"] == pytest.approx(plain, rel=1e-12)
     # a constant study takes no rule template
     cfg.write_text(body + 'template = "x.json"\n')

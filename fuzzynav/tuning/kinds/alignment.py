@@ -23,8 +23,8 @@ from fuzzynav.sim.tomltable import Table, read_toml, with_path
 from fuzzynav.tuning.kinds import StudyKind, register_kind, study_settings
 from fuzzynav.tuning.objective import TrialObjective
 
-__all__ = ["FUZZY_FILTERS", "DEFAULT_SAMPLER", "AlignmentConfig", "load_alignment_config", "AlignmentObjective",
-           "AlignmentPlan"]
+__all__ = ["FUZZY_FILTERS", "DEFAULT_SAMPLER", "AlignmentConfig", "load_alignment_config",
+           "AlignmentObjective", "AlignmentPlan"]
 
 #: the fuzzy alignment filters whose rules an alignment study tunes
 FUZZY_FILTERS = ("align-fuzzy", "align-fuzzy-fast")
