@@ -7,10 +7,9 @@ from __future__ import annotations
 
 import json
 
-from fuzzynav.pages.common import REPO_ROOT
+from fuzzynav.papers.paper002.page_tuned import BASELINES, CLASSICAL, TUNED, finding, section
 from fuzzynav.report import ci_cell
 
-TUNED = REPO_ROOT / "rules" / "paper002_ror_tuned.json"
 
 
 def _m(runs, scn, f, key, fmt=".0f"):
@@ -23,8 +22,6 @@ def _n(runs, scn):
 
 
 def _constants() -> str:
-    from fuzzynav.papers.paper002.page_tuned import BASELINES
-
     p = json.loads(BASELINES.read_text())["filters"]["align-kf-tuned"]
     return (f"R = {p.get('r_all', 1.0):.3g} R0 and Q0's velocity and attitude rows times "
             f"{p.get('q_vel', 1.0):.3g} and {p.get('q_att', 1.0):.3g}")
@@ -112,8 +109,6 @@ against the filter's 3σ, with a three-seed Monte-Carlo beside the paper's claim
 
 
 def page(runs, tables, figs, never, command: str) -> str:
-    from fuzzynav.papers.paper002.page_tuned import CLASSICAL, finding, section
-
     # both tuned filters ran: the page sets them side by side
     tuned = TUNED.exists() and all(CLASSICAL in set(df["filter"]) for _, df in runs.values())
 

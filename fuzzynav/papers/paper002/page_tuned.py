@@ -15,12 +15,14 @@ from fuzzynav.pages import scores as sr
 from fuzzynav.pages.best_classical import paired_terms_lines
 from fuzzynav.pages.common import REPO_ROOT
 
-__all__ = ["FUZZY", "CLASSICAL", "BASELINES", "FUZZY_STUDY", "HELD_OUT", "TERMS", "frame",
+__all__ = ["FUZZY", "CLASSICAL", "TUNED", "BASELINES", "FUZZY_STUDY", "HELD_OUT", "TERMS", "frame",
            "verdicts", "section", "finding"]
 
 #: the labels of the two tuned filters in the page's runs
 FUZZY, CLASSICAL = "align-fuzzy tuned", "align-kf tuned"
-#: the classical study's output and the fuzzy study (its objective's azimuth weight)
+#: the tuned rule file, the classical study's output and the fuzzy study (its objective's
+#: azimuth weight)
+TUNED = REPO_ROOT / "rules" / "paper002_ror_tuned.json"
 BASELINES = REPO_ROOT / "studies" / "align" / "paper002_baselines.json"
 FUZZY_STUDY = REPO_ROOT / "studies" / "align" / "paper002_tune.toml"
 #: the scenarios neither study trained on (the training ones are rmismatch and sway)
@@ -64,8 +66,6 @@ def _setting(acfg) -> str:
 def _train() -> tuple:
     """The training objective of the tuned fuzzy and classical filters, as their studies
     recorded it."""
-    from fuzzynav.papers.paper002.page_text import TUNED
-
     fz = json.loads(TUNED.read_text())["provenance"]["objective"]["train"]["tuned"]
     return fz, json.loads(BASELINES.read_text())["train_score"]["align-kf-tuned"]
 
@@ -108,8 +108,6 @@ def _study_test(fuzzy, classical) -> str:
     numbers of the day it was tuned)."""
     from fuzzynav.align.tune import Runs
     from fuzzynav.fuzzy import load_fis
-    from fuzzynav.papers.paper002.page_text import TUNED
-
     test, w = Runs(fuzzy.study.test), fuzzy.azimuth_weight
     fz = test.score(load_fis(str(TUNED)), fuzzy.filter, w)[0]
     kf = test.score(None, f"{classical.filter}@{BASELINES}", w)[0]
