@@ -8,7 +8,12 @@ The named alignment filters (``compare paper002 --filters align-kf,align-fuzzy,.
 ``align-kf-fast``  align-kf with the fast azimuth estimate (an ablation)
 ``align-fuzzy``    align-kf with the fuzzy R-scaling (ROR -> t rule file)
 ``align-fuzzy-fast`` align-fuzzy with the fast azimuth estimate
+``align-kf-tuned`` align-kf with constant tuned R and Q multipliers
+                   (``align-kf-tuned@FILE``, :mod:`fuzzynav.align.tuned`)
 =================  ==========================================================
+
+A filter may be named ``NAME@FILE``: the fuzzy ones' rule file, ``align-kf-tuned``'s
+tuned-parameter file (:func:`align_spec`).
 
 The metric that matters is the **azimuth alignment time**: the first epoch after which the
 azimuth error stays within the threshold (scenario ``threshold_arcmin``, 10 arcmin by
@@ -30,11 +35,13 @@ from fuzzynav.align.alignment_states import EAST, LAYOUT_10, LAYOUT_12, NORTH, U
 from fuzzynav.align.mechanize import mechanize
 from fuzzynav.align.scenario import AlignScenario
 from fuzzynav.align.simulate import AlignLog, simulate_alignment
+from fuzzynav.errors import FuzzynavError, brief
 from fuzzynav.nav import attitude, earth
 from fuzzynav.registry import Registry
 from fuzzynav.sim.sensor_log import component_rng
 
-__all__ = ["AlignFilter", "ALIGN_FILTERS", "get_align_filter", "AlignRun", "simulate",
+__all__ = ["AlignFilter", "ALIGN_FILTERS", "get_align_filter", "align_spec", "AlignRun",
+           "simulate",
            "epochs", "true_misalignment", "run_align_filter", "true_state", "nees",
            "ALIGN_ROWS", "alignment_time", "metrics", "seed_runs"]
 
@@ -50,13 +57,14 @@ ALIGN_ROWS = (
 @dataclass(frozen=True)
 class AlignFilter:
     """A named alignment filter: layout, whether it adapts R, whether it uses the fast
-    azimuth estimate."""
+    azimuth estimate, whether it reads tuned constant multipliers."""
 
     name: str
     description: str
     layout: object
     fuzzy: bool = False
     fast: bool = False
+    tuned: bool = False
 
 
 #: the named alignment filters (a :class:`fuzzynav.registry.Registry`: all built in here)
@@ -68,6 +76,8 @@ for _f in (
     AlignFilter("align-fuzzy", "align-kf + fuzzy R-scaling (ROR -> t)", LAYOUT_10, fuzzy=True),
     AlignFilter("align-fuzzy-fast", "align-fuzzy + fast azimuth estimate", LAYOUT_10,
                 fuzzy=True, fast=True),
+    AlignFilter("align-kf-tuned", "align-kf with constant R and Q multipliers tuned by an "
+                "alignment study (align-kf-tuned@FILE)", LAYOUT_10, tuned=True),
 ):
     ALIGN_FILTERS.add(_f.name, _f)
 
@@ -75,6 +85,22 @@ for _f in (
 def get_align_filter(name: str) -> AlignFilter:
     """A named alignment filter (:class:`~fuzzynav.errors.UnknownNameError` if unknown)."""
     return ALIGN_FILTERS.lookup(name)
+
+
+def align_spec(text: str) -> tuple:
+    """``"NAME"`` or ``"NAME@FILE"`` -> ``(AlignFilter, FILE or None)``: FILE is the fuzzy
+    filters' rule file or ``align-kf-tuned``'s tuned-parameter file; the others take none."""
+    name, at, file = str(text).partition("@")
+    spec = get_align_filter(name)
+    if at and not file:
+        what = "tuned-parameter" if spec.tuned else "rule"
+        raise FuzzynavError(f"{brief(text)}: no {what} file after '@' (NAME@FILE, or NAME "
+                            "alone for the default)")
+    if file and not (spec.fuzzy or spec.tuned):
+        raise FuzzynavError(f"{brief(text)}: {name} takes no rule file (the fuzzy aligners "
+                            "take one: align-fuzzy, align-fuzzy-fast; align-kf-tuned a "
+                            "tuned-parameter file)")
+    return spec, file or None
 
 
 @dataclass(frozen=True)
@@ -140,10 +166,21 @@ def true_misalignment(log: AlignLog, ep: Epochs) -> np.ndarray:
 
 
 def run_align_filter(name: str, scn: AlignScenario, log: AlignLog, ep: Epochs,
-                     rules=None, fast_kw=None) -> AlignRun:
-    """Run a named alignment filter on prepared epochs and score it against the truth."""
-    spec = get_align_filter(name)
-    res = run_fine(ep, spec.layout, scn.noise, policy=r_policy(rules) if spec.fuzzy else None)
+                     rules=None, fast_kw=None, params=None) -> AlignRun:
+    """Run a named alignment filter (``NAME`` or ``NAME@FILE``: :func:`align_spec`) on
+    prepared epochs and score it against the truth.
+
+    ``rules``: the fuzzy filters' rule file (a file after ``@`` wins); ``params``: the
+    multipliers of ``align-kf-tuned`` as a dict (else read from its file)."""
+    from fuzzynav.align.tuned import scaled_noise, tuned_params
+
+    spec, file = align_spec(name)
+    noise = scn.noise
+    if spec.tuned:
+        noise = scaled_noise(noise, params if params is not None else tuned_params(file))
+    elif file:
+        rules = file
+    res = run_fine(ep, spec.layout, noise, policy=r_policy(rules) if spec.fuzzy else None)
     phi_hat = np.array(res.estimate("att"))
     if spec.fast:
         floor = scn.noise.gyro_bias_sigma_rps / earth.omega_ie_n(ep.lat_rad)[NORTH]

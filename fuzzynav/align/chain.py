@@ -84,6 +84,10 @@ def align_on_rest(log, align_filter="align-kf", rules=None):
     C, v, f = mechanize(_slice_imu(imu, k0, k1), c.C_bn, lat, h, step)
     ep = R.Epochs(imu.time_s[k0:k1 + 1:step], C, v, f, lat)
     noise = _noise(log, c.cov_phi)
+    if spec.tuned:  # its multipliers, relative to the noise of this IMU
+        from fuzzynav.align.tuned import scaled_noise, tuned_params
+
+        noise = scaled_noise(noise, tuned_params(rules))
     res = run_fine(ep, spec.layout, noise, policy=r_policy(rules) if spec.fuzzy else None)
     phi = res.estimate("att")[-1]
     return k1, attitude.rotvec_to_dcm(phi) @ C[-1], res.sigma("att")[-1]

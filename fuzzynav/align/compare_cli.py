@@ -4,7 +4,7 @@ from __future__ import annotations
 import json
 
 from fuzzynav.align.scenario import load_alignment_scenario
-from fuzzynav.align.alignment_run import ALIGN_ROWS, get_align_filter, seed_runs
+from fuzzynav.align.alignment_run import ALIGN_ROWS, align_spec, seed_runs
 from fuzzynav.align.fine import r_policy
 from fuzzynav.errors import FuzzynavError, brief
 from fuzzynav.experiment import monte_carlo
@@ -31,7 +31,7 @@ def compare_alignment(args, filters, claims=None, claim_labels=(), rows=()) -> i
     """Run ``filters`` on ``args.mc`` seeds of an alignment scenario and print the table."""
     _refuse(args, ("plot", "--plot"), ("t_start", "--t-start"))
     scn = load_alignment_scenario(args.scenario)
-    fuzzy = [f for f in filters if get_align_filter(f).fuzzy]
+    fuzzy = [f for f in filters if align_spec(f)[0].fuzzy]
     if args.rules and len(args.rules) > 1:
         raise FuzzynavError("--rules: the alignment filters take one rule file (ROR -> t)")
     if args.rules and not fuzzy:
@@ -75,22 +75,26 @@ ALIGNED_NAV_ROWS = (("aligned heading error (deg)", "align_heading_err_deg"),
 
 
 def parse_align_spec(text: str):
-    """``"align-fuzzy@FILE"`` -> ``("align-fuzzy", "FILE")``; ``"align-kf"`` -> ``(.., None)``.
+    """``"align-fuzzy@FILE"`` -> ``("align-fuzzy", "FILE")``; ``"align-kf"`` -> ``(.., None)``;
+    ``"align-kf-tuned@FILE"``: FILE is its tuned-parameter file.
 
     The aligner's rule file is given with the aligner: ``--rules`` belongs to the
     navigation filter (``run --filter fakf --align align-fuzzy --rules F`` used to send F
     to the aligner and leave fakf on its default rules).
     """
-    name, at, rules = str(text).partition("@")
-    spec = get_align_filter(name)
-    if at and not rules:
-        raise FuzzynavError(f"--align {brief(text)}: no rule file after '@'")
-    if rules and not spec.fuzzy:
-        raise FuzzynavError(f"--align {brief(text)}: {name} takes no rule file (the fuzzy "
-                            "aligners do: align-fuzzy, align-fuzzy-fast)")
-    if rules:
-        r_policy(rules)  # refused now if it is not an R-scaling controller
-    return name, rules or None
+    from fuzzynav.align.tuned import tuned_params
+
+    try:
+        spec, file = align_spec(text)
+    except FuzzynavError as exc:
+        if type(exc) is not FuzzynavError:
+            raise
+        raise FuzzynavError(f"--align {exc}") from None
+    if spec.tuned:
+        tuned_params(file)  # a bad parameter file: refused now, naming file and field
+    elif file:
+        r_policy(file)  # refused now if it is not an R-scaling controller
+    return spec.name, file
 
 
 def run_with_alignment(args) -> int:

@@ -10,6 +10,11 @@ block (``kind = "alignment"``: one scenario and seed, its metrics) that
 ``tests/align/test_tuned_rules.py`` re-runs.  ``fuzzynav study export`` writes the rule file
 of the best (or a chosen) trial elsewhere, ``fuzzynav study report`` a trials table.
 
+The same file with ``filter = "align-kf-tuned"`` tunes the classical counterpart instead:
+a trial is the constant multipliers of :mod:`fuzzynav.align.tuned` (its ``SPACE``), scored
+by the same :func:`objective` on the same runs, and the study writes a tuned-parameter file
+(:func:`tuned_constants` is its summary against the untuned ``align-kf``).
+
 The search space keeps the paper's three rules and changes only numbers: the centre of
 t's ``less1`` in [0.5, 0.99] and of ``more1`` in [1.01, 2.0] (``equal1`` stays at 1 so that a
 consistent filter keeps R), where ``more1`` starts to rise on the ROR axis ([1.0, 2.0]) and
@@ -30,7 +35,8 @@ from fuzzynav.align.scenario import load_alignment_scenario
 from fuzzynav.fileio import publish
 from fuzzynav.fuzzy import load_fis
 
-__all__ = ["SPACE", "candidate", "suggest", "Runs", "tuned_rules", "write_json"]
+__all__ = ["SPACE", "candidate", "suggest", "objective", "Runs", "tuned_rules",
+           "tuned_constants", "write_json"]
 
 #: the searched numbers: key -> (low, high, kind), in the order they are drawn
 SPACE = {"t_less": (0.5, 0.99, "linear"), "t_more": (1.01, 2.0, "linear"),
@@ -62,6 +68,13 @@ def suggest(trial) -> dict:
                 trial.suggest_float(k, lo, hi)) for k, (lo, hi, kind) in SPACE.items()}
 
 
+def objective(m: dict, scn, weight: float) -> float:
+    """The alignment study's objective of one run's metrics ``m`` on scenario ``scn``:
+    ``align_time_s / duration_s + weight * final_azimuth_arcmin / threshold_arcmin``."""
+    return (m["align_time_s"] / scn.duration_s
+            + weight * m["final_azimuth_arcmin"] / scn.threshold_arcmin)
+
+
 class Runs:
     """Simulated logs and epochs of (scenario, seed), prepared once."""
 
@@ -72,14 +85,14 @@ class Runs:
             log = R.simulate(scn, seed)
             self.items.append((name, seed, scn, log, R.epochs(scn, log, seed)))
 
-    def score(self, fis, filt, weight) -> tuple[float, list]:
-        """Mean objective and the per-run metrics."""
+    def score(self, fis, filt, weight, params=None) -> tuple[float, list]:
+        """Mean objective and the per-run metrics of filter ``filt`` with the rules ``fis``
+        (fuzzy filters) or the multipliers ``params`` (``align-kf-tuned``)."""
         vals, rows = [], []
         for name, seed, scn, log, ep in self.items:
-            out = R.run_align_filter(filt, scn, log, ep, rules=fis)
+            out = R.run_align_filter(filt, scn, log, ep, rules=fis, params=params)
             m = R.metrics(out, scn.threshold_arcmin)
-            vals.append(m["align_time_s"] / scn.duration_s
-                        + weight * m["final_azimuth_arcmin"] / scn.threshold_arcmin)
+            vals.append(objective(m, scn, weight))
             rows.append({"scenario": name, "seed": seed, **m})
         return float(np.mean(vals)), rows
 
@@ -113,6 +126,19 @@ def tuned_rules(acfg, params: dict, value: float, trials: int,
                        "metrics": {k: v for k, v in rows[0].items()
                                    if k not in ("scenario", "seed")}}
     return doc, summary
+
+
+def tuned_constants(acfg, params: dict, value: float, train: Runs | None = None) -> dict:
+    """The summary of ``align-kf-tuned`` with the multipliers ``params`` (training score
+    ``value``): train and held-out objective against the untuned ``align-kf``."""
+    filt, w = acfg.filter, acfg.azimuth_weight
+    train = train if train is not None else Runs(acfg.study.train)
+    test = Runs(acfg.study.test)
+    plain = acfg.study.baseline
+    return {"train": {plain: train.score(None, plain, w)[0], "tuned": value},
+            "test": ({plain: test.score(None, plain, w)[0],
+                      "tuned": test.score(None, filt, w, params)[0]} if test.items else {}),
+            "best_params": dict(params)}
 
 
 def write_json(path: Path, doc: dict) -> Path:

@@ -24,7 +24,8 @@ def register(sub) -> None:
     p.add_argument("--align", metavar="ALIGN_FILTER",
                    help="align on the scenario's opening rest with this alignment filter "
                         "(align-kf, align-fuzzy, ...; align-fuzzy@FILE with its own rule "
-                        "file) and start the navigation from it")
+                        "file, align-kf-tuned@FILE with its tuned-parameter file) and start "
+                        "the navigation from it")
     add_common_arguments(p)
     add_streaming_arguments(p)
     add_recording_arguments(p)

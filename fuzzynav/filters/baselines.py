@@ -43,8 +43,8 @@ from fuzzynav.filters.named import FilterSetup, base_config, every_sensor, regis
 
 #: the tuned-parameter file used when a filter is named without ``@FILE``
 DEFAULT_PARAMS = "paper000_baselines.json"
-__all__ = ["DEFAULT_PARAMS", "Q_FIELDS", "TUNED", "find_params_file", "hqh_per_channel", "params_of",
-           "read_params", "scaled_noise_setup"]
+__all__ = ["DEFAULT_PARAMS", "Q_FIELDS", "TUNED", "file_params", "find_params_file",
+           "hqh_per_channel", "params_of", "read_params", "scaled_noise_setup"]
 
 
 def read_params(path) -> dict:
@@ -54,14 +54,20 @@ def read_params(path) -> dict:
     return {"path": Path(path), "filters": read_params_file(path)}
 
 
-def params_of(ctx, name: str, default=DEFAULT_PARAMS) -> dict:
-    """The tuned parameters of filter ``name`` (from ``params`` or the file ``default``)."""
-    doc = read_params(ctx.options.get("params") or default)
+def file_params(path, name: str) -> dict:
+    """The tuned parameters of filter ``name`` in the tuned-parameter file ``path``
+    (:class:`~fuzzynav.errors.InputFileError` naming ``$.filters.<name>`` if it has none)."""
+    doc = read_params(path)
     if name not in doc["filters"]:
         raise InputFileError(doc["path"], f"$.filters.{name}",
                              f"missing (this file tunes: {', '.join(doc['filters']) or 'none'}"
                              "); run the baseline study that tunes it")
     return dict(doc["filters"][name])
+
+
+def params_of(ctx, name: str, default=DEFAULT_PARAMS) -> dict:
+    """The tuned parameters of filter ``name`` (from ``params`` or the file ``default``)."""
+    return file_params(ctx.options.get("params") or default, name)
 
 
 def scaled_noise_setup(ctx, params: dict) -> FilterSetup:

@@ -78,6 +78,9 @@ PARAMETERS = {
     "strong-tracking-tuned": {"rho": Param(0.0, 1.0, lo_open=True),
                               "beta": Param(1.0, 1e3),
                               "lam_max": Param(1.0, MULTIPLIER[1], lo_open=True)},
+    # the alignment KF's constant multipliers (:mod:`fuzzynav.align.tuned`): R0, and the
+    # velocity (VRW) and attitude (ARW) rows of Q0 -- its bias rows are zero
+    "align-kf-tuned": {R_ALL: _MULT, "q_vel": _MULT, "q_att": _MULT},
 }
 #: filters whose every declared key must be given (the others need at least one key)
 ALL_REQUIRED = ("sage-husa-tuned", "vb-tuned", "huber-tuned", "strong-tracking-tuned")

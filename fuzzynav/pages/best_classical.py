@@ -15,9 +15,9 @@ import pandas as pd
 
 from fuzzynav.errors import InputFileError
 from fuzzynav.pages import scores as sr
-from fuzzynav.pages.science_sections import designs_lines
+from fuzzynav.pages.science_sections import MARKS, designs_lines
 
-__all__ = ["paper_lines", "provenance_score"]
+__all__ = ["paper_lines", "provenance_score", "paired_terms_lines"]
 
 
 def provenance_score(path) -> float:
@@ -90,3 +90,39 @@ def paper_lines(dfs: dict, *, designs, pool, params, metrics, weights=None,
         "filter of lowest mean score on the page's own (held-out) runs — a choice made on "
         "the test data, which favours the classical side:", "",
         *designs_lines(scores, scenarios, designs, pool=pool, labels=labels)]
+
+
+def paired_terms_lines(df: pd.DataFrame, scenarios, design: str, best: str, terms,
+                       notes=None) -> list:
+    """Markdown table: per scenario, the paired difference ``design - best`` of each term.
+
+    Each cell is the mean over the scenario's seeds of the per-seed difference (same seed =
+    same simulated data) with its 95 % CI (:func:`~fuzzynav.pages.scores.paired`) and the
+    verdict mark (:func:`~fuzzynav.pages.scores.verdict`; negative favours ``design``).
+
+    Parameters
+    ----------
+    df : DataFrame
+        One row per run: ``scenario``, ``seed``, ``filter`` and a column per term.
+    scenarios : sequence of str
+        The rows, in order.
+    design, best : str
+        The two filters compared (values of ``filter``).
+    terms : sequence of (str, str, str)
+        ``(header, column, format spec)`` of each compared quantity.
+    notes : mapping, optional
+        Scenario -> words printed after its name (e.g. that it was a training set).
+    """
+    notes = dict(notes or {})
+    lines = ["| scenario | seeds | " + " | ".join(f"{h} (95 % CI)" for h, _, _ in terms)
+             + " |", "|---|---|" + "---|" * len(terms)]
+    for s in scenarios:
+        cells, n = [], 0
+        for _, col, fmt in terms:
+            est = sr.paired(df.assign(score=df[col]), s, design, best)
+            n = max(n, est.n)
+            cells.append(f"{est.mean:+{fmt}} [{est.lo:+{fmt}}, {est.hi:+{fmt}}] "
+                         f"{MARKS[sr.verdict(est)]}")
+        note = f" ({notes[s]})" if s in notes else ""
+        lines.append(f"| `{s}`{note} | {n} | " + " | ".join(cells) + " |")
+    return lines

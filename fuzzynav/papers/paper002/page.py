@@ -4,8 +4,10 @@
 
 Runs the alignment filters on ``paper002`` (``--mc`` seeds) and on each variant
 (``--mc-variants`` seeds), with the paper's rules and, when ``rules/paper002_ror_tuned.json``
-exists, the tuned ones; draws the misalignment errors with their 3-sigma bounds for the
-plain and the fuzzy filter; writes the page (text, tables, figures) atomically.
+exists, the tuned ones, and, when ``studies/align/paper002_baselines.json`` exists, the
+equally tuned classical filter (``align-kf-tuned``, :mod:`.page_tuned`); draws the
+misalignment errors with their 3-sigma bounds for the plain and the fuzzy filter; writes
+the page (text, tables, figures) atomically.
 """
 from __future__ import annotations
 
@@ -22,6 +24,7 @@ from fuzzynav.experiment import monte_carlo
 from fuzzynav.papers.claims import claims_for
 from fuzzynav.fileio import publish
 from fuzzynav.papers.paper002.page_text import TUNED, page
+from fuzzynav.papers.paper002.page_tuned import BASELINES, CLASSICAL
 from fuzzynav.report import comparison_rows, render
 
 FILTERS = ["align-kf", "align-kf12", "align-fuzzy", "align-fuzzy-fast"]
@@ -29,9 +32,11 @@ VARIANTS = ["paper002-rmismatch", "paper002-sway", "paper002-gusts", "paper002-m
 
 
 def results(name, seeds):
-    """Metrics of every filter (and the tuned rules) on one scenario."""
+    """Metrics of every filter (and the tuned rules and constants) on one scenario."""
     scn = load_alignment_scenario(name)
-    df = monte_carlo(scn, FILTERS, seeds, seed_runs=R.seed_runs(scn))
+    kf_tuned = [f"align-kf-tuned@{BASELINES}"] if BASELINES.exists() else []
+    df = monte_carlo(scn, FILTERS + kf_tuned, seeds, seed_runs=R.seed_runs(scn))
+    df["filter"] = df["filter"].replace({f: CLASSICAL for f in kf_tuned})
     if TUNED.exists():
         tuned = monte_carlo(scn, ["align-fuzzy"], seeds, seed_runs=R.seed_runs(scn, str(TUNED)))
         tuned["filter"] = "align-fuzzy tuned"

@@ -1,9 +1,15 @@
-"""The alignment study: paper 002's ROR -> t rules of the fuzzy alignment filter.
+"""The alignment study: paper 002's ROR -> t rules of the fuzzy alignment filter, or the
+constant multipliers of its classical counterpart.
 
 A file with ``kind = "alignment"`` (or a top-level ``template``) is one Optuna study run by
-the one driver; a trial is a candidate rule set scored on the
-simulated alignment runs (:class:`AlignmentObjective`).
-:meth:`AlignmentPlan.finish` writes the tuned rule file with its ``expected`` block.
+the one driver; a trial is a candidate scored on the simulated alignment runs
+(:class:`AlignmentObjective`).  With ``filter = "align-fuzzy"`` (the default) a candidate
+is a rule set around ``template`` and :meth:`AlignmentPlan.finish` writes the tuned rule
+file with its ``expected`` block; with ``filter = "align-kf-tuned"`` it is the constant R
+and Q multipliers of :mod:`fuzzynav.align.tuned` (no template, no expected block) and
+``output`` is a tuned-parameter file (``fuzzynav-baselines``) that
+``align-kf-tuned@FILE`` reads -- the equally tuned classical filter, with the same
+budget, sampler, objective and runs as the fuzzy study it is compared with.
 """
 from __future__ import annotations
 
@@ -17,9 +23,11 @@ from fuzzynav.sim.tomltable import Table, read_toml, with_path
 from fuzzynav.tuning.kinds import StudyKind, register_kind, study_settings
 from fuzzynav.tuning.objective import TrialObjective
 
-__all__ = ["DEFAULT_SAMPLER", "AlignmentConfig", "load_alignment_config", "AlignmentObjective",
-           "AlignmentPlan"]
+__all__ = ["FUZZY_FILTERS", "DEFAULT_SAMPLER", "AlignmentConfig", "load_alignment_config",
+           "AlignmentObjective", "AlignmentPlan"]
 
+#: the fuzzy alignment filters whose rules an alignment study tunes
+FUZZY_FILTERS = ("align-fuzzy", "align-fuzzy-fast")
 #: the sampler of an alignment study unless its file names one (Optuna's default TPE,
 #: which the study used before it ran on the one driver)
 DEFAULT_SAMPLER = "tpe-univariate"
@@ -37,14 +45,17 @@ class AlignmentConfig:
         (``sampler_seed``), trials (``n_trials``), ``stale_after_s``; the train and test
         runs; no pruner (a trial is scored on every training run).
     template, output : Path
-        The hand rule file searched around, and where the tuned rule file is written.
+        The hand rule file searched around (None for ``align-kf-tuned``), and where the
+        tuned rule file (or tuned-parameter file) is written.
     template_doc : dict
-        The template's JSON document.
+        The template's JSON document (None for ``align-kf-tuned``).
     filter : str
-        The alignment filter run (``align-fuzzy``).
+        The alignment filter run (``align-fuzzy``, or ``align-kf-tuned``: then the study
+        searches its constants, :data:`fuzzynav.align.tuned.SPACE`).
     azimuth_weight : float
     expected : tuple
-        ``(scenario, seed)`` whose metrics the tuned file records.
+        ``(scenario, seed)`` whose metrics the tuned rule file records (None for
+        ``align-kf-tuned``).
     """
 
     study: object
@@ -54,6 +65,13 @@ class AlignmentConfig:
     filter: str
     azimuth_weight: float
     expected: tuple
+
+    @property
+    def constants(self) -> bool:
+        """Whether the study searches constant multipliers (``align-kf-tuned``)."""
+        from fuzzynav.align.tuned import NAME
+
+        return self.filter == NAME
 
 
 def _names(doc: dict, key: str, kind, path) -> list:
@@ -66,7 +84,7 @@ def _names(doc: dict, key: str, kind, path) -> list:
 
 def load_alignment_config(path) -> AlignmentConfig:
     """Read and check an alignment tuning file (errors name the file and the key)."""
-    from fuzzynav.align.tune import SPACE
+    from fuzzynav.align import tune, tuned
     from fuzzynav.tuning.samplers import get_optimiser, optimiser_names
 
     path = Path(path)
@@ -85,6 +103,11 @@ def load_alignment_config(path) -> AlignmentConfig:
         why_not = get_optimiser(sampler).check(False)
         if why_not:
             raise t.error("sampler", why_not)
+        filt = t.string("filter", "align-fuzzy", choices=(*FUZZY_FILTERS, tuned.NAME))
+        constants = filt == tuned.NAME
+        kinds = {True: "log", False: "linear"}
+        space = ({k: (lo, hi, kinds[log]) for k, (lo, hi, log) in tuned.SPACE.items()}
+                 if constants else tune.SPACE)
         study = study_settings(
             path, t.string("name", path.stem), sampler=sampler,
             seed=t.integer("sampler_seed", 0, lo=0),
@@ -92,18 +115,24 @@ def load_alignment_config(path) -> AlignmentConfig:
             stale_after_s=t.number("stale_after_s", 300.0, lo=0.0, lo_open=True),
             train=((s, d) for s in lists["train"] for d in lists["train_seeds"]),
             test=((s, d) for s in lists["test"] for d in lists["test_seeds"]),
-            space=((k, lo, hi, kind) for k, (lo, hi, kind) in SPACE.items()),
-            description=t.string("description", ""), baseline="paper rules",
-            filter=t.string("filter", "align-fuzzy"))
+            space=((k, lo, hi, kind) for k, (lo, hi, kind) in space.items()),
+            description=t.string("description", ""),
+            baseline="align-kf" if constants else "paper rules", filter=filt)
         if not study.train:
             raise t.error("train", "the study needs at least one training run "
                                    "(train and train_seeds)")
-        template = (here / t.string("template")).resolve()
+        for key in ("template", "expected_scenario", "expected_seed"):
+            if constants and t.has(key):
+                raise t.error(key, f"not read by an {filt} study (it searches constant "
+                                   "multipliers: no rule template, no expected block)")
+        template = None if constants else (here / t.string("template")).resolve()
         acfg = AlignmentConfig(
-            study=study, template=template, template_doc=_read_template(template, path),
+            study=study, template=template,
+            template_doc=None if constants else _read_template(template, path),
             output=study_output(t.string("output"), path, "output").resolve(),
             filter=study.filter, azimuth_weight=t.number("azimuth_weight", 1.0, lo=0.0),
-            expected=(t.string("expected_scenario"), t.integer("expected_seed", lo=0)))
+            expected=None if constants else (t.string("expected_scenario"),
+                                             t.integer("expected_seed", lo=0)))
         t.finish()
     return acfg
 
@@ -137,8 +166,16 @@ class AlignmentObjective(TrialObjective):
         from fuzzynav.fuzzy import load_fis
 
         self.claim(trial)
-        fis = load_fis(candidate(self.acfg.template_doc, suggest(trial)))
-        value = self.train.score(fis, self.acfg.filter, self.acfg.azimuth_weight)[0]
+        acfg = self.acfg
+        if acfg.constants:
+            from fuzzynav.align.tuned import SPACE
+            from fuzzynav.tuning.baseline_config import suggest as suggest_constants
+
+            value = self.train.score(None, acfg.filter, acfg.azimuth_weight,
+                                     suggest_constants(trial, SPACE))[0]
+        else:
+            fis = load_fis(candidate(acfg.template_doc, suggest(trial)))
+            value = self.train.score(fis, acfg.filter, acfg.azimuth_weight)[0]
         trial.set_user_attr("n_runs", len(self.train.items))
         return value
 
@@ -193,17 +230,38 @@ class AlignmentPlan:
                                 f"trial (complete: {sorted(t.number for t in full)})")
         return found[0]
 
+    def summary_of(self, study, trial=None) -> tuple:
+        """``(chosen trial, summary)``: the train and held-out objective of the best trial
+        (or trial ``trial``) against the untuned filter, and its parameters."""
+        from fuzzynav.align.tune import tuned_constants, tuned_rules
+        from fuzzynav.tuning.optuna_study import n_finished
+
+        chosen = self.chosen(study, trial)
+        if self.acfg.constants:
+            return chosen, tuned_constants(self.acfg, chosen.params, chosen.value, self.train)
+        return chosen, tuned_rules(self.acfg, chosen.params, chosen.value, n_finished(study),
+                                   self.train)[1]
+
     def _write(self, study, out, trial=None) -> tuple:
         from fuzzynav.align.tune import tuned_rules, write_json
         from fuzzynav.tuning.optuna_study import n_finished
 
+        if self.acfg.constants:  # a tuned-parameter file, as a baseline study writes
+            from fuzzynav.tuning.baseline_config import BaselineConfig, write_params
+
+            chosen, summary = self.summary_of(study, trial)
+            name = self.acfg.filter
+            bcfg = BaselineConfig(self.acfg.study, (name,), Path(out))
+            return write_params(bcfg, {name: dict(chosen.params)}, {name: chosen.value},
+                                {name: n_finished(study)}), summary
         chosen = self.chosen(study, trial)
         doc, summary = tuned_rules(self.acfg, chosen.params, chosen.value, n_finished(study),
                                    self.train)
         return write_json(out, doc), summary
 
     def finish(self, studies: dict, storage=None) -> list:
-        """Write the tuned rule file of the best trial (the file's ``output``)."""
+        """Write the tuned rule file (or tuned-parameter file) of the best trial (the file's
+        ``output``)."""
         path, self.last_summary = self._write(studies[""], self.acfg.output)
         return [json.dumps(self.last_summary, indent=2), f"wrote {path}"]
 
@@ -211,7 +269,8 @@ class AlignmentPlan:
         """(Printed by :meth:`finish`: train and held-out scores against the paper's.)"""
 
     def export(self, studies: dict, out, trial=None, pareto=None) -> list:
-        """Write the rule file of the best trial (or trial ``trial``) to ``out``."""
+        """Write the rule file (parameter file) of the best trial (or trial ``trial``) to
+        ``out``."""
         if pareto is not None:
             raise FuzzynavError("an alignment study has one objective: --pareto does not apply")
         return [self._write(studies[""], Path(out), trial)[0]]

@@ -14,9 +14,8 @@ def write_alignment_report(plan, study, out, evaluate: bool = True) -> Path:
 
     ``report.md`` names the best trial and its numbers; with ``evaluate`` it also gives
     the train and held-out objective of the tuned rules beside the paper's rules (what the
-    rule file's provenance records).
+    rule file's provenance records), or of the tuned constants beside ``align-kf``.
     """
-    from fuzzynav.align.tune import tuned_rules
     from fuzzynav.tuning.optuna_study import n_finished
 
     acfg, best = plan.acfg, plan.chosen(study)
@@ -29,11 +28,13 @@ def write_alignment_report(plan, study, out, evaluate: bool = True) -> Path:
              "| parameter | value |", "|---|---|"]
     lines += [f"| {k} | {v:.4g} |" for k, v in best.params.items()]
     if evaluate:
-        _, summary = tuned_rules(acfg, best.params, best.value, n_finished(study), plan.train)
-        lines += ["", "| runs | paper rules | tuned |", "|---|---|---|"]
+        _, summary = plan.summary_of(study)
+        plain = "align-kf" if acfg.constants else "paper"
+        lines += ["", f"| runs | {'align-kf' if acfg.constants else 'paper rules'} | tuned |",
+                  "|---|---|---|"]
         for group in ("train", "test"):
             if summary[group]:
-                lines.append(f"| {group} | {summary[group]['paper']:.4f} | "
+                lines.append(f"| {group} | {summary[group][plain]:.4f} | "
                              f"{summary[group]['tuned']:.4f} |")
     frame = study.trials_dataframe(attrs=("number", "value", "state", "params"))
     text = "\n".join(lines) + "\n"
