@@ -185,11 +185,17 @@ def split_section(root: Path, seeds, cache=None) -> tuple:
     if sp.missing():
         return head + note + [""], None
     sp = sp.available()
+    from fuzzynav.pages import science_split_tunings as st
+
     with _data_env(root):
         df = ss.split_frame(sp, cache, seeds)
+        more = st.frames_of(sp, cache, seeds, ROOT)
     what = (f"noise seeds {seeds[0]}–{seeds[-1]} of the one held-out half: the spread of the "
             "noise added to its fixes, not of drives")
-    return head + note + ss.splits_lines([sp], {sp.label: df}, "noise seeds", what), df
+    tail = st.tunings_lines([df, *more], ss.SPLIT_METRICS, "noise seeds") if more else \
+        ["*Further tunings not judged: " + ", ".join(f"`{f}`" for t in st.CAR_TUNINGS
+                                                     for f in t) + " absent.*", ""]
+    return head + note + ss.splits_lines([sp], {sp.label: df}, "noise seeds", what) + tail, df
 
 
 def auv_section(directory: Path, cache=None) -> tuple:
