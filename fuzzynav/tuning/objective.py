@@ -86,6 +86,11 @@ def score_metrics(metrics: dict, baseline: dict, weights: dict) -> RunScore:
                                   if g in EXTRA_GROUP_METRICS}}
     for g, key in groups.items():
         if key not in baseline:  # a recording scores no attitude (its weight is 0)
+            if weights.get(g):  # else the score would be NaN: a silent wrong objective
+                raise FuzzynavError(f"objective group {g!r} has weight {weights[g]:g}, but "
+                                    f"this run has no {key} (e.g. attitude on a recording, "
+                                    "r_use without a simulated magnetometer): set its "
+                                    "weight to 0 or train on runs that measure it")
             ratios[g] = math.nan
             continue
         r = metrics[key] / baseline[key] if baseline[key] > 0 else math.nan

@@ -11,6 +11,7 @@ import pytest
 from fuzzynav.experiment import run_on_log
 from fuzzynav.fuzzy import load_fis
 from fuzzynav.tuning.study_config import load_study_config
+from fuzzynav.errors import FuzzynavError
 from fuzzynav.tuning.objective import FAILED_RATIO, Evaluator, Objective, score_metrics
 from fuzzynav.tuning.space import ControllerSpace, build_all
 from tests.tuning.studies import ATT, ATT_CONTROLLER, BASE, GPS, TINY, write_study
@@ -121,6 +122,16 @@ def test_heading_and_horizontal_groups_enter_the_score_when_weighted(tmp_path, s
     scored = score_metrics(metrics, base, cfg.weights)
     assert scored.ratios["hdg"] == pytest.approx(3.0) and scored.ratios["att"] == 1.0
     assert scored.score == pytest.approx((2 * 3.0 + 1.0 + 0.5) / 4)
+
+
+def test_a_weighted_group_the_run_does_not_measure_is_refused():
+    # r_use on a run without a simulated magnetometer (or attitude on a recording) would
+    # make every score NaN; weighted 0 it is simply not scored
+    base = {"rms_pos_m": 2.0, "rms_vel_mps": 1.0, "rms_att_deg": 0.5}
+    weights = {"pos": 1.0, "vel": 1.0, "att": 1.0, "r_use": 0.1}
+    with pytest.raises(FuzzynavError, match="'r_use' has weight 0.1.*no r_use_dev_calm"):
+        score_metrics(dict(base), base, weights)
+    assert score_metrics(dict(base), base, dict(weights, r_use=0.0)).score == 1.0
 
 
 class PruneAfter(optuna.pruners.BasePruner):
