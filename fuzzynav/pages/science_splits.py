@@ -95,13 +95,13 @@ AKIT_FOLDS = (
 )
 
 
-def split_specs(split: Split, tuned, root: Path = ROOT) -> dict:
+def split_specs(split: Split, tuned, root: Path = ROOT, untuned=UNTUNED) -> dict:
     """Table label -> filter spec of every filter judged on ``split`` (``tuned``: the names
     in its parameter file)."""
     specs = {split.fuzzy: f"fakf@{root / split.rules}"}
     specs.update({label: f"{name}@{root / rules}" for label, name, rules in split.supervisors})
     specs.update({name: f"{name}@{root / split.params}" for name in tuned})
-    specs.update({name: name for name in UNTUNED if name not in specs})
+    specs.update({name: name for name in untuned if name not in specs})
     if split.apso:
         specs["apso"] = f"apso@{root / split.apso}"
     return specs
@@ -139,9 +139,11 @@ def held_out_runs(cfg, seeds=None) -> list:
     return runs
 
 
-def split_frame(split: Split, cache=None, seeds=None, root: Path = ROOT) -> pd.DataFrame:
+def split_frame(split: Split, cache=None, seeds=None, root: Path = ROOT,
+                untuned=UNTUNED) -> pd.DataFrame:
     """One row per (held-out run, filter): metrics; ``scenario`` is the split's label and
-    ``seed`` the pair (:func:`pair_ids`), ``run`` the run's own name."""
+    ``seed`` the pair (:func:`pair_ids`), ``run`` the run's own name (``untuned``: the
+    untuned filters run beside the split's own)."""
     import json
 
     from fuzzynav.tuning.evaluate import run_table
@@ -151,7 +153,7 @@ def split_frame(split: Split, cache=None, seeds=None, root: Path = ROOT) -> pd.D
     cfg = load_study_config(root / split.study)
     runs = held_out_runs(cfg, seeds)
     tuned = list(json.loads((root / split.params).read_text())["filters"])
-    specs = split_specs(split, tuned, root)
+    specs = split_specs(split, tuned, root, untuned)
     df = run_table(Evaluator(cfg, cache), {}, runs, tuple(specs.values()))
     df = df.replace({"filter": {v: k for k, v in specs.items()}})
     pairs = dict(zip(runs, pair_ids(runs)))

@@ -76,12 +76,12 @@ def usage_table(df, filters) -> str:
     rows = []
     for label in filters:
         sub = df[df["filter"] == label]
-        if sub.empty or "r_use_median_calm" not in sub or np.allclose(
-                sub["r_use_median_calm"].to_numpy(float), 1.0, equal_nan=True) and \
-                np.allclose(sub["r_use_median_zone"].to_numpy(float), 1.0, equal_nan=True):
-            continue  # a constant R: nothing to show
-        rows.append([label, *(fmt.format(np.nanmedian(sub["r_use_" + k].to_numpy(float)))
-                              for k, fmt in USAGE)])
+        if sub.empty or "r_use_median_calm" not in sub:
+            continue
+        medians = {k: np.nanmedian(sub["r_use_" + k].to_numpy(float)) for k, _ in USAGE}
+        if medians["median_calm"] == 1.0 and medians["median_zone"] == 1.0:
+            continue  # a constant R (every epoch exactly nominal): nothing to show
+        rows.append([label, *(fmt.format(medians[k]) for k, fmt in USAGE)])
     table = render(["filter", "median R factor, undisturbed", "median R factor, zone",
                     "R > 10× nominal, undisturbed", "R > 10× nominal, zone"], rows,
                    markdown=True)
