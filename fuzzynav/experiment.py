@@ -97,7 +97,7 @@ class SimulatedSource(OnSimulatedLog):
 
     # the streaming options of fuzzynav run apply to a simulated log (its truth scores
     # chunk by chunk)
-    SETTINGS = OnSimulatedLog.SETTINGS | {"output_rate", "chunk"}
+    SETTINGS = OnSimulatedLog.SETTINGS | {"output_rate", "chunk", "output_dir"}
 
     def score(self, result) -> dict:
         metrics = rms_metrics(errors_vs_trajectory(result, self.log.truth), self.t_start_s)
@@ -173,8 +173,10 @@ def monte_carlo(scenario, filters, seeds, options=None, cache_dir=None, t_start_
         :func:`fuzzynav.align.alignment_run.seed_runs`); ``options``, ``cache_dir``,
         ``t_start_s`` and ``refuse_diverged`` are then its own business and refused here.
     streaming : dict, optional
-        ``chunk_samples`` and ``output_rate_hz`` of every navigation run
-        (:func:`run_on_log`).
+        ``chunk_samples``, ``output_rate_hz`` and ``output_dir`` of every navigation run:
+        each is then simulated chunk by chunk (:func:`fuzzynav.streamrun.run_streamed`, the
+        same data and filter arithmetic as the whole log, nothing of the run's length
+        held) instead of simulated whole and cached.
     """
     outcomes = []
     if seed_runs is None:
@@ -209,17 +211,36 @@ def _navigation_runs(scn, options, cache_dir, t_start_s, outcomes, streaming):
     """``seed -> (filter -> metrics)`` of named navigation filters on ``scn``'s logs (each
     run's outcome appended to ``outcomes``)."""
     def of_seed(seed):
-        log = simulate(scn, seed, cache_dir)
+        # a streamed run simulates its chunks itself: nothing of the run's length is held
+        log = None if streaming else simulate(scn, seed, cache_dir)
 
         def run_one(name):
             opts = {k: v for k, v in options.items() if not isinstance(v, dict)}
             opts.update(options.get(name, {}) if isinstance(options.get(name), dict) else {})
             # NAME@FILE: resolved by the run
-            out = run_on_log(log, name, opts, t_start_s, **streaming)
+            if streaming:
+                out = _streamed(scn, seed, name, opts, t_start_s, streaming)
+            else:
+                out = run_on_log(log, name, opts, t_start_s)
             outcomes.append(out)
             return out.metrics
         return run_one
     return of_seed
+
+
+def _streamed(scn, seed, name, opts, t_start_s, streaming) -> RunOutcome:
+    """One run of :func:`fuzzynav.streamrun.run_streamed` (``streaming``: its chunk, output
+    rate and output directory, one sub-directory per filter and seed)."""
+    from fuzzynav.fileio import safe_stem
+    from fuzzynav.streamrun import DEFAULT_CHUNK_SAMPLES, run_streamed
+
+    kw = dict(streaming)
+    out_dir = kw.pop("output_dir", None)
+    if out_dir is not None:
+        out_dir = f"{out_dir}/{safe_stem(name)}-seed{int(seed)}"
+    return run_streamed(scn, seed, name, opts, chunk_samples=kw.pop(
+        "chunk_samples", DEFAULT_CHUNK_SAMPLES), t_start_s=t_start_s, output_dir=out_dir,
+        **kw)
 
 
 def _progress(total, enabled, desc):

@@ -57,7 +57,7 @@ def add_arguments(p) -> None:
 #: may refuse
 _FLAGS = {**{d: "--" + d.replace("_", "-") for d in _SETTINGS}, "imu_delay": "--imu-delay",
           "span": "--span", "mounting": "--mounting", "t_start": "--t-start", "mc": "--mc",
-          "output_rate": "--output-rate", "chunk": "--chunk"}
+          "output_rate": "--output-rate", "chunk": "--chunk", "output_dir": "--output-dir"}
 
 
 def given_settings(args) -> dict:
