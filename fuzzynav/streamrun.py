@@ -30,13 +30,14 @@ from fuzzynav.fileio import make_dir, output_errors, publish
 from fuzzynav.metrics import StreamingRms
 from fuzzynav.metrics_rscale import KIND as USAGE_KIND, usage_metrics
 from fuzzynav.runpath import RunOutcome, _merged, keep_every, make_setup, nonfinite
+from fuzzynav.sim import budget
 from fuzzynav.sim.sensors import SensorData
 from fuzzynav.sim.stream import SimulatedChunks
 
 __all__ = ["DEFAULT_CHUNK_SAMPLES", "StreamedSource", "run_streamed", "write_npz"]
 
-#: IMU samples per chunk when none is given (5 min at 50 Hz)
-DEFAULT_CHUNK_SAMPLES = 15_000
+#: IMU samples per chunk when none is given (:data:`fuzzynav.sim.budget.DEFAULT_CHUNK_SAMPLES`)
+DEFAULT_CHUNK_SAMPLES = budget.DEFAULT_CHUNK_SAMPLES
 
 
 class StreamedSource(OnSimulatedLog):

@@ -28,7 +28,7 @@ import numpy as np
 
 from fuzzynav.errors import InputFileError
 from fuzzynav.fileio import make_dir, output_errors, publish, safe_stem
-from fuzzynav.sim.budget import CACHE_ENV_VAR, cache_file_limit, human_bytes
+from fuzzynav.sim.budget import CACHE_ENV_VAR, cache_file_limit, check_whole_run, human_bytes
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.sim.scenario import Scenario
 from fuzzynav.sim.sensors import SensorData
@@ -203,6 +203,9 @@ def simulate(scenario: Scenario, seed: int, cache_dir=None) -> SensorLog:
     SensorLog
     """
     seed = check_seed(seed)
+    # a run too long to hold whole is refused here, with the estimate of streaming it
+    check_whole_run(scenario.duration_s, scenario.imu.rate_hz, scenario.sensors,
+                    f"scenario {scenario.name!r}")
     if cache_dir is None:
         return _generate(scenario, seed)
     key = cache_key(scenario, seed)

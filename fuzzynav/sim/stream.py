@@ -180,8 +180,9 @@ class SimulatedChunks:
         arrays = {k: np.empty((rows.size,) + ((4,) if k == "q_bn" else () if k == "time_s"
                                               else (3,))) for k in _ROW_ARRAYS}
         gen = Blocks(*self._args, sea=self.scenario.sea)
-        for k0 in range(0, self.n_samples, BLOCK_SAMPLES):
-            k1 = min(k0 + BLOCK_SAMPLES, self.n_samples)
+        step = min(BLOCK_SAMPLES, self.chunk_samples)  # the chunk's memory, not a block's
+        for k0 in range(0, self.n_samples, step):
+            k1 = min(k0 + step, self.n_samples)
             blk = gen.block(k0, k1)
             a, b = np.searchsorted(rows, [k0, k1 + 1])
             for k in _ROW_ARRAYS:
