@@ -202,7 +202,8 @@ class SimulatedChunks:
         truth = self._blocks.block(k0, k1)
         imu = self._imu.corrupt(truth)
         lo = k0 if k0 == 0 else k0 + 1
-        sensors = {nm: s.chunk(truth, k0, lo) for nm, s in self._streams.items()}
+        whole = k0 == 0 and k1 == self.n_samples  # the run in one chunk: the whole log
+        sensors = {nm: s.chunk(truth, k0, lo, whole) for nm, s in self._streams.items()}
         t_after = None if k0 == 0 else float(truth.time_s[0])
         sensors.update({nm: epochs_between(d, t_after, float(truth.time_s[-1]))
                         for nm, d in self._whole.items()})

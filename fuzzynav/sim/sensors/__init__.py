@@ -107,7 +107,7 @@ class EpochStream:
     A chunk of the run is the truth at samples ``k0..k1``; it carries the epochs at samples
     ``lo..k1`` (``lo = k0`` for the run's first chunk, ``k0 + 1`` after: the chunk before
     carried sample ``k0``), so every epoch is simulated once, in order.  A subclass
-    ``chunk(truth, k0, lo)`` draws each random term from its own generator in epoch order,
+    ``chunk(truth, k0, lo, whole=False)`` (``whole``: the run is one chunk) draws each random term from its own generator in epoch order,
     so the chunks' draws are the whole run's (numpy draws of ``n1`` then ``n2`` values
     are the draw of ``n1 + n2``) and the one-chunk case is ``simulate``.
     """

@@ -117,8 +117,9 @@ class LogStream(EpochStream):
         super().__init__(idx)
         self.spec, self.rng = spec, rng
 
-    def chunk(self, truth, k0: int, lo: int) -> SensorData:
-        """The readings at samples ``lo..`` of ``truth`` (rows from sample ``k0``)."""
+    def chunk(self, truth, k0: int, lo: int, whole: bool = False) -> SensorData:
+        """The readings at samples ``lo..`` of ``truth`` (rows from sample ``k0``; ``whole``:
+        the run is this one chunk)."""
         sp = self.spec
         idx = self.local(k0, lo, k0 + truth.time_s.size - 1)
         time_s = np.asarray(truth.time_s)[idx]

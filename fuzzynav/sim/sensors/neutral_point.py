@@ -151,8 +151,9 @@ class NeutralPointStream(EpochStream):
         self.jd0 = sun.julian_day(start_utc)
         self.g_a, self.g_b = rng, skipped(rng, 2 * self.idx.size)
 
-    def chunk(self, truth, k0: int, lo: int) -> SensorData:
-        """The line angles at samples ``lo..`` of ``truth`` (rows from sample ``k0``)."""
+    def chunk(self, truth, k0: int, lo: int, whole: bool = False) -> SensorData:
+        """The line angles at samples ``lo..`` of ``truth`` (rows from sample ``k0``;
+        ``whole``: the run is this one chunk)."""
         sp, per_epoch = self.spec, self.per_epoch
         idx = self.local(k0, lo, k0 + truth.time_s.size - 1)
         time_s = np.asarray(truth.time_s)[idx]
