@@ -15,26 +15,23 @@ does on a simulated scenario.
 """
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.experiment import OnSimulatedLog, perturbed_initial_state
-from fuzzynav.filters.named import FilterContext
-from fuzzynav.filters.runner import FilterRun
-from fuzzynav.fileio import make_dir, output_errors, publish
+from fuzzynav.filters.runner import FilterRun, concat_event_logs
+from fuzzynav.fileio import write_npz
 from fuzzynav.metrics import StreamingRms
 from fuzzynav.metrics_rscale import KIND as USAGE_KIND, usage_metrics
-from fuzzynav.runpath import RunOutcome, _merged, keep_every, make_setup, nonfinite
+from fuzzynav.runpath import RunOutcome, keep_every, make_setup, nonfinite
 from fuzzynav.sim import budget
 from fuzzynav.sim.sensors import SensorData
 from fuzzynav.sim.stream import SimulatedChunks
+from fuzzynav.simsource import OnSimulatedLog, perturbed_initial_state
 
-__all__ = ["DEFAULT_CHUNK_SAMPLES", "StreamedSource", "run_streamed", "write_npz"]
+__all__ = ["DEFAULT_CHUNK_SAMPLES", "StreamedSource", "run_streamed"]
 
 #: IMU samples per chunk when none is given (:data:`fuzzynav.sim.budget.DEFAULT_CHUNK_SAMPLES`)
 DEFAULT_CHUNK_SAMPLES = budget.DEFAULT_CHUNK_SAMPLES
@@ -48,21 +45,6 @@ class StreamedSource(OnSimulatedLog):
         self.chunks = chunks
         self.log = SimpleNamespace(scenario=chunks.scenario, seed=chunks.seed,
                                    sensors=chunks.header)
-
-
-def write_npz(path: Path, arrays: dict, what: str) -> None:
-    """Write ``arrays`` to ``path`` atomically (a temporary file, then renamed); a full disk
-    or a read-only place is one :class:`~fuzzynav.errors.OutputError`."""
-    make_dir(path.parent, what)
-    with output_errors(path, what):
-        fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
-        try:
-            with os.fdopen(fd, "wb") as f:
-                np.savez(f, **arrays)
-            publish(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
 
 
 def _output_arrays(result, logs: dict) -> dict:
@@ -96,15 +78,13 @@ class _Usage:
     def metrics(self) -> dict:
         if not self.names:
             return {}
-        from fuzzynav.filters.runner import _concat_logs
-
         sensors, events = {}, {}
         for nm in self.names:
             parts = self.data[nm]
             defl = np.concatenate([np.asarray(p.meta["deflection_rad"]) for p in parts])
             sensors[nm] = SimpleNamespace(kind=USAGE_KIND, time_s=defl,
                                           meta={"deflection_rad": defl})
-            events[nm] = _concat_logs(self.logs[nm])
+            events[nm] = concat_event_logs(self.logs[nm])
         return usage_metrics(SimpleNamespace(events=events), sensors)
 
 
@@ -176,7 +156,7 @@ def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None
                                            setup)
             dt_nom = float(np.median(np.diff(ch.imu.time_s))) if ch.k1 > ch.k0 else 0.01
             fr = FilterRun(header, init, config, setup.adapters,
-                           _merged(setup.sensor_options, {}), dt_nom, keep,
+                           setup.sensor_options, dt_nom, keep,
                            on_chunk=scorer.add_result, events_per_chunk=True,
                            on_events=on_events, keep_events=keep_events)
             first = False

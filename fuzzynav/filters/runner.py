@@ -326,7 +326,7 @@ class FilterRun:
         elif not self.keep_events:
             events = {}
         else:
-            events = {nm: _concat_logs([p[nm] for p in self.event_parts])
+            events = {nm: concat_event_logs([p[nm] for p in self.event_parts])
                       for nm in self.tb["names"]}
         return dataclasses.replace(_solution(out, self.config, self.state, self.bank.beta),
                                    events=events, status=msg)
@@ -339,8 +339,8 @@ def _event_outputs(E: int, M: int) -> dict:
                 diag=np.full((E, N_DIAG), np.nan))
 
 
-def _concat_logs(parts) -> EventLog:
-    """One :class:`EventLog` of a stream's consecutive chunk logs."""
+def concat_event_logs(parts) -> EventLog:
+    """One :class:`EventLog` of a stream's consecutive chunk logs (in order)."""
     if len(parts) == 1:
         return parts[0]
     arrays = {f: np.concatenate([getattr(p, f) for p in parts])

@@ -19,7 +19,6 @@ from __future__ import annotations
 import hashlib
 import operator
 import os
-import tempfile
 import zlib
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from fuzzynav.errors import InputFileError
-from fuzzynav.fileio import make_dir, output_errors, publish, safe_stem
+from fuzzynav.fileio import safe_stem, write_npz
 from fuzzynav.sim.budget import CACHE_ENV_VAR, cache_file_limit, check_whole_run, human_bytes
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.sim.scenario import Scenario
@@ -167,17 +166,7 @@ def _read_cache(path: Path, key: str, scenario: Scenario, seed: int):
 
 def _write_cache(path: Path, arrays: dict):
     """Write atomically; a full disk or a read-only place is one :class:`OutputError`."""
-    what = "simulation cache file (see --cache / $FUZZYNAV_CACHE)"
-    make_dir(path.parent, what)
-    with output_errors(path, what):
-        fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
-        try:
-            with os.fdopen(fd, "wb") as f:
-                np.savez(f, **arrays)
-            publish(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+    write_npz(path, arrays, "simulation cache file (see --cache / $FUZZYNAV_CACHE)")
 
 
 def cache_path(cache_dir, scenario: Scenario, seed: int) -> Path:
