@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import hashlib
 import operator
-import os
 import zlib
 from dataclasses import dataclass
 from pathlib import Path
