@@ -16,6 +16,7 @@ from fuzzynav.sim import budget
 from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.streamrun import run_streamed
 
+from tests.sim.test_budget import RUN as BUDGET_RUN
 from tests.sim.test_stream import short
 
 
@@ -74,20 +75,9 @@ def test_an_oracle_told_the_whole_runs_noise_is_refused():
         run_streamed(short("paper004", 20.0), 0, "ekf-true", chunk_samples=100)
 
 
-RUN = """name = "long"
-[start]
-lat_deg = 30.0
-lon_deg = 110.0
-speed_mps = 10.0
-[imu]
-rate_hz = {rate}
-[[segments]]
-kind = "cruise"
-duration_s = {duration}
-[sensors.log]
-kind = "log"
-rate_hz = {rate}
-"""
+#: a cruise with a ship's log at the IMU's rate (one epoch a sample)
+RUN = BUDGET_RUN.replace('[sensors.gps]\nkind = "gnss"', '[sensors.log]\nkind = "log"\n'
+                         'rate_hz = {rate}')
 
 
 def test_a_run_that_fits_only_in_chunks_is_refused_whole_with_both_estimates(tmp_path,
