@@ -99,6 +99,7 @@ def test_a_run_that_fits_only_in_chunks_is_refused_whole_with_both_estimates(tmp
     assert "in chunks it needs ~934 MB: run it with --output-rate" in exc.value.what
     # twice as long does not fit even in chunks: refused when read
     path.write_text(RUN.format(rate=200, duration=2 * 86400))
-    with pytest.raises(InputFileError, match="in chunks of 15000 samples with 1-Hz output, "
-                                             r"needs ~1.77 GB; the limit is 1 GB"):
+    with pytest.raises(InputFileError, match=r"samples needs ~1.77 GB even simulated and "
+                                             "filtered in chunks of 15000 samples with 1-Hz "
+                                             "output; the limit is 1 GB"):
         load_scenario(path)

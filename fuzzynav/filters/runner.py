@@ -168,7 +168,7 @@ class FilterRun:
     carried from one chunk to the next, so feeding a run in chunks of any size gives the
     result of one call over the whole run, to the last bit (:func:`run_filter` is the
     one-chunk case).  The measurement streams are held whole (they are epochs, not IMU
-    samples); the recorded outputs of each chunk are handed to ``on_chunk`` and kept
+    samples), unless each chunk brings its own (``events_per_chunk``); the recorded outputs of each chunk are handed to ``on_chunk`` and kept
     decimated by ``keep_every``, so memory is bounded by the chunk, the streams and the
     kept outputs.
 

@@ -113,13 +113,6 @@ def human_bytes(n: float) -> str:
     return f"{n:.3g} PB"  # pragma: no cover
 
 
-def _refuse(where: str, what: str, need: float):
-    limit, source = memory_limit()
-    if need > limit:
-        raise InputFileError(None, where, f"{what} needs ~{human_bytes(need)}; the limit is "
-                                          f"{human_bytes(limit)} ({source})")
-
-
 def whole_estimate(duration_s: float, imu_rate_hz: float, sensors: dict) -> float:
     """Bytes a run simulated and filtered whole holds (truth, IMU, streams, outputs)."""
     from fuzzynav.sim.trajectory import BLOCK_SAMPLES
@@ -174,10 +167,14 @@ def check_run_size(duration_s: float, imu_rate_hz: float, sensors: dict) -> None
         Without a file; ``where`` is the key that sets the size.
     """
     n_imu = duration_s * imu_rate_hz
-    _refuse("imu.rate_hz", f"[imu] rate_hz x duration = {imu_rate_hz:g} Hz x {duration_s:g} s "
-                           f"= {n_imu:.3g} samples, simulated and filtered in chunks of "
-                           f"{DEFAULT_CHUNK_SAMPLES} samples with 1-Hz output,",
-            streamed_estimate(duration_s, imu_rate_hz, sensors))
+    need = streamed_estimate(duration_s, imu_rate_hz, sensors)
+    limit, source = memory_limit()
+    if need > limit:
+        raise InputFileError(None, "imu.rate_hz", f"[imu] rate_hz x duration = {imu_rate_hz:g} "
+                             f"Hz x {duration_s:g} s = {n_imu:.3g} samples needs "
+                             f"~{human_bytes(need)} even simulated and filtered in chunks of "
+                             f"{DEFAULT_CHUNK_SAMPLES} samples with 1-Hz output; the limit is "
+                             f"{human_bytes(limit)} ({source})")
     for name, spec in sensors.items():
         where = f"sensors.{name}"
         if hasattr(spec, "spell_count"):

@@ -130,8 +130,9 @@ class SimulatedChunks:
         Increments of the run.
     grid : Grid
     header : dict
-        Sensor name -> the first chunk's :class:`SensorData` (kind and constant ``meta``:
-        what filters configure themselves from).
+        Sensor name -> what filters configure themselves from: a sensor simulated whole,
+        its whole :class:`SensorData`; a streamed one, its first chunk's (its kind, constant
+        ``meta`` and epoch spacing).
 
     Iterate (once) for the :class:`Chunk` s in order.
     """
@@ -195,7 +196,11 @@ class SimulatedChunks:
     def header(self) -> dict:
         if self._header is None:
             self._first = self._make(0, min(self.chunk_samples, self.n_samples))
-            self._header = self._first.sensors
+            # a sensor simulated whole is its own header (a filter may read statistics of
+            # its epochs, e.g. strong tracking the median interval); a streamed one's is
+            # its first chunk
+            head = {**self._first.sensors, **self._whole}
+            self._header = {nm: head[nm] for nm in sorted(head)}
         return self._header
 
     def _make(self, k0: int, k1: int) -> Chunk:

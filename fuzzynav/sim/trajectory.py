@@ -249,7 +249,8 @@ class Blocks:
 
     Parameters
     ----------
-    As :func:`generate`.
+    start_lla_rad, segments, imu_rate_hz, initial_speed_mps, initial_heading_rad, sea
+        As :func:`generate`.
     """
 
     def __init__(self, start_lla_rad, segments, imu_rate_hz, initial_speed_mps=0.0,

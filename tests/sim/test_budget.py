@@ -48,8 +48,9 @@ def test_the_estimate_is_samples_times_bytes_and_names_the_limit(tmp_path, monke
     assert "the limit is 512 MB ($FUZZYNAV_MAX_MEMORY_GB)" in exc.value.what
     assert "in chunks it needs ~92.8 MB" in exc.value.what
     monkeypatch.setenv(budget.ENV_VAR, "0.05")  # 51.2 MiB: not even in chunks
-    with pytest.raises(InputFileError, match="with 1-Hz output, needs ~92.8 MB; the limit "
-                                             "is 51.2 MB"):
+    with pytest.raises(InputFileError, match="samples needs ~92.8 MB even simulated and "
+                                             "filtered in chunks of 15000 samples with 1-Hz "
+                                             "output; the limit is 51.2 MB"):
         load_scenario(path)
     monkeypatch.setenv(budget.ENV_VAR, "8")
     assert load_scenario(path).duration_s == 20000.0

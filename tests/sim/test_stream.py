@@ -105,6 +105,7 @@ def test_one_chunk_is_the_log_with_the_oracle_noise():
 def test_chunks_are_made_once_in_order():
     sc = SimulatedChunks(short("paper000", 5.0), 0, 100)
     assert sc.header.keys() == {"gps", "pol"}
+    assert sc.header["gps"].time_s.size > 100  # simulated whole: every epoch, not 1 s of them
     list(sc)
     with pytest.raises(RuntimeError, match="iterated once"):
         list(sc)
