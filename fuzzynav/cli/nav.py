@@ -201,7 +201,7 @@ def _cmd_run(args) -> int:
         raise FuzzynavError("--align: only with a simulated SCENARIO, not with --data")
     check_rules(args, [args.filter], "--filter")
     if args.data:
-        from fuzzynav.realdata import run_recording
+        from fuzzynav.realdata.cli import run_recording
 
         return run_recording(args.data, args.filter, filter_options(args), args)
     from fuzzynav.experiment import SimulatedSource
