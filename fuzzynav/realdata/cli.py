@@ -112,6 +112,18 @@ def load_recording(spec, args):
                        span_s=_span(getattr(args, "span", None)), session=session, **kw)
 
 
+def streaming_of(args, rec) -> dict:
+    """``run``'s ``chunk_samples`` / ``output_rate_hz`` from ``--chunk`` / ``--output-rate``
+    (:func:`fuzzynav.cli.nav.streaming_options`) at the rate of the loaded IMU increments
+    (of the first recording of several: one kind has one rate)."""
+    import numpy as np
+
+    from fuzzynav.cli.nav import streaming_options
+
+    imu = (rec[0] if isinstance(rec, list) else rec).imu
+    return streaming_options(args, 1.0 / float(np.median(np.diff(imu.time_s))))
+
+
 def run_recording(spec, filter_name, options, args) -> int:
     """Load, run the protocol on ``args.mc`` seeds, print the table or JSON, plot if asked.
 
@@ -127,12 +139,13 @@ def run_recording(spec, filter_name, options, args) -> int:
     if getattr(args, "t_start", 0.0) and not args.t_start < span:
         raise FuzzynavError(f"--t-start {args.t_start:g} s: the recording runs {span:.0f} s; "
                             "nothing would be scored")
+    streaming = streaming_of(args, rec)
     if isinstance(rec, list):  # several recordings of one kind (akit trajectories)
         from fuzzynav.realdata.akit_cli import run_akit
 
-        return run_akit(spec, rec, filter_name, options, args)
+        return run_akit(spec, rec, filter_name, options, args, streaming)
     seeds = list(range(args.seed, args.seed + args.mc))
-    vals = [validate(rec, filter_name, settings, s, options) for s in seeds]
+    vals = [validate(rec, filter_name, settings, s, options, **streaming) for s in seeds]
     check_finite(vals, spec)  # a diverged run: no table at all, exit 3
     check = vals[0].start.coarse.heading_check
     if check.startswith(("turned", "direction not checked")):
