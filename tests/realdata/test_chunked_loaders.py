@@ -238,3 +238,28 @@ def test_real_akit_tables_are_the_same_in_blocks(n):
         whole = read_table(path, kind, None)
         for rows in (97, 4096):
             assert np.array_equal(read_table(path, kind, rows), whole), (path, rows)
+
+
+def test_increments_in_blocks_are_the_whole_integrals_to_the_bit():
+    """The running integral carried across blocks of samples gives every increment of the
+    one-block integration exactly (zero rates and their signs included), and the
+    increments of a piecewise-linear rate are its exact integrals (the trapezoid is exact)."""
+    from fuzzynav.realdata.loaders.increments import integrate_rates
+
+    rng = np.random.default_rng(1)
+    t = np.cumsum(rng.uniform(0.009, 0.011, 3000))
+    w = rng.normal(0, 1, (3000, 6))
+    w[100:200] = 0.0
+    w[150] = -0.0
+    grids = (np.arange(np.ceil(t[0] * 100), np.floor(t[-1] * 100) + 1) / 100, t[3:],
+             np.linspace(t[0], t[-1], 7))
+    for bounds in grids:
+        whole = integrate_rates(t, w, bounds)
+        for block in (1, 2, 17, 1000, 2999, 10**6):
+            got = integrate_rates(t, lambda a, b: w[a:b], bounds, block)
+            assert np.array_equal(got, whole) and np.array_equal(np.signbit(got),
+                                                                 np.signbit(whole)), block
+    # at the sample instants: the trapezoid of each interval, by its definition
+    np.testing.assert_allclose(integrate_rates(t, w, t, 7),
+                               0.5 * (w[1:] + w[:-1]) * np.diff(t)[:, None], rtol=1e-9,
+                               atol=1e-12)

@@ -170,12 +170,24 @@ def _resolve_mounting(mounting, directory: Path, files: dict):
     return Mounting.from_toml(mounting)
 
 
-def _imu_data(data, t_s, mounting, resample_hz, span):
-    """Increments in the body frame between the chosen boundaries."""
-    rates = np.column_stack([data[:, 3:6] * units.DPS, data[:, 0:3] * units.G0])
-    if mounting is not None:
-        c = mounting.matrix
-        rates = np.column_stack([rates[:, :3] @ c.T, rates[:, 3:] @ c.T])
+def _rates_of(data, mounting):
+    """``rates(a, b)``: gyro [rad/s] and accelerometer [m/s^2] rates of rows ``a .. b-1``,
+    in the body frame."""
+    c = None if mounting is None else mounting.matrix
+
+    def rates(a, b):
+        rows = data[a:b]
+        out = np.column_stack([rows[:, 3:6] * units.DPS, rows[:, 0:3] * units.G0])
+        if c is not None:
+            out = np.column_stack([out[:, :3] @ c.T, out[:, 3:] @ c.T])
+        return out
+
+    return rates
+
+
+def _imu_data(data, t_s, mounting, resample_hz, span, block_rows=None):
+    """Increments in the body frame between the chosen boundaries (the rates made and
+    integrated ``block_rows`` samples at a time: :func:`~.increments.integrate_rates`)."""
     lo, hi = max(t_s[0], span[0]), min(t_s[-1], span[1])
     if resample_hz is None:
         bounds = t_s[(t_s >= lo) & (t_s <= hi)]
@@ -184,7 +196,7 @@ def _imu_data(data, t_s, mounting, resample_hz, span):
     if bounds.size < 2:
         raise InputFileError(None, "span_s", f"leaves no IMU data (IMU covers {t_s[0]:.3f} "
                                              f"to {t_s[-1]:.3f} s)")
-    inc = increments.integrate_rates(t_s, rates, bounds)
+    inc = increments.integrate_rates(t_s, _rates_of(data, mounting), bounds, block_rows)
     return ImuData(time_s=bounds, dtheta_b=inc[:, :3], dv_b=inc[:, 3:])
 
 
@@ -270,7 +282,7 @@ def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
     span = (-np.inf, np.inf) if span_s is None else (t_s[0] + span_s[0], t_s[0] + span_s[1])
     rate = round(1000.0 / clock.period_ms) if resample_hz == "nominal" else resample_hz
     try:
-        imu = _imu_data(data, t_s, mount, rate, span)
+        imu = _imu_data(data, t_s, mount, rate, span, chunk_rows)
     except InputFileError as exc:  # a span outside the data
         raise InputFileError(directory, exc.where, exc.what) from None
     imu.meta.update(n_missing_samples=clock.n_missing, max_gap_s=clock.max_gap_ms / 1000.0,
