@@ -13,7 +13,7 @@ kept) or *chunked* (the loaders' default blocks of 65 536 lines, ``--output-rate
 formed chunk by chunk).  Memory is the process's own: *RSS before* (the package and numba
 imported), the high-water mark once the recording is loaded (``VmHWM``) and at the end (the
 peak); the growth per hour of IMU is the slope between the shortest and longest
-recordings.
+recordings.  A short run of each path first fills numba's cache (not reported).
 
 Usage: ``python benchmarks/bench_long_recording.py [--hours 0.5,1,2,4] [--no-write]``.
 """
@@ -113,6 +113,18 @@ def measure(*argv) -> dict:
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
+def _warm() -> None:
+    """One run of each path on a short recording, not reported: numba's cache of this
+    checkout is filled (or loaded) before anything is measured."""
+    tmp = Path(tempfile.mkdtemp(prefix="bench_rec_warm_"))
+    try:
+        measure("--write", tmp, 0.05)
+        for mode in MODES:
+            measure("--child", tmp, mode)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--hours", default="0.5,1,2,4", help="recording lengths [h]")
@@ -128,6 +140,7 @@ def main(argv=None) -> int:
                                                     float(args.write[1]))}))
         return 0
     load0 = os.getloadavg()[0]
+    _warm()
     rows = []
     for hours in (float(h) for h in args.hours.split(",")):
         tmp = Path(tempfile.mkdtemp(prefix="bench_rec_"))
@@ -178,7 +191,8 @@ def render(rows, load0, load1) -> str:
         "(`VmHWM`) once the recording is loaded, *peak* that mark at the end (not "
         "`ru_maxrss`, which Linux carries over an exec from the forking parent). Machine: "
         f"{machine()}; load average {load0:.2f} at the start, {load1:.2f} at the end "
-        "(shared machine: times are indicative).",
+        "(shared machine: times are indicative). One run of each path on a 3-minute "
+        "recording fills numba's cache first and is not reported.",
         "",
         "| recording | IMU samples | CSV (MB) | path | load (s) | run (s) | RSS before (GB) "
         "| after loading (GB) | peak RSS (GB) | kept rows | RMS horizontal, GNSS / outages (m) |",

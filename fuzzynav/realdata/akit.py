@@ -24,8 +24,8 @@ from fuzzynav.runpath import STREAMING_SETTINGS, RunInputs, run
 from fuzzynav.sim.imu import ImuSpec
 
 __all__ = ["INIT_OPTIONS", "PHINS", "ROWS", "context", "initial_state", "AkitSource",
-           "run_trajectory", "distance_travelled", "score", "score_errors", "run_all", "run_outcomes",
-           "outcomes_table"]
+           "run_trajectory", "distance_travelled", "score", "score_errors", "run_all",
+           "run_outcomes", "outcomes_table"]
 
 #: initial uncertainty of the start taken from the reference: Delph post-processing gives
 #: roll/pitch to ~0.01 deg and heading to a few 0.01 deg; its position is the reference
@@ -127,8 +127,9 @@ class AkitSource:
 
 def run_trajectory(rec, filter_name: str, options=None, **streaming):
     """Run one named filter (``NAME`` or ``NAME@FILE``) on one
-    :class:`~fuzzynav.realdata.loaders.akit_recording.AkitRecording`; ``(FilterResult, metrics dict)``
-    (``streaming``: ``chunk_samples``, ``output_rate_hz`` of :func:`fuzzynav.runpath.run`)."""
+    :class:`~fuzzynav.realdata.loaders.akit_recording.AkitRecording`; ``(FilterResult,
+    metrics dict)`` (``streaming``: ``chunk_samples``, ``output_rate_hz`` of
+    :func:`fuzzynav.runpath.run`)."""
     out = run(AkitSource(rec), filter_name, options, **streaming)
     return out.result, out.metrics
 

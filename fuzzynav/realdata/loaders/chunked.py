@@ -74,11 +74,9 @@ class FirstErrors:
     def __contains__(self, kind: str) -> bool:
         return kind in self.found
 
-    def raise_first(self, upto=None) -> None:
-        """Raise the error of the first kind (in :attr:`order`, up to and including ``upto``)
-        that was met; nothing when none was."""
+    def raise_first(self) -> None:
+        """Raise the error of the first kind (in :attr:`order`) that was met; nothing when
+        none was."""
         for kind in self.order:
             if kind in self.found:
                 raise self.found[kind]
-            if kind == upto:
-                return
