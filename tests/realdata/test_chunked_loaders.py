@@ -263,3 +263,14 @@ def test_increments_in_blocks_are_the_whole_integrals_to_the_bit():
     np.testing.assert_allclose(integrate_rates(t, w, t, 7),
                                0.5 * (w[1:] + w[:-1]) * np.diff(t)[:, None], rtol=1e-9,
                                atol=1e-12)
+
+
+@pytest.mark.parametrize("text", [b"", b"a", b"a\n", b"a\nb", b"\n\n", b"a\r\nb\r\n"])
+def test_count_lines_is_what_the_blocks_yield(tmp_path, text):
+    from fuzzynav.realdata.loaders.chunked import count_lines, line_blocks
+
+    path = tmp_path / "f"
+    path.write_bytes(text)
+    with open(path, "rb") as f:
+        assert count_lines(path) == sum(len(b) for _, b in line_blocks(f, 1)) \
+            == len(text.splitlines(keepends=True))

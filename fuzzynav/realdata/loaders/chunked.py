@@ -19,7 +19,12 @@ from __future__ import annotations
 
 from itertools import islice
 
-__all__ = ["DEFAULT_CHUNK_ROWS", "line_blocks", "FirstErrors", "check_chunk_rows"]
+import numpy as np
+
+from fuzzynav.errors import InputFileError
+
+__all__ = ["DEFAULT_CHUNK_ROWS", "line_blocks", "FirstErrors", "check_chunk_rows",
+           "count_lines", "Rows"]
 
 #: lines parsed at a time by default: 65 536 lines of the car's IMU CSV are ~3 MB of text
 #: (11 minutes at 100 Hz), a block small next to a recording of hours yet large enough that
@@ -50,6 +55,53 @@ def line_blocks(stream, chunk_rows):
         first += len(lines)
         if chunk_rows is None:
             return
+
+
+def count_lines(path) -> int:
+    """How many lines :func:`line_blocks` will yield for ``path`` (the last may lack its
+    newline), counted in blocks of 1 MB."""
+    n, tail = 0, b""
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            n += block.count(b"\n")
+            tail = block[-1:]
+    return n + (tail not in (b"", b"\n"))
+
+
+class Rows:
+    """An array of at most ``n`` rows filled block by block.
+
+    The rows of a file are known in number beforehand (:func:`count_lines`), so the blocks
+    are written into one array as they are parsed: no list of blocks and no concatenated
+    copy of the whole (which would double the memory at the end of the read).
+
+    Parameters
+    ----------
+    path : path-like
+        The file the rows come from (for the message if it grew while read).
+    n : int
+    width : int, optional
+        Columns of a 2-D array; ``None`` for a 1-D one.
+    dtype : numpy dtype
+    """
+
+    def __init__(self, path, n: int, width=None, dtype=float):
+        self.path = path
+        self.buf = np.empty((n,) if width is None else (n, width), dtype)
+        self.n = 0
+
+    def add(self, a) -> None:
+        """Append the rows of ``a``."""
+        k = len(a)
+        if self.n + k > self.buf.shape[0]:
+            raise InputFileError(self.path, "", "grew while it was read (a file still being "
+                                                "logged? read a finished copy)")
+        self.buf[self.n:self.n + k] = a
+        self.n += k
+
+    def array(self) -> np.ndarray:
+        """The rows added (a view of the first :attr:`n`)."""
+        return self.buf[:self.n]
 
 
 class FirstErrors:

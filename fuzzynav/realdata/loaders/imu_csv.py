@@ -107,14 +107,16 @@ def read_imu_csv(path, chunk_rows=DEFAULT_CHUNK_ROWS):
     path = Path(path)
     chunk_rows = chunked.check_chunk_rows(chunk_rows)
     errors = chunked.FirstErrors(_ERROR_ORDER)
-    parts, kept_parts, length_parts = [], [], []
+    n = chunked.count_lines(path)
+    # every line's length, the data lines' indices and rows: at most one per line
+    lengths, kept_rows = (chunked.Rows(path, n, None, np.int64) for _ in range(2))
+    data_rows = chunked.Rows(path, n, _CSV_COLUMNS)
     last = None  # (tick, line number) of the previous block's last row
     with open(path, "rb") as f:
         for first, lines in chunked.line_blocks(f, chunk_rows):
-            length_parts.append(np.array([len(x) - x.endswith(b"\n") for x in lines],
-                                         dtype=np.int64))
+            lengths.add([len(x) - x.endswith(b"\n") for x in lines])
             rows = _data_lines(lines, first)
-            kept_parts.append(rows + first)
+            kept_rows.add(rows + first)
             if not rows.size or "line" in errors:  # past a bad line only lines are counted
                 continue
             data = _parse_block(path, lines, rows)
@@ -133,11 +135,9 @@ def read_imu_csv(path, chunk_rows=DEFAULT_CHUNK_ROWS):
             if bad is not None:
                 errors.note("tick", bad)
             last = (data[-1, 6], lineno[-1])
-            parts.append(data)
-    kept = np.concatenate(kept_parts) if kept_parts else np.zeros(0, np.int64)
+            data_rows.add(data)
+    kept = kept_rows.array()
     if kept.size < 2:
         raise InputFileError(path, "lines", "fewer than two complete sample lines")
     errors.raise_first()
-    data = parts[0] if len(parts) == 1 else np.concatenate(parts)
-    lengths = np.concatenate(length_parts)
-    return data, kept, lengths, path.stat().st_size
+    return data_rows.array(), kept, lengths.array(), path.stat().st_size
