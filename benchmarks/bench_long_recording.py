@@ -7,8 +7,8 @@ suite's writers (``tests/realdata/rtklib_files.py``; the tag vectorised here): a
 drive-off, then 8 m/s with a 90-degree turn each way every two minutes.  It lives in a
 temporary directory and is deleted afterwards (never committed).  Fresh processes
 (``--child``) then load it and run the validation protocol (``ekf``, noise seed 0, both
-feeds) either as today (*whole*: the CSV read at once, ``chunk_rows=None``, every output
-kept) or *chunked* (the loaders' default blocks of 65 536 lines, ``--output-rate 1 --chunk
+feeds) either *whole* (the CSV read and integrated in one block, ``chunk_rows=None``,
+every output kept) or *chunked* (the loaders' default blocks of 65 536 lines, ``--output-rate 1 --chunk
 300``: 300-s chunks of IMU, the solution kept at 1 Hz, the errors at the reference epochs
 formed chunk by chunk).  Memory is the process's own: *RSS before* (the package and numba
 imported), the high-water mark once the recording is loaded (``VmHWM``) and at the end (the
@@ -184,7 +184,8 @@ def render(rows, load0, load1) -> str:
         "written to a temporary directory for each length and deleted afterwards; each path "
         f"loads it and runs the validation protocol (`{FILTER}`, noise seed 0, both feeds: "
         "GNSS throughout and with 60-s outages every 180 s) in a fresh process. *whole*: the "
-        "CSV read at once (`chunk_rows=None`), every output kept, as before this change; "
+        "CSV read and integrated in one block (`chunk_rows=None`, the whole read) and every "
+        "output kept; "
         "*chunked*: the loaders' default blocks of 65,536 lines and "
         f"`--output-rate {OUTPUT_RATE_HZ:g} --chunk {CHUNK_S:g}`. Memory is the process's: "
         "*before* its RSS with the package imported, *after loading* its high-water mark "
