@@ -9,8 +9,8 @@ temporary directory and is deleted afterwards (never committed).  Fresh processe
 (``--child``) then load it and run the validation protocol (``ekf``, noise seed 0, both
 feeds) either *whole* (the CSV read and integrated in one block, ``chunk_rows=None``,
 every output kept) or *chunked* (the loaders' default blocks of 65 536 lines,
-``--output-rate 1 --chunk 300``: 300-s chunks of IMU, the solution kept at 1 Hz, the errors at the reference epochs
-formed chunk by chunk).  Memory is the process's own: *RSS before* (the package and numba
+``--output-rate 1 --chunk 300``: 300-s chunks of IMU, the solution kept at 1 Hz, the
+errors at the reference epochs formed chunk by chunk).  Memory is the process's own: *RSS before* (the package and numba
 imported), the high-water mark once the recording is loaded (``VmHWM``) and at the end (the
 peak); the growth per hour of IMU is the slope between the shortest and longest
 recordings.  A short run of each path first fills numba's cache (not reported).
