@@ -204,7 +204,8 @@ def _cmd_run(args) -> int:
     if args.data:
         from fuzzynav.realdata import run_recording
 
-        return run_recording(args.data, args.filter, filter_options(args), args)
+        return run_recording(args.data, args.filter, filter_options(args), args,
+                             lambda rate_hz: streaming_options(args, rate_hz))
     from fuzzynav.experiment import SimulatedSource
     from fuzzynav.realdata.cli import given_settings
     from fuzzynav.runpath import refuse_settings

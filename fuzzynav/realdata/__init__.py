@@ -20,8 +20,8 @@ from fuzzynav.realdata.sources import SOURCES, DataSource, parse_data_spec, regi
 __all__ = ["SOURCES", "DataSource", "parse_data_spec", "register_source", "run_recording"]
 
 
-def run_recording(spec, filter_name, options, args) -> int:
+def run_recording(spec, filter_name, options, args, streaming=None) -> int:
     """``fuzzynav run --data KIND:DIR`` (:func:`fuzzynav.realdata.cli.run_recording`)."""
     from fuzzynav.realdata.cli import run_recording as _run
 
-    return _run(spec, filter_name, options, args)
+    return _run(spec, filter_name, options, args, streaming)
