@@ -39,7 +39,7 @@ class SimulatedSource(OnSimulatedLog):
 
     # the streaming options of fuzzynav run apply to a simulated log (its truth scores
     # chunk by chunk)
-    SETTINGS = OnSimulatedLog.SETTINGS | {"output_rate", "chunk", "output_dir"}
+    SETTINGS = OnSimulatedLog.SETTINGS | {"output_rate", "chunk"}
 
     def score(self, result) -> dict:
         metrics = rms_metrics(errors_vs_trajectory(result, self.log.truth), self.t_start_s)

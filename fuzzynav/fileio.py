@@ -24,7 +24,7 @@ from fuzzynav.errors import InputFileError, OutputError, brief
 
 __all__ = ["write_npz", "FILE_MODE", "publish", "MAX_STEM", "safe_stem", "output_errors", "SYSTEM_DIRS",
            "is_inside", "check_place", "study_output", "make_dir", "write_atomic", "write_text_atomic",
-           "publish_all", "sweep_staged", "staged", "json_ready"]
+           "publish_all", "process_alive", "sweep_staged", "staged", "json_ready"]
 
 
 def _umask() -> int:
@@ -211,14 +211,21 @@ def _staged_prefix() -> str:
     return f".staged-{os.getpid()}@{socket.gethostname()}-"
 
 
-def _alive(pid: int) -> bool:
+def process_alive(pid: int) -> bool:
+    """Whether process ``pid`` runs (a zombie -- dead, not yet reaped by its parent -- does
+    not: signal 0 still reaches it, so it is told apart by its state in ``/proc``)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
     except PermissionError:  # another user's live process
         return True
-    return True
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as fh:
+            state = fh.read().rsplit(b")", 1)[1].split()[0]
+    except (OSError, IndexError):  # no /proc (macOS): signal 0 is all we know
+        return True
+    return state not in (b"Z", b"X")
 
 
 def sweep_staged(directory) -> list[Path]:
@@ -237,7 +244,7 @@ def sweep_staged(directory) -> list[Path]:
     host, removed = socket.gethostname(), []
     for path in Path(directory).glob(".staged-*"):
         m = _STAGED_RE.fullmatch(path.name)
-        if m and m.group(2) == host and not _alive(int(m.group(1))) and path.is_dir():
+        if m and m.group(2) == host and not process_alive(int(m.group(1))) and path.is_dir():
             shutil.rmtree(path, ignore_errors=True)
             removed.append(path)
     return removed

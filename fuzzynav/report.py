@@ -6,7 +6,8 @@ import pandas as pd
 
 from fuzzynav.metrics import improvement_ci, mean_ci
 
-__all__ = ["NAV_ROWS", "comparison_rows", "scenario_rows", "render"]
+__all__ = ["NAV_ROWS", "ci_cell", "diff_cell", "improvement_cell", "comparison_rows",
+           "scenario_rows", "render"]
 
 #: (row label, metric key) in the order of the papers' tables
 NAV_ROWS = (
@@ -41,6 +42,12 @@ def ci_cell(values, fmt: str = ".4f", half_fmt: str | None = None) -> str:
     if est.n < 2:
         return f"{est.mean:{fmt}}"
     return f"{est.mean:{fmt}} ± {est.half_width:{half_fmt or fmt}}"
+
+
+def diff_cell(est, fmt: str = "+.3f") -> str:
+    """A paired difference ``est`` (:func:`~fuzzynav.metrics.mean_ci` of the per-run
+    differences) as ``"+m [lo, hi]"``, every number in the format spec ``fmt``."""
+    return f"{est.mean:{fmt}} [{est.lo:{fmt}}, {est.hi:{fmt}}]"
 
 
 def improvement_cell(base, cand) -> str:

@@ -304,9 +304,8 @@ RUN_SETTINGS = {
     "span": "stretch of the recording used [s]",
     "output_rate": "rate of the kept recorded solution [Hz] (metrics streamed)",
     "chunk": "IMU seconds per chunk of the compiled loop",
-    "output_dir": "directory the streamed outputs and event logs are written to",
 }
 
 #: the run settings of a streaming run (:func:`run`'s ``output_rate_hz`` and
 #: ``chunk_samples``): only sources that can score chunk by chunk take them
-STREAMING_SETTINGS = frozenset({"output_rate", "chunk", "output_dir"})
+STREAMING_SETTINGS = frozenset({"output_rate", "chunk"})

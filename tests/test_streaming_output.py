@@ -125,10 +125,6 @@ def test_cli_output_rate_gives_the_whole_runs_table(capsys, sim_cache):
     (["run", "paper000", "--output-rate", "-1"], "--output-rate must be a positive number"),
     (["run", "paper000", "--align", "align-kf", "--output-rate", "1"],
      "--output-rate: not available with alignment"),
-    (["run", "--data", "rtklib:{dir}", "--chunk", "60"],
-     "--chunk: does not apply to rtklib recordings"),
-    (["run", "--data", "akit:{dir}", "--output-rate", "1"],
-     "--output-rate: does not apply to"),
 ])
 def test_cli_streaming_options_refused_with_one_line(capsys, argv, fragment, sim_cache,
                                                      tmp_path):

@@ -28,7 +28,8 @@ def _same(a, b):
 
 @pytest.mark.parametrize("name, filt", [("paper000", "fuzzy"), ("paper001", "fuzzy-mag"),
                                         ("paper003", "fuzzy-ship"), ("paper004", "huber"),
-                                        ("paper003-storm", "ekf")])
+                                        ("paper003-storm", "ekf"),
+                                        ("paper000", "strong-tracking")])
 def test_streamed_run_is_the_whole_logs_run(name, filt):
     scn = short(name, 60.0)
     chunk = int(round(7.3 * scn.imu.rate_hz))  # boundaries between and (every 73 s) on epochs

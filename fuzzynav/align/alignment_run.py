@@ -41,9 +41,7 @@ from fuzzynav.registry import Registry
 from fuzzynav.sim.sensor_log import component_rng
 
 __all__ = ["AlignFilter", "ALIGN_FILTERS", "get_align_filter", "align_spec", "AlignRun",
-           "simulate",
-           "epochs", "true_misalignment", "run_align_filter", "true_state", "nees",
-           "ALIGN_ROWS", "alignment_time", "metrics", "seed_runs"]
+           "simulate", "epochs", "true_misalignment", "run_align_filter", "ALIGN_ROWS", "alignment_time", "metrics", "seed_runs"]
 
 #: (row label, metric key) of the comparison table
 ALIGN_ROWS = (
@@ -189,25 +187,6 @@ def run_align_filter(name: str, scn: AlignScenario, log: AlignLog, ep: Epochs,
                                          res.sigma("att")[:, UP], ep.lat_rad, **kw)
     C_end = attitude.rotvec_to_dcm(phi_hat[-1]) @ ep.C_bn[-1]
     return AlignRun(res, phi_hat, true_misalignment(log, ep), C_end)
-
-
-def true_state(layout, log: AlignLog, ep: Epochs) -> np.ndarray:
-    """The true error state ``(K+1, n)`` of the open-loop solution (simulations only)."""
-    step = (log.imu.time_s.size - 1) // (ep.time_s.size - 1)
-    n_ep = ep.time_s.size
-    truth = {"vel": ep.vel_err, "att": true_misalignment(log, ep),
-             "accel_bias": log.imu.accel_bias_mps2[::step][:n_ep],
-             "gyro_bias": log.imu.gyro_bias_rps[::step][:n_ep]}
-    out = np.zeros((n_ep, layout.n))
-    for name, size in layout.blocks:
-        out[:, layout[name]] = truth[name][:, :size]
-    return out
-
-
-def nees(run: AlignRun, truth: np.ndarray) -> np.ndarray:
-    """Normalised estimation error squared at every epoch, (K+1,)."""
-    e = truth - run.result.x
-    return np.einsum("ki,ki->k", e, np.linalg.solve(run.result.P, e[..., None])[..., 0])
 
 
 def alignment_time(time_s, err_u, threshold_rad) -> float:

@@ -67,8 +67,9 @@ DEFAULT_CHUNK_S = 300.0
 
 
 def add_streaming_arguments(p) -> None:
-    """``--output-rate`` and ``--chunk`` of ``fuzzynav run`` on a simulated scenario."""
-    g = p.add_argument_group("long runs (simulated scenarios)")
+    """``--output-rate`` and ``--chunk`` of ``fuzzynav run`` (a simulated scenario or a
+    recording, ``--data``)."""
+    g = p.add_argument_group("long runs (simulated scenarios and recordings)")
     g.add_argument("--output-rate", type=float, metavar="HZ",
                    help="keep the filter's recorded solution at this rate only (its output "
                         "rate, 10 Hz by default, divided by a whole number: 5, 2, 1, 0.1 ...); the "
@@ -209,11 +210,15 @@ def _cmd_run(args) -> int:
     check_common(args)
     if args.data and args.align:
         raise FuzzynavError("--align: only with a simulated SCENARIO, not with --data")
+    if args.data and getattr(args, "output_dir", None):
+        raise FuzzynavError("--output-dir: only with a simulated SCENARIO (a recording's "
+                            "run is streamed with --output-rate, its chunks not written)")
     check_rules(args, [args.filter], "--filter")
     if args.data:
-        from fuzzynav.realdata import run_recording
+        from fuzzynav.realdata.cli import run_recording
 
-        return run_recording(args.data, args.filter, filter_options(args), args)
+        return run_recording(args.data, args.filter, filter_options(args), args,
+                             lambda rate_hz: streaming_options(args, rate_hz))
     from fuzzynav.experiment import SimulatedSource
     from fuzzynav.realdata.cli import given_settings
     from fuzzynav.runpath import refuse_settings

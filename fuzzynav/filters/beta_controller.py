@@ -72,13 +72,6 @@ class ShareController:
     def _error(self, where: str, what: str) -> InputFileError:
         return InputFileError(self.source, f"$.binding.{where}", what)
 
-    @classmethod
-    def from_file(cls, path, floor: float = DEFAULT_FLOOR) -> "ShareController":
-        """Load a rule file and check its binding."""
-        from fuzzynav.fuzzy import load_fis
-
-        return cls(load_fis(path), str(path), floor)
-
     def share_control(self, n_local: int) -> ShareControl:
         """The loop's arrays for a bank of ``n_local`` locals."""
         cf = self.fis.compile()

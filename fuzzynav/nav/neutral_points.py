@@ -37,9 +37,8 @@ import numpy as np
 
 __all__ = ["neutral_points_n", "image_point", "pair_beta", "images", "heading_from_beta"]
 
-#: point pairs used, by code: (A, B) indices into the (Babinet, Brewster, Arago, fourth) rows
+#: point pairs used, by code: the line from Arago (or Brewster) to Babinet
 PAIR_ARAGO_BABINET, PAIR_BREWSTER_BABINET = 0, 1
-_PAIRS = ((2, 0), (1, 0))
 
 
 @nb.njit(cache=True, error_model="numpy")

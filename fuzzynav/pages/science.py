@@ -216,14 +216,6 @@ def design_table(tunings, trials) -> list:
     return lines
 
 
-def baseline_trials(params: Path) -> str:
-    """The trial count of the tuned baselines as the parameter file records it."""
-    import json
-
-    counts = sorted({n for n in json.loads(params.read_text())["trials"].values() if n})
-    return " to ".join(str(n) for n in counts[:: max(1, len(counts) - 1)]) or "0"
-
-
 def cpu_minutes() -> float:
     """CPU time of this process and its finished children (study workers) [min]."""
     import resource

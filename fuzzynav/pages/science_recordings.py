@@ -15,7 +15,7 @@ that lacks its data or its rules is skipped with a sentence on the page saying s
   throughout (a recording has no attitude truth); the outage drift is tabulated apart.
   The CI is over noise seeds of one recording, not over recordings.
 * **The drive's second half** (:func:`split_section`): the fuzzy controller and the classical
-  filters tuned on the first half with the same budget (:data:`CAR_RULES`,
+  filters tuned on the first half with the same budget (``rules/rtklib_drive_tuned.json``,
   ``studies/rtklib_split_baselines.json``), on noise seeds 100+ of the held-out half
   (:mod:`fuzzynav.pages.science_splits`).
 * **AUV** (``$FUZZYNAV_DATA/akit``, :func:`auv_section`): both A-KIT folds (1-4 -> 5-8 and
@@ -33,8 +33,6 @@ import pandas as pd
 
 from fuzzynav.pages.common import REPO_ROOT as ROOT
 
-#: the controller tuned on the drive's first half (judged on its second half only)
-CAR_RULES = ROOT / "rules" / "rtklib_drive_tuned.json"
 DATA_ENV = "FUZZYNAV_DATA"
 #: the first noise seed on the car drive's held-out half (its training used seeds 0-2)
 SPLIT_SEED0 = 100
@@ -244,34 +242,3 @@ def recordings_section(args, params: Path, systems: dict, supervisors=None) -> t
     auv, auv_df = auv_section(root / "akit", getattr(args, "cache", None))
     frames = [d for d in (car_df, split_df, auv_df) if d is not None]
     return lines + car + split + auv, (pd.concat(frames) if frames else None)
-
-
-AUV_HEADING = "### The AUV trajectories held out"
-AUV_END = "Every run's metrics:"
-
-
-def splice_auv(page: str, auv_lines: list) -> str:
-    """``page`` (docs/science.md) with its AUV subsection replaced by ``auv_lines``: from its
-    heading up to the closing "Every run's metrics" line, the rest untouched."""
-    a = page.index(AUV_HEADING)
-    b = page.index(AUV_END, a)
-    return page[:a] + "\n".join(auv_lines) + "\n" + page[b:]
-
-
-def regenerate_auv(data: str | None = None, root: Path = ROOT) -> None:
-    """Rerun the AUV subsection of docs/science.md and its rows of
-    docs/science_recordings.csv alone (the simulated sections need hours of tuning;
-    ``fuzzynav docs regenerate science`` regenerates the whole page)."""
-    from fuzzynav.fileio import write_atomic
-
-    lines, df = auv_section(data_root(data) / "akit")
-    page = root / "docs" / "science.md"
-    text = splice_auv(page.read_text(), lines)
-    write_atomic(page, lambda tmp: Path(tmp).write_text(text))
-    csv = root / "docs" / "science_recordings.csv"
-    if df is not None and csv.is_file():
-        old = pd.read_csv(csv)
-        # columns only the replaced rows had (an earlier loader's fields) go with them
-        new = pd.concat([old[~old["scenario"].str.startswith("akit")], df]).dropna(
-            axis=1, how="all")
-        write_atomic(csv, lambda tmp: new.to_csv(tmp, index=False))

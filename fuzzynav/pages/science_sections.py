@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from fuzzynav.pages import scores as sr
+from fuzzynav.report import diff_cell
 
 __all__ = ["MARKS", "designs_lines", "design_tally", "variance_lines", "pooled_differences",
            "pooled_lines", "budget_lines", "budget_sentences"]
@@ -79,8 +80,7 @@ def designs_lines(scores, scenarios, designs, best=None, pool=None, labels=None)
         cells = []
         for d in designs:
             est = sr.paired(scores, s, d, b)
-            cells.append(f"{est.mean:+.3f} [{est.lo:+.3f}, {est.hi:+.3f}] "
-                         f"{MARKS[sr.verdict(est)]}")
+            cells.append(f"{diff_cell(est)} {MARKS[sr.verdict(est)]}")
         lines.append(f"| `{s}` | {name(b, span=False)} | " + " | ".join(cells) + " |")
     lines += ["", f"| design | wins | draws | losses (of the {len(scenarios)} sets) |",
               "|---|---|---|---|"]
@@ -163,7 +163,7 @@ def pooled_lines(per_tuning: dict, scenarios, designs) -> tuple:
             v = sr.verdict(est)
             wins[d] += v == "wins against"
             mark = {"wins against": " **win**", "loses to": " loss"}.get(v, "")
-            cells.append(f"{est.mean:+.3f} [{est.lo:+.3f}, {est.hi:+.3f}]{mark}")
+            cells.append(f"{diff_cell(est)}{mark}")
         lines.append(f"| `{s}` | {best} | " + " | ".join(cells) + " |")
     return lines, wins
 

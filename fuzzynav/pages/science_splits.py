@@ -23,6 +23,7 @@ from pathlib import Path
 import pandas as pd
 
 from fuzzynav.pages.common import REPO_ROOT as ROOT
+from fuzzynav.report import diff_cell
 
 #: the studies' objective (weights pos 1, vel 1; recordings score no attitude)
 SPLIT_METRICS = ("rms_pos_m", "rms_vel_mps")
@@ -174,15 +175,11 @@ def comparison(scores: pd.DataFrame, splits, unit: str) -> tuple:
         for fuzzy in sp.designs():
             vs_best = sr.paired(scores, sp.label, fuzzy, best)
             vs_ref = sr.paired(scores, sp.label, fuzzy, sr.REF)
-            rows.append(f"| `{sp.label}` | `{fuzzy}` | {best} | {_diff(vs_best)} | "
-                        f"{sr.verdict(vs_best)} | {_diff(vs_ref)} | {sr.verdict(vs_ref)} |")
+            rows.append(f"| `{sp.label}` | `{fuzzy}` | {best} | {diff_cell(vs_best)} | "
+                        f"{sr.verdict(vs_best)} | {diff_cell(vs_ref)} | {sr.verdict(vs_ref)} |")
             text.append("- " + sr.sentence(sp.label, f"`{fuzzy}`", f"`{best}`", vs_best,
                                            unit))
     return rows, text
-
-
-def _diff(est) -> str:
-    return f"{est.mean:+.3f} [{est.lo:+.3f}, {est.hi:+.3f}]"
 
 
 def score_table(scores: pd.DataFrame, splits) -> list:

@@ -9,7 +9,7 @@ import pandas as pd
 
 from fuzzynav.errors import InputFileError
 from fuzzynav.metrics import mean_ci
-from fuzzynav.report import ci_cell
+from fuzzynav.report import ci_cell, diff_cell
 
 FUZZY = "fuzzy-tuned"
 REF, ORACLE = "ekf-tuned", "ekf-true"
@@ -126,8 +126,7 @@ def comparison_lines(scores: pd.DataFrame, scenarios, fuzzy: str = FUZZY) -> tup
         best = best_classical(scores, s)
         vs_best, vs_ref = paired(scores, s, fuzzy, best), paired(scores, s, fuzzy, REF)
         tally[verdict(vs_best)] = tally.get(verdict(vs_best), 0) + 1
-        rows.append(f"| `{s}` | {best} | {vs_best.mean:+.3f} [{vs_best.lo:+.3f}, "
-                    f"{vs_best.hi:+.3f}] | {verdict(vs_best)} | {vs_ref.mean:+.3f} "
-                    f"[{vs_ref.lo:+.3f}, {vs_ref.hi:+.3f}] | {verdict(vs_ref)} |")
+        rows.append(f"| `{s}` | {best} | {diff_cell(vs_best)} | {verdict(vs_best)} | "
+                    f"{diff_cell(vs_ref)} | {verdict(vs_ref)} |")
         text.append("- " + sentence(s, f"`{fuzzy}`", f"`{best}`", vs_best))
     return rows, text, tally

@@ -17,11 +17,5 @@ from __future__ import annotations
 
 from fuzzynav.realdata.sources import SOURCES, DataSource, parse_data_spec, register_source
 
-__all__ = ["SOURCES", "DataSource", "parse_data_spec", "register_source", "run_recording"]
+__all__ = ["SOURCES", "DataSource", "parse_data_spec", "register_source"]
 
-
-def run_recording(spec, filter_name, options, args) -> int:
-    """``fuzzynav run --data KIND:DIR`` (:func:`fuzzynav.realdata.cli.run_recording`)."""
-    from fuzzynav.realdata.cli import run_recording as _run
-
-    return _run(spec, filter_name, options, args)

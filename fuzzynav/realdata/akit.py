@@ -18,13 +18,14 @@ from fuzzynav.filters.named import FilterContext
 from fuzzynav.filters.runner import InitialState
 from fuzzynav.metrics import errors_vs_reference, rms_metrics
 from fuzzynav.nav import attitude, earth
+from fuzzynav.realdata.reference_scoring import ReferenceScoring
 from fuzzynav.realdata.score import antenna_track
-from fuzzynav.runpath import RunInputs, run
+from fuzzynav.runpath import STREAMING_SETTINGS, RunInputs, run
 from fuzzynav.sim.imu import ImuSpec
 
 __all__ = ["INIT_OPTIONS", "PHINS", "ROWS", "context", "initial_state", "AkitSource",
-           "run_trajectory", "distance_travelled", "score", "run_all", "run_outcomes",
-           "outcomes_table"]
+           "run_trajectory", "distance_travelled", "score", "score_errors", "run_all",
+           "run_outcomes", "outcomes_table"]
 
 #: initial uncertainty of the start taken from the reference: Delph post-processing gives
 #: roll/pitch to ~0.01 deg and heading to a few 0.01 deg; its position is the reference
@@ -82,7 +83,8 @@ class AkitSource:
 
     seed = 0
     # nothing drawn, nothing degraded: the recorded sensors as they are, the whole run
-    SETTINGS = frozenset()
+    # (streamed or not: --output-rate / --chunk)
+    SETTINGS = STREAMING_SETTINGS
     KIND = "akit recordings"
     SETTINGS_NOTE = ("the filter starts from the reference, is fed the recorded sensors without "
                      "simulated outages or noise, and is scored over the whole run: nothing "
@@ -95,9 +97,27 @@ class AkitSource:
     def inputs(self, setup) -> RunInputs:
         return RunInputs(self.rec.imu, {"dvl": self.rec.dvl}, initial_state(self.rec))
 
-    def score(self, result) -> dict:
+    @property
+    def scoring(self) -> ReferenceScoring:
+        """How a run is scored (:mod:`~fuzzynav.realdata.reference_scoring`): at the
+        reference point, against ``reference`` (default the recording's)."""
         ref = self.rec.reference if self.reference is None else self.reference
-        return score(antenna_track(result, self.rec.reference_offset_b), ref)
+        offset = self.rec.reference_offset_b
+        return ReferenceScoring(
+            lambda res: errors_vs_reference(antenna_track(res, offset), ref.time_s, ref.lla,
+                                            ref.vel_n),
+            lambda err, _t, res: score_errors(err, ref, res.ok))
+
+    def score(self, result) -> dict:
+        return self.scoring(result)
+
+    def streaming_scorer(self):
+        """A streaming form of :meth:`score`, fed each chunk of the solution."""
+        return self.scoring.streaming()
+
+    def score_streamed(self, result, scorer) -> dict:
+        """:meth:`score` of a run fed chunk by chunk to ``scorer``: the same metrics."""
+        return self.scoring.streamed(result, scorer)
 
     @staticmethod
     def required(metrics) -> tuple:
@@ -105,10 +125,12 @@ class AkitSource:
         return tuple(m for m in metrics if m.startswith(("rms_pos", "max_pos", "rms_vel")))
 
 
-def run_trajectory(rec, filter_name: str, options=None):
+def run_trajectory(rec, filter_name: str, options=None, **streaming):
     """Run one named filter (``NAME`` or ``NAME@FILE``) on one
-    :class:`~fuzzynav.realdata.loaders.akit_recording.AkitRecording`; ``(FilterResult, metrics dict)``."""
-    out = run(AkitSource(rec), filter_name, options)
+    :class:`~fuzzynav.realdata.loaders.akit_recording.AkitRecording`; ``(FilterResult,
+    metrics dict)`` (``streaming``: ``chunk_samples``, ``output_rate_hz`` of
+    :func:`fuzzynav.runpath.run`)."""
+    out = run(AkitSource(rec), filter_name, options, **streaming)
     return out.result, out.metrics
 
 
@@ -130,18 +152,24 @@ def score(result, ref) -> dict:
 
     ``result`` must already be moved to the reference point (:func:`antenna_track`).
     """
-    err = errors_vs_reference(result, ref.time_s, ref.lla, ref.vel_n)
+    return score_errors(errors_vs_reference(result, ref.time_s, ref.lla, ref.vel_n), ref,
+                        result.ok)
+
+
+def score_errors(err, ref, ok: bool) -> dict:
+    """:func:`score` of the errors at the reference epochs (``ok``: the run completed)."""
     m = rms_metrics(err)
     end = float(np.hypot(*err.pos_m[-1, :2])) if err.time_s.size else math.nan
     dist = distance_travelled(ref)
     m.update(end_pos_h_m=end, distance_m=dist, end_pos_h_pct=100.0 * end / dist,
-             completed=float(result.ok))
+             completed=float(ok))
     return m
 
 
-def run_outcomes(recs, filter_name: str, options=None) -> list:
-    """One :class:`~fuzzynav.runpath.RunOutcome` per trajectory of ``recs``."""
-    return [run(AkitSource(rec), filter_name, options) for rec in recs]
+def run_outcomes(recs, filter_name: str, options=None, **streaming) -> list:
+    """One :class:`~fuzzynav.runpath.RunOutcome` per trajectory of ``recs`` (``streaming``:
+    as :func:`run_trajectory`)."""
+    return [run(AkitSource(rec), filter_name, options, **streaming) for rec in recs]
 
 
 def outcomes_table(recs, outcomes) -> tuple[pd.DataFrame, dict]:

@@ -79,11 +79,13 @@ def json_summary(spec, recs, filter_name, df) -> dict:
                               zip(recs, ["ok" if c >= 1 else "stopped" for c in df["completed"]])}})
 
 
-def run_akit(spec, recs, filter_name, options, args) -> int:
-    """Run, print the table or JSON; ``--plot DIR`` writes a trajectory and error figure."""
+def run_akit(spec, recs, filter_name, options, args, streaming=None) -> int:
+    """Run, print the table or JSON; ``--plot DIR`` writes a trajectory and error figure
+    (``streaming``: ``chunk_samples`` / ``output_rate_hz`` of every run, the metrics those
+    of the whole run)."""
     from fuzzynav.realdata.akit import outcomes_table, run_outcomes
 
-    outcomes = run_outcomes(recs, filter_name, options)
+    outcomes = run_outcomes(recs, filter_name, options, **dict(streaming or {}))
     # the guarantee every source keeps: non-finite metrics print nothing and exit 3 (the
     # attitude is not scored against the reference here: its RMS columns are NaN by design)
     check_outcomes([replace(o, filter=filter_name, scenario=f"{spec} (traj {r.trajectory})",

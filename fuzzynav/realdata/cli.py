@@ -57,7 +57,7 @@ def add_arguments(p) -> None:
 #: may refuse
 _FLAGS = {**{d: "--" + d.replace("_", "-") for d in _SETTINGS}, "imu_delay": "--imu-delay",
           "span": "--span", "mounting": "--mounting", "t_start": "--t-start", "mc": "--mc",
-          "output_rate": "--output-rate", "chunk": "--chunk", "output_dir": "--output-dir"}
+          "output_rate": "--output-rate", "chunk": "--chunk"}
 
 
 def given_settings(args) -> dict:
@@ -112,8 +112,25 @@ def load_recording(spec, args):
                        span_s=_span(getattr(args, "span", None)), session=session, **kw)
 
 
-def run_recording(spec, filter_name, options, args) -> int:
+def streaming_of(streaming, rec) -> dict:
+    """``run``'s ``chunk_samples`` / ``output_rate_hz``: ``streaming(imu_rate_hz)`` (the
+    command line's ``--chunk`` / ``--output-rate``,
+    :func:`fuzzynav.cli.nav.streaming_options`) at the rate of the loaded IMU increments
+    (of the first recording of several: one kind has one rate); none without
+    ``streaming``."""
+    if streaming is None:
+        return {}
+    import numpy as np
+
+    imu = (rec[0] if isinstance(rec, list) else rec).imu
+    return streaming(1.0 / float(np.median(np.diff(imu.time_s))))
+
+
+def run_recording(spec, filter_name, options, args, streaming=None) -> int:
     """Load, run the protocol on ``args.mc`` seeds, print the table or JSON, plot if asked.
+
+    ``streaming``, if given, maps the IMU rate [Hz] to ``run``'s streaming options
+    (:func:`streaming_of`): each run is then fed in chunks, its output decimated.
 
     stdout failures (full disk, closed pipe) are handled once, in :func:`fuzzynav.cli.main`.
     """
@@ -127,12 +144,13 @@ def run_recording(spec, filter_name, options, args) -> int:
     if getattr(args, "t_start", 0.0) and not args.t_start < span:
         raise FuzzynavError(f"--t-start {args.t_start:g} s: the recording runs {span:.0f} s; "
                             "nothing would be scored")
+    streaming = streaming_of(streaming, rec)
     if isinstance(rec, list):  # several recordings of one kind (akit trajectories)
         from fuzzynav.realdata.akit_cli import run_akit
 
-        return run_akit(spec, rec, filter_name, options, args)
+        return run_akit(spec, rec, filter_name, options, args, streaming)
     seeds = list(range(args.seed, args.seed + args.mc))
-    vals = [validate(rec, filter_name, settings, s, options) for s in seeds]
+    vals = [validate(rec, filter_name, settings, s, options, **streaming) for s in seeds]
     check_finite(vals, spec)  # a diverged run: no table at all, exit 3
     check = vals[0].start.coarse.heading_check
     if check.startswith(("turned", "direction not checked")):

@@ -47,7 +47,7 @@ from fuzzynav.realdata.sources import (
 )
 
 __all__ = ["Window", "RecordingSpec", "is_recording_name", "parse_window",
-           "parse_recording_spec", "data_dir", "resolve", "expand", "identity", "overlaps",
+           "parse_recording_spec", "resolve", "expand", "identity", "overlaps",
            "until", "within"]
 
 _WINDOW_RE = re.compile(r"^\s*(\d+(?:\.\d*)?)\s*-\s*(\d+(?:\.\d*)?)\s*(%?)\s*$")
@@ -143,12 +143,6 @@ def parse_recording_spec(text) -> RecordingSpec:
     if not directory or session == "":
         raise FuzzynavError(f"{text!r}: empty directory or session")
     return RecordingSpec(kind, directory, session, parse_window(win) if at else None, options)
-
-
-def data_dir() -> Path:
-    """The first data directory (:func:`fuzzynav.realdata.datasets.data_dirs`):
-    ``$FUZZYNAV_DATA`` when set, else the user cache."""
-    return data_dirs()[0]
 
 
 def resolve(spec: RecordingSpec) -> Path:

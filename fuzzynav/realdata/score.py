@@ -22,8 +22,8 @@ from fuzzynav.nav import attitude, earth
 from fuzzynav.realdata.protocol import read_later
 from fuzzynav.sim.sensors.gnss import in_windows
 
-__all__ = ["OutageDrift", "antenna_track", "check_scored", "errors_against", "horizontal", "outage_drifts",
-           "score"]
+__all__ = ["OutageDrift", "antenna_track", "check_scored", "errors_against", "horizontal",
+           "outage_drifts", "score", "outage_scoring"]
 
 
 @dataclass(frozen=True)
@@ -140,3 +140,20 @@ def score(err: NavErrors, result_time_s, windows, t_start_s: float = 0.0) -> dic
     m["outage_max_h_m"] = float(max(d.max_h_m for d in drifts)) if drifts else float("nan")
     m["n_outages"] = float(len(drifts))
     return m
+
+
+def outage_scoring(errors, windows, t_start_s: float = 0.0, seen: dict | None = None):
+    """The :class:`~fuzzynav.realdata.reference_scoring.ReferenceScoring` of a run fed with
+    outages ``windows``: ``errors(result) -> NavErrors`` (:func:`errors_against`), finished
+    by :func:`score` from ``t_start_s`` on; the outage ends are the instants whose last
+    solution time the drifts read.  ``seen``, if given, receives the ``errors`` and
+    ``solution_time_s`` each run was scored on (for :func:`outage_drifts`)."""
+    from fuzzynav.realdata.reference_scoring import ReferenceScoring
+
+    def finish(err, t_res, _result):
+        if seen is not None:
+            seen.update(errors=err, solution_time_s=t_res)
+        return score(err, t_res, windows, t_start_s)
+
+    return ReferenceScoring(errors, finish,
+                            tuple(np.asarray(windows, float).reshape(-1, 2)[:, 1]))

@@ -15,12 +15,13 @@ from typing import Callable
 
 import numpy as np
 
-from fuzzynav.errors import InputFileError
+from fuzzynav.errors import FuzzynavError, InputFileError
 from fuzzynav.filters.named import FilterContext
 from fuzzynav.filters.runner import InitialState
 from fuzzynav.nav import attitude, earth
 from fuzzynav.realdata.mems import CONSUMER_MEMS, MemsModel
-from fuzzynav.runpath import RUN_SETTINGS, STREAMING_SETTINGS, RunInputs
+from fuzzynav.realdata.reference_scoring import ReferenceScoring
+from fuzzynav.runpath import RUN_SETTINGS, RunInputs
 from fuzzynav.realdata import coarse_align
 from fuzzynav.sim.imu import ImuData
 
@@ -100,8 +101,10 @@ class GnssSource:
     make_context : callable
         ``make_context(options) -> FilterContext`` (:func:`context_for`); its ``sensors``
         are the fed streams.
-    scorer : callable
-        ``scorer(result) -> metrics`` against the reference.
+    scorer : ReferenceScoring or callable
+        ``scorer(result) -> metrics`` against the reference; a
+        :class:`~fuzzynav.realdata.reference_scoring.ReferenceScoring` also scores a run
+        streamed chunk by chunk (``--output-rate``, ``--chunk``).
     needed : callable
         ``needed(metrics) -> names`` of the metrics that must be finite.
     use_velocity : bool
@@ -116,12 +119,11 @@ class GnssSource:
     needed: Callable
     use_velocity: bool = True
 
-    # every run setting applies (the validation protocol degrades what the receiver logged)
-    # but the streaming ones: a recording is scored against its reference whole
-    SETTINGS = frozenset(RUN_SETTINGS) - STREAMING_SETTINGS
+    # every run setting applies: the validation protocol degrades what the receiver logged,
+    # and the reference scores a streamed run chunk by chunk (reference_scoring)
+    SETTINGS = frozenset(RUN_SETTINGS)
     KIND = "rtklib recordings"
-    SETTINGS_NOTE = "they are scored against the reference in one piece; --output-rate " \
-                    "and --chunk are for simulated scenarios"
+    SETTINGS_NOTE = "every run setting applies"
 
     def context(self, options=None) -> FilterContext:
         return self.make_context(options)
@@ -132,6 +134,23 @@ class GnssSource:
 
     def score(self, result) -> dict:
         return self.scorer(result)
+
+    def streaming_scorer(self):
+        """A streaming form of :meth:`score`, fed each chunk of the solution.
+
+        Raises
+        ------
+        FuzzynavError
+            When :attr:`scorer` is a plain function (it scores whole results only).
+        """
+        if not isinstance(self.scorer, ReferenceScoring):
+            raise FuzzynavError(f"--output-rate: {self.name} is scored on its whole result, so "
+                                "its output cannot be decimated")
+        return self.scorer.streaming()
+
+    def score_streamed(self, result, scorer) -> dict:
+        """:meth:`score` of a run fed chunk by chunk to ``scorer``: the same metrics."""
+        return self.scorer.streamed(result, scorer)
 
     def required(self, metrics: dict) -> tuple:
         return self.needed(metrics)

@@ -26,7 +26,7 @@ from fuzzynav.errors import FuzzynavError
 from fuzzynav.realdata import akit
 from fuzzynav.realdata.dataspec import parse_recording_spec, resolve, until, within
 from fuzzynav.realdata.protocol import ProtocolSettings
-from fuzzynav.realdata.score import check_scored, errors_against, score
+from fuzzynav.realdata.score import check_scored, errors_against, outage_scoring
 from fuzzynav.realdata.session import GnssSource, context_for
 from fuzzynav.realdata.sources import SOURCES, data_options
 from fuzzynav.realdata.validate import fed_sigma, prepare_feeds, required_names
@@ -153,7 +153,8 @@ def _gnss_run(name, seed, rec, lo, hi,
     source = GnssSource(
         name, int(seed), start,
         lambda options: context_for(fixes, options, init_pos_sigma_m=sigma0),
-        lambda res: score(errors_against(res, cut.reference, lever, settings.velocity_lag_s),
-                          res.time_s, windows, t0),
+        outage_scoring(
+            lambda res: errors_against(res, cut.reference, lever, settings.velocity_lag_s),
+            windows, t0),
         lambda m: required_names(m, vel_scored), settings.use_velocity)
     return RecordingRun(name, int(seed), {"gnss": fixes}, hi - t0, source)

@@ -14,7 +14,8 @@ from fuzzynav.errors import InputFileError
 from fuzzynav.realdata import protocol
 from fuzzynav.realdata.mems import CONSUMER_MEMS, MemsModel
 from fuzzynav.realdata.protocol import ProtocolSettings
-from fuzzynav.realdata.score import check_scored, errors_against, outage_drifts, score
+from fuzzynav.realdata.score import (check_scored, errors_against, outage_drifts,
+                                     outage_scoring)
 from fuzzynav.realdata.session import (GnssSource, Start, constraints_for, context_for,
                                        start_from)
 from fuzzynav.runpath import RunOutcome, check_outcomes, run
@@ -91,7 +92,8 @@ def _with_heading_sigma(mems: MemsModel, options) -> MemsModel:
 
 
 def validate(rec, filter_name: str, settings: ProtocolSettings = ProtocolSettings(),
-             seed: int = 0, options=None, mems: MemsModel = CONSUMER_MEMS) -> Validation:
+             seed: int = 0, options=None, mems: MemsModel = CONSUMER_MEMS,
+             **streaming) -> Validation:
     """Feed ``filter_name`` a degraded copy of ``rec.gnss`` and score it on ``rec.reference``.
 
     Parameters
@@ -106,6 +108,11 @@ def validate(rec, filter_name: str, settings: ProtocolSettings = ProtocolSetting
     options : dict, optional
         Filter options (e.g. ``rules``).
     mems : MemsModel
+    **streaming
+        ``chunk_samples`` and ``output_rate_hz`` of :func:`fuzzynav.runpath.run`: each
+        feed's run streamed chunk by chunk and its recorded solution kept at
+        ``output_rate_hz``; the metrics, errors and drifts are those of the whole run
+        (:mod:`~fuzzynav.realdata.reference_scoring`).
     """
     mems = _with_heading_sigma(mems, getattr(rec, "start_options", None))
     feeds, windows, start, lever = prepare_feeds(rec, settings, seed)
@@ -116,20 +123,20 @@ def validate(rec, filter_name: str, settings: ProtocolSettings = ProtocolSetting
     runs = {}
     nhc = constraints_for(start, settings.nhc_sigma_mps, settings.nhc_rate_hz)
     vel_scored = bool(np.isfinite(rec.reference.z[:, 3:6]).all())
-
-    def errors(res):
-        return errors_against(res, rec.reference, lever, settings.velocity_lag_s)
-
+    scored = {}  # the errors and solution times the last run was scored on
+    scoring = outage_scoring(
+        lambda res: errors_against(res, rec.reference, lever, settings.velocity_lag_s),
+        windows, t0, scored)
     for name, fixes in feeds.items():
         source = GnssSource(
             f"{getattr(rec, 'directory', 'recording')} ({FEEDS[name]})", int(seed), start,
             lambda opts, fixes=fixes: context_for(fixes, opts, mems, sigma0, nhc),
-            lambda res: score(errors(res), res.time_s, windows, t0),
-            lambda m: required_names(m, vel_scored), settings.use_velocity)
-        out = run(source, filter_name, options)
-        err = errors(out.result)
+            scoring, lambda m: required_names(m, vel_scored), settings.use_velocity)
+        out = run(source, filter_name, options, **streaming)
+        err = scored["errors"]
         runs[name] = FeedRun(fixes, out.result, err, out.metrics,
-                             outage_drifts(err, out.result.time_s, windows), out.diverged)
+                             outage_drifts(err, scored["solution_time_s"], windows),
+                             out.diverged)
     return Validation(filter_name, int(seed), settings, start, windows, runs)
 
 

@@ -37,7 +37,7 @@ from fuzzynav.sim.tomltable import Table, read_toml, with_path
 from fuzzynav.tuning.study_config import study_config_from_dict
 from fuzzynav.tuning.objective import TrialObjective
 
-__all__ = ["TUNABLE", "Q_BOUNDS", "R_BOUNDS", "SPACES", "BaselineConfig", "is_baseline_config",
+__all__ = ["TUNABLE", "Q_BOUNDS", "R_BOUNDS", "SPACES", "BaselineConfig",
            "load_baseline_config", "training_channels", "space_of", "suggest", "run_params",
            "BaselineObjective", "sub_config", "best_params", "write_params", "train_score", "bound_hits"]
 
@@ -88,11 +88,6 @@ class BaselineConfig:
     study: object          # StudyConfig (no controllers)
     tune: tuple
     out: Path
-
-
-def is_baseline_config(path) -> bool:
-    """Whether a study file is a baseline study (has a ``[baselines]`` table)."""
-    return "baselines" in read_toml(Path(path), "study file")
 
 
 def load_baseline_config(path) -> BaselineConfig:

@@ -31,6 +31,7 @@ import optuna
 from optuna.trial import TrialState
 
 from fuzzynav.errors import FuzzynavError
+from fuzzynav.fileio import process_alive
 from fuzzynav.tuning.study_config import GROUP_METRICS
 from fuzzynav.tuning.objective import Objective
 from fuzzynav.tuning.samplers import get_optimiser
@@ -174,23 +175,6 @@ def n_finished(study) -> int:
     return len(study.get_trials(deepcopy=False, states=FINISHED))
 
 
-def _alive(pid: int) -> bool:
-    """Whether process ``pid`` runs (a zombie -- dead, not yet reaped by its parent -- does
-    not: signal 0 still reaches it, so it is told apart by its state in ``/proc``)."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    try:
-        with open(f"/proc/{pid}/stat", "rb") as fh:
-            state = fh.read().rsplit(b")", 1)[1].split()[0]
-    except (OSError, IndexError):  # no /proc (macOS): signal 0 is all we know
-        return True
-    return state not in (b"Z", b"X")
-
-
 def _owner(t, now: float):
     """``(host, pid, last heartbeat)`` of a running trial's worker.
 
@@ -222,7 +206,7 @@ def reap_stale(study, stale_after_s: float, exclusive: bool = False) -> int:
     for t in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
         w_host, pid, beat = _owner(t, now)
         if w_host == host and pid is not None:
-            if _alive(int(pid)):
+            if process_alive(int(pid)):
                 continue
         elif w_host is None and exclusive:
             pass  # ownerless under the lock: an orphan

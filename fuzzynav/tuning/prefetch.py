@@ -1,10 +1,9 @@
 """A study's start-up done by as many processes as it has workers.
 
 Before a study forks its workers, the parent loads the kernels, every training log and the
-baseline filter's metrics on each (:func:`fuzzynav.tuning.study_run.warm_evaluator`), so that the
-workers start with everything a trial needs.  Done serially, that start-up is over a second
--- 7 % of a 60-trial study with two workers, during which the second CPU idles.  With
-several processes (:func:`warm_shared`):
+baseline filter's metrics on each, so that the workers start with everything a trial needs.
+Done serially, that start-up is over a second -- 7 % of a 60-trial study with two workers,
+during which the second CPU idles.  With several processes (:func:`warm_shared`):
 
 * the logs load in a thread while the kernels load (reading and checksumming a log's file
   releases the GIL; loading kernels mostly holds it);
@@ -93,10 +92,12 @@ def _load_logs(evaluator, runs, stop) -> None:
 
 
 def warm_shared(cfg, cache_dir=None, processes: int = 1):
-    """A warm :class:`~fuzzynav.tuning.objective.Evaluator` of ``cfg``'s training runs
-    (:func:`fuzzynav.tuning.study_run.warm_evaluator`), made by ``processes`` processes: the
-    kernels loaded with the logs loading alongside (a thread), then the baseline runs
-    shared (:func:`prepare_shared`).  Pass 1 where workers are not forked."""
+    """A warm :class:`~fuzzynav.tuning.objective.Evaluator` of ``cfg``'s training runs (every
+    training log loaded, simulated into the cache if missing so that workers never race to
+    create it; the baseline's metrics on each; the kernels of a candidate's run loaded),
+    made by ``processes`` processes: the kernels loaded with the logs loading alongside (a
+    thread), then the baseline runs shared (:func:`prepare_shared`).  Pass 1 where workers
+    are not forked."""
     from fuzzynav.tuning.objective import Evaluator
     from fuzzynav.tuning.warmup import compile_by_running
 

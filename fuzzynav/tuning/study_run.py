@@ -24,13 +24,12 @@ import warnings
 from tqdm.auto import tqdm
 
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.tuning.prefetch import warm_shared
 from fuzzynav.tuning.samplers import get_optimiser
 from fuzzynav.tuning.optuna_study import n_finished, open_study, reap_orphans, run_worker
 
 __all__ = ["WORKER_BOOT", "FORK", "MAX_RESTARTS", "USER_ERROR", "POLL_S", "worker_command",
            "ForkedWorker", "wait_for_exit", "supervise", "run_study", "run_plan",
-           "open_plan_studies", "warm_evaluator"]
+           "open_plan_studies"]
 
 #: a worker is started with this program instead of ``python -m``, which would put the
 #: current directory first on its import path (a stray ``inspect.py`` there broke workers)
@@ -285,12 +284,3 @@ def open_plan_studies(plan, storage=None) -> dict:
     """``part -> optuna.Study`` of a plan's studies, loaded (a missing study:
     :class:`~fuzzynav.errors.FuzzynavError` naming it; no file is created)."""
     return {part: open_study(plan.config(part), storage) for part in plan.parts()}
-
-
-def warm_evaluator(cfg, cache_dir=None, processes: int = 1):
-    """An :class:`~fuzzynav.tuning.objective.Evaluator` with every training log loaded
-    (simulated into the cache if missing, so workers never race to create it), the
-    baseline's metrics on each, and the kernels of a candidate's run loaded.  ``processes``
-    share the baseline runs (forked helpers, :mod:`fuzzynav.tuning.prefetch`: pass 1 where
-    workers are not forked)."""
-    return warm_shared(cfg, cache_dir, processes)

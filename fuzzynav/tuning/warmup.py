@@ -16,28 +16,11 @@ from tqdm.auto import tqdm
 
 from fuzzynav import compile_notice
 
-__all__ = ["MESSAGE", "kernel_cache", "compiled_count", "is_cold", "compile_by_running",
-           "compiling", "warm_up"]
+__all__ = ["MESSAGE", "compile_by_running", "compiling", "warm_up"]
 
 #: the live count's label (on a terminal; the one-line notice is
 #: :mod:`fuzzynav.compile_notice`'s, printed whether stderr is a terminal or not)
 MESSAGE = "numba kernels compiled"
-
-
-def kernel_cache():
-    """numba's cache directory keyed to this package's sources (None when not keyed:
-    ``FUZZYNAV_NUMBA_CACHE=0`` leaves numba's own per-file caches, not counted here)."""
-    return compile_notice.kernel_cache()
-
-
-def compiled_count(cache) -> int:
-    """Compiled kernels in the cache (one index file each)."""
-    return compile_notice.compiled_count(cache)
-
-
-def is_cold(cache=None) -> bool:
-    """Whether the keyed kernel cache is empty (the next run compiles everything)."""
-    return compile_notice.cache_is_cold(cache)
 
 
 def compile_by_running(cfg, cache_dir=None, evaluator=None):
@@ -63,8 +46,8 @@ def compiling(progress: bool = True):
     Enter it before anything imports the filters: importing them (loading a study config
     does) already compiles the kernels that have explicit signatures.
     """
-    cache = kernel_cache()
-    if not is_cold(cache):
+    cache = compile_notice.kernel_cache()
+    if not compile_notice.cache_is_cold(cache):
         yield False
         return
     compile_notice.announce()  # the one line, before loading the config compiles
@@ -75,7 +58,7 @@ def compiling(progress: bool = True):
 
     def count():
         while not done.wait(1.0):
-            bar.update(compiled_count(cache) - bar.n)
+            bar.update(compile_notice.compiled_count(cache) - bar.n)
 
     watcher = threading.Thread(target=count, daemon=True)
     watcher.start()
@@ -84,7 +67,7 @@ def compiling(progress: bool = True):
     finally:
         done.set()
         watcher.join()
-        bar.update(compiled_count(cache) - bar.n)
+        bar.update(compile_notice.compiled_count(cache) - bar.n)
         bar.close()
 
 

@@ -18,7 +18,7 @@ from fuzzynav.filters.bank_beta import floor_shares, push_innovation, stat_size,
 from fuzzynav.filters.beta_controller import ShareController
 from fuzzynav.filters.catalog import bind_systems
 from fuzzynav.filters.runner import run_filter
-from fuzzynav.fuzzy.io import from_dict
+from fuzzynav.fuzzy.io import from_dict, load_fis
 from tests.filters.test_bank import data, nhc  # noqa: F401  (the module-scoped fixture)
 from tests.filters.simple_data import CONFIG
 
@@ -94,7 +94,7 @@ def test_a_local_whose_sensor_is_disturbed_gets_a_lower_share(data):
     bad = copy.deepcopy(sensors["nhc"])
     zone = (bad.time_s >= 100.0) & (bad.time_s < 150.0)
     bad.z[zone, 0] += 1.0  # a 1-m/s lateral slip, 20 sigma of the non-holonomic constraint
-    res = _run(data, _bank(ShareController.from_file(RULES)), {**sensors, "nhc": bad})
+    res = _run(data, _bank(ShareController(load_fis(RULES), str(RULES))), {**sensors, "nhc": bad})
     assert res.ok
     beta, t = res.locals.beta, res.time_s
     onset = (t >= 100.0) & (t < 112.0)

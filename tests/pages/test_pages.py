@@ -10,7 +10,8 @@ from scipy import stats
 from fuzzynav.cli import main
 from fuzzynav.pages.common import markers, replace_section
 from fuzzynav.pages.page_registry import PAGES
-from fuzzynav.report import ci_cell, improvement_cell
+from fuzzynav.metrics import mean_ci
+from fuzzynav.report import ci_cell, diff_cell, improvement_cell
 
 from ..conftest import ROOT
 
@@ -24,6 +25,13 @@ def test_ci_cell_is_the_student_t_interval_by_hand():
     assert ci_cell(values, ".3g", ".2g") == "3.5 ± 4.2"
     assert ci_cell([2.0, np.nan], ".2f") == "2.00"  # one finite value: no interval
     assert ci_cell([np.nan]) == "—"
+
+
+def test_diff_cell_is_the_signed_mean_and_interval_by_hand():
+    d = [-1.0, 0.0, 1.0, 4.0]  # mean 1, sd sqrt(14/3), half = t(0.975, 3) sd / 2
+    half = stats.t.ppf(0.975, 3) * math.sqrt(14.0 / 3.0) / 2.0
+    assert diff_cell(mean_ci(np.array(d))) == f"+1.000 [{1 - half:+.3f}, {1 + half:+.3f}]"
+    assert diff_cell(mean_ci(np.array(d)), "+.1f") == "+1.0 [-2.4, +4.4]"
 
 
 def test_improvement_cell_from_one_pair_is_the_bare_change():

@@ -3,7 +3,8 @@ import numpy as np
 import pytest
 
 from fuzzynav.errors import DataMissingError, FuzzynavError
-from fuzzynav.realdata.dataspec import (DATA_DIR_ENV, Window, data_dir, expand, is_recording_name,
+from fuzzynav.realdata.datasets import data_dirs
+from fuzzynav.realdata.dataspec import (DATA_DIR_ENV, Window, expand, is_recording_name,
                                         overlaps, parse_recording_spec, parse_window, resolve,
                                         until, within)
 from fuzzynav.sim.imu import ImuData
@@ -81,7 +82,7 @@ def test_a_study_refuses_a_respelled_training_recording_as_held_out(monkeypatch,
 
 def test_data_dir_from_environment_and_missing_directory(monkeypatch, tmp_path):
     monkeypatch.setenv(DATA_DIR_ENV, str(tmp_path))
-    assert data_dir() == tmp_path
+    assert data_dirs()[0] == tmp_path
     (tmp_path / "akit").mkdir()
     assert resolve(parse_recording_spec("akit:akit:2")) == tmp_path / "akit"
     with pytest.raises(DataMissingError, match=DATA_DIR_ENV):

@@ -9,8 +9,10 @@ import pytest
 from fuzzynav.errors import FuzzynavError, InputFileError
 from fuzzynav.filters.baselines import read_params
 from fuzzynav.filters.params_file import PARAMS_FORMAT
-from fuzzynav.tuning.baseline_config import is_baseline_config, load_baseline_config, space_of
-from fuzzynav.tuning.kinds.baseline_studies import run_baselines
+from fuzzynav.tuning.baseline_config import load_baseline_config, space_of
+from fuzzynav.tuning.kinds import kind_of
+from fuzzynav.tuning.kinds.baseline_studies import BaselinePlan
+from fuzzynav.tuning.study_run import run_plan
 
 STUDY = Path(__file__).resolve().parents[2] / "studies" / "paper000_baselines.toml"
 
@@ -34,8 +36,14 @@ out = "tuned.json"
 """
 
 
+def run_baselines(bcfg, cache_dir):
+    """Tune every filter of ``bcfg`` with the one study driver; the parameter file."""
+    run_plan(BaselinePlan(bcfg, cache_dir), progress=False)
+    return bcfg.out
+
+
 def test_the_shipped_baseline_study_parses():
-    assert is_baseline_config(STUDY)
+    assert kind_of(STUDY).name == "baselines"
     b = load_baseline_config(STUDY)
     assert "ekf-tuned" in b.tune and "als" in b.tune
     assert b.out.name == "paper000_baselines.json"

@@ -36,11 +36,11 @@ def test_a_cold_cache_is_compiled_here_under_a_message(fake_compile, monkeypatch
     cache, calls = fake_compile
     said = io.StringIO()
     monkeypatch.setattr(compile_notice, "_INSTALLED", compile_notice.CompileNotice(said))
-    assert warmup.is_cold()
+    assert compile_notice.cache_is_cold()
     assert warmup.warm_up(cfg=None, cache_dir="sim") is True
     assert said.getvalue() == compile_notice.COLD_TEXT + "\n"
     assert capsys.readouterr().err == ""  # no progress bar off a terminal
-    assert calls == ["sim"] and not warmup.is_cold()
+    assert calls == ["sim"] and not compile_notice.cache_is_cold()
     # warm now: nothing compiled, nothing said
     assert warmup.warm_up(cfg=None, cache_dir="sim") is False
     assert calls == ["sim"] and capsys.readouterr().err == ""

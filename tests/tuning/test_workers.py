@@ -18,7 +18,8 @@ from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.sim.scenario import load_scenario
 from fuzzynav.tuning.study_config import load_study_config
 from fuzzynav.tuning.study_run import run_study
-from fuzzynav.tuning.optuna_study import _alive, open_study
+from fuzzynav.fileio import process_alive as _alive
+from fuzzynav.tuning.optuna_study import open_study
 from tests.tuning.studies import write_study
 
 optuna.logging.set_verbosity(optuna.logging.ERROR)

@@ -34,13 +34,6 @@ class FuzzyPolicy(Adapter):
         self.binding = binding
         self.diag_names = tuple(self.diag_prefix) + tuple(fis.input_names)
 
-    @classmethod
-    def from_file(cls, path):
-        """Load a rule file and bind it."""
-        from fuzzynav.fuzzy import load_fis
-
-        return cls(load_fis(path), str(path))
-
     @property
     def channels(self) -> tuple:
         """Measurement channels the rule file reads."""

@@ -7,4 +7,7 @@ aiding-sensor data (:class:`fuzzynav.sim.sensors.SensorData`) on one time axis.
 * :mod:`.rtklib` — RTKLIB-logged IMU CSV + time tags + RTKLIB ``.pos`` (the rtklib-drive);
 * :mod:`.akit_recording` — the A-KIT AUV trajectories (clock map in :mod:`.akit_timing`,
   checks in :mod:`.akit_checks`).
+
+Both read their files a block of lines at a time (:mod:`.chunked`; the car's IMU CSV in
+:mod:`.imu_csv`), with the same arrays and errors as a whole read.
 """

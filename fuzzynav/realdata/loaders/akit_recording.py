@@ -36,7 +36,8 @@ import numpy as np
 
 from fuzzynav.errors import DataMissingError, InputFileError, brief
 from fuzzynav.nav import attitude
-from fuzzynav.realdata.loaders import akit_checks as checks
+from fuzzynav.realdata.loaders import akit_checks as checks, chunked
+from fuzzynav.realdata.loaders.chunked import DEFAULT_CHUNK_ROWS
 from fuzzynav.realdata.loaders.akit_timing import ClockMap, dvl_offset, estimate_clock
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.sim.sensors import SensorData
@@ -108,23 +109,17 @@ def parse_trajectories(text) -> list[int]:
     return sorted(out)
 
 
-def read_table(path: Path, kind: str) -> np.ndarray:
-    """A numeric CSV with one header line; every row complete and finite, time increasing."""
-    if path.is_dir():
-        raise InputFileError(path, "", "is a directory, not an A-KIT file")
-    if not path.is_file():
-        raise DataMissingError(f"{path}: A-KIT file not found")
-    try:
-        checks.file_size(path)
-        text = path.read_text()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputFileError(path, "", f"cannot be read ({exc.__class__.__name__})") from None
-    lines = text.splitlines()
-    if len(lines) < 3:
-        raise InputFileError(path, "line 2", "no data rows (a header and at least 2 rows)")
-    ncol = COLUMNS[kind]
+#: what a whole read refuses first (after a file that cannot be read, one without two data
+#: rows): a row that does not parse, then a time that does not increase
+_ERROR_ORDER = ("row", "time")
+
+
+def _parse_rows(path, lines, first_lineno: int, ncol: int):
+    """The numbers of text rows (``lines``, the first being line ``first_lineno`` of the
+    file, 1-based); raises the error of the first row that is cut, not a number or not
+    finite."""
     rows = []
-    for i, line in enumerate(lines[1:], start=2):
+    for i, line in enumerate(lines, start=first_lineno):
         parts = line.split(",")
         if len(parts) != ncol:
             raise InputFileError(path, f"line {i}", f"has {len(parts)} columns, expected "
@@ -137,11 +132,68 @@ def read_table(path: Path, kind: str) -> np.ndarray:
         if not all(np.isfinite(vals)):
             raise InputFileError(path, f"line {i}", "a field is not finite")
         rows.append(vals)
-    a = np.array(rows)
-    bad = np.flatnonzero(np.diff(a[:, 0]) <= 0)
-    if bad.size:
-        raise InputFileError(path, f"line {bad[0] + 3}, column Time [s]",
-                             "time does not increase")
+    return np.array(rows, dtype=float).reshape(len(rows), ncol)
+
+
+def _time_error(path, t, first_lineno: int):
+    """The error of the first time that does not increase in ``t`` (rows from line
+    ``first_lineno`` of the file on), or ``None``."""
+    bad = np.flatnonzero(np.diff(t) <= 0)
+    if not bad.size:
+        return None
+    return InputFileError(path, f"line {first_lineno + bad[0] + 1}, column Time [s]",
+                          "time does not increase")
+
+
+def _split_lines(block) -> list:
+    """The lines of a block of text lines as ``str.splitlines`` splits the whole text."""
+    return [part for line in block for part in line.splitlines()]
+
+
+def read_table(path: Path, kind: str, chunk_rows=DEFAULT_CHUNK_ROWS) -> np.ndarray:
+    """A numeric CSV with one header line; every row complete and finite, time increasing.
+
+    Read ``chunk_rows`` lines at a time (:mod:`.chunked`; ``None``: at once): each block's
+    rows are parsed and checked, the time order across block boundaries too, then the
+    time column as a whole (:func:`~.akit_checks.timing_of`); every block size gives the
+    same table and the same error.
+    """
+    if path.is_dir():
+        raise InputFileError(path, "", "is a directory, not an A-KIT file")
+    if not path.is_file():
+        raise DataMissingError(f"{path}: A-KIT file not found")
+    chunk_rows = chunked.check_chunk_rows(chunk_rows)
+    ncol = COLUMNS[kind]
+    errors = chunked.FirstErrors(_ERROR_ORDER)
+    parts, n_lines, last = [], 0, None  # last: the previous block's last (time, line)
+    try:
+        checks.file_size(path)
+        with open(path) as f:
+            for _, block in chunked.line_blocks(f, chunk_rows):
+                lines = _split_lines(block)
+                # the header is line 1; rows are numbered from 2
+                first = max(n_lines, 1) - n_lines
+                lineno = n_lines + first + 1
+                n_lines += len(lines)
+                if "row" in errors or not lines[first:]:  # past a bad row only lines count
+                    continue
+                try:
+                    a = _parse_rows(path, lines[first:], lineno, ncol)
+                except InputFileError as exc:
+                    errors.note("row", exc)
+                    continue
+                t = a[:, 0] if last is None else np.concatenate([[last[0]], a[:, 0]])
+                bad = _time_error(path, t, lineno if last is None else last[1])
+                if bad is not None:
+                    errors.note("time", bad)
+                last = (a[-1, 0], lineno + a.shape[0] - 1)
+                parts.append(a)
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputFileError(path, "", f"cannot be read ({exc.__class__.__name__})") from None
+    if n_lines < 3:
+        raise InputFileError(path, "line 2", "no data rows (a header and at least 2 rows)")
+    errors.raise_first()
+    a = parts[0] if len(parts) == 1 else np.concatenate(parts)
     checks.timing_of(path, a[:, 0], kind)
     return a
 
@@ -243,8 +295,10 @@ def _reference_on_imu_clock(gt, imu, clock: ClockMap):
     return reference_on_imu_clock(gt, clock, t_ref), imu
 
 
-def load_trajectory(directory, n: int) -> AkitRecording:
-    """Read trajectory ``n`` of an A-KIT directory (see the module notes for frames)."""
+def load_trajectory(directory, n: int, chunk_rows=DEFAULT_CHUNK_ROWS) -> AkitRecording:
+    """Read trajectory ``n`` of an A-KIT directory (see the module notes for frames), its
+    files ``chunk_rows`` lines at a time (:func:`read_table`; the same recording whatever
+    it is)."""
     d = Path(directory)
     files = {"imu": d / f"IMU_trajectory{n}.csv", "dvl": d / "corrected" / f"DVL_trajectory{n}.csv",
              "reference": d / "corrected" / f"GT_trajectory{n}.csv"}
@@ -252,13 +306,13 @@ def load_trajectory(directory, n: int) -> AkitRecording:
     # in one line, not as numpy's warnings first
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        return _load(d, n, files)
+        return _load(d, n, files, chunk_rows)
 
 
-def _load(d: Path, n: int, files: dict) -> AkitRecording:
-    imu = read_table(files["imu"], "IMU")
-    dvl = read_table(files["dvl"], "DVL")
-    gt = read_table(files["reference"], "GT")
+def _load(d: Path, n: int, files: dict, chunk_rows) -> AkitRecording:
+    imu = read_table(files["imu"], "IMU", chunk_rows)
+    dvl = read_table(files["dvl"], "DVL", chunk_rows)
+    gt = read_table(files["reference"], "GT", chunk_rows)
     checks.imu_of(files["imu"], imu)
     checks.dvl_of(files["dvl"], dvl)
     checks.reference_of(files["reference"], gt)
@@ -281,6 +335,8 @@ def _load(d: Path, n: int, files: dict) -> AkitRecording:
     return AkitRecording(n, d, inc, sensor, ref, clock, r_b, {k: str(v) for k, v in files.items()})
 
 
-def load_akit(directory, trajectories="1-8") -> list[AkitRecording]:
-    """Load several trajectories (``"1-8"``, ``"2"``, ``"1,3"``)."""
-    return [load_trajectory(directory, n) for n in parse_trajectories(trajectories)]
+def load_akit(directory, trajectories="1-8", chunk_rows=DEFAULT_CHUNK_ROWS
+              ) -> list[AkitRecording]:
+    """Load several trajectories (``"1-8"``, ``"2"``, ``"1,3"``; ``chunk_rows``: as
+    :func:`load_trajectory`)."""
+    return [load_trajectory(directory, n, chunk_rows) for n in parse_trajectories(trajectories)]

@@ -70,17 +70,23 @@ def regular_sample_times(tick_ms) -> SampleClock:
                        regular=bool(regular))
 
 
-def integrate_rates(t_s, rate, bounds_s) -> np.ndarray:
+def integrate_rates(t_s, rate, bounds_s, block_samples=None) -> np.ndarray:
     """Integrals of a piecewise-linear rate between consecutive boundaries.
 
     Parameters
     ----------
     t_s : ndarray, shape (K,)
         Increasing sample times [s].
-    rate : ndarray, shape (K, m)
-        Rate samples [unit/s].
+    rate : ndarray, shape (K, m), or callable
+        Rate samples [unit/s], or ``rate(a, b) -> ndarray (b - a, m)``: the samples
+        ``a .. b-1``, asked for in consecutive blocks (made when needed, e.g. from rows
+        read and rotated block by block).
     bounds_s : ndarray, shape (M+1,)
         Increasing boundaries inside ``[t_s[0], t_s[-1]]``.
+    block_samples : int, optional
+        Work through the samples this many at a time (default: all at once); the result
+        is the same to the last bit (the running integral is carried across blocks and
+        summed in the same order).
 
     Returns
     -------
@@ -88,16 +94,37 @@ def integrate_rates(t_s, rate, bounds_s) -> np.ndarray:
         ``int_{bounds[j]}^{bounds[j+1]} rate dt`` [unit].
     """
     t = np.asarray(t_s, dtype=float)
-    w = np.asarray(rate, dtype=float)
     b = np.asarray(bounds_s, dtype=float)
-    h = np.diff(t)
-    cum = np.concatenate([np.zeros((1, w.shape[1])),
-                          np.cumsum(0.5 * (w[:-1] + w[1:]) * h[:, None], axis=0)])
+    rate_of = rate if callable(rate) else (lambda lo, hi, w=np.asarray(rate, float): w[lo:hi])
+    # the sample interval of each boundary (the last interval holds the last sample)
     i = np.clip(np.searchsorted(t, b, side="right") - 1, 0, t.size - 2)
-    tau = (b - t[i])[:, None]
-    slope = (w[i + 1] - w[i]) / h[i, None]
-    running = cum[i] + w[i] * tau + 0.5 * slope * tau * tau
-    return np.diff(running, axis=0)
+    step = t.size - 1 if block_samples is None else max(int(block_samples), 1)
+    out, done, cum0, last = None, 0, None, None  # last: the previous block's last running
+    for s0 in range(0, t.size - 1, step):
+        s1 = min(s0 + step, t.size - 1)  # intervals s0 .. s1-1, samples s0 .. s1
+        w = rate_of(s0, s1 + 1)
+        h = np.diff(t[s0:s1 + 1])
+        area = 0.5 * (w[:-1] + w[1:]) * h[:, None]
+        if cum0 is None:  # the running integral from zero, summed in order
+            cum = np.concatenate([np.zeros((1, w.shape[1])), np.cumsum(area, axis=0)])
+        else:  # ... carried on from the previous block's last sample
+            cum = np.cumsum(np.concatenate([cum0[None], area]), axis=0)
+        cum0 = cum[-1]
+        lo, hi = np.searchsorted(i, s0, side="left"), np.searchsorted(i, s1 - 1, side="right")
+        k = i[lo:hi] - s0
+        tau = (b[lo:hi] - t[s0:s1][k])[:, None]
+        slope = (w[k + 1] - w[k]) / h[k, None]
+        running = cum[k] + w[k] * tau + 0.5 * slope * tau * tau
+        if last is not None and running.shape[0]:
+            running = np.concatenate([last[None], running])
+        if running.shape[0]:
+            last = running[-1]
+        inc = np.diff(running, axis=0)
+        if out is None:
+            out = np.empty((b.size - 1, w.shape[1]))
+        out[done:done + inc.shape[0]] = inc
+        done += inc.shape[0]
+    return out
 
 
 def grid_bounds(t_first_s: float, t_last_s: float, rate_hz: float) -> np.ndarray:

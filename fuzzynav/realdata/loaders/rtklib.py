@@ -31,7 +31,6 @@ second just before the first IMU sample, counted from 1970 in the GPS time scale
 """
 from __future__ import annotations
 
-import io
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -41,6 +40,8 @@ from fuzzynav import units
 from fuzzynav.errors import DataMissingError, InputFileError
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.realdata.loaders import checks, increments, timetag
+from fuzzynav.realdata.loaders.chunked import DEFAULT_CHUNK_ROWS
+from fuzzynav.realdata.loaders.imu_csv import read_imu_csv
 from fuzzynav.realdata.loaders.mounting import Mounting
 from fuzzynav.realdata.loaders.recording_files import find_files
 from fuzzynav.realdata.loaders.rtkpos import read_pos
@@ -52,9 +53,6 @@ __all__ = ["DEFAULT_IMU_DELAY_S", "TimeAlignment", "Recording", "read_imu_csv", 
 
 #: sample-to-fitted-arrival delay of the rtklib-drive IMU [s] (see the module docstring)
 DEFAULT_IMU_DELAY_S = 0.21
-_CSV_COLUMNS = 7
-_CSV_NAMES = ("acc x", "acc y", "acc z", "gyro x", "gyro y", "gyro z", "tick")
-_CSV_LAYOUT = "acc x,y,z [g], gyro x,y,z [deg/s], tick [ms]"
 
 
 @dataclass(frozen=True)
@@ -136,80 +134,6 @@ class Recording:
                              options=self.start_options, **kw)
 
 
-def _data_lines(lines, first: int, last: int) -> np.ndarray:
-    """0-based indices of lines ``first .. last-1`` that hold data.
-
-    Blank lines and whole-line ``#`` comments (an edited or concatenated copy) are skipped;
-    their bytes still count in the offsets matched against the tag.
-    """
-    return np.array([i for i in range(first, last)
-                     if lines[i].strip() and not lines[i].lstrip().startswith(b"#")],
-                    dtype=np.int64)
-
-
-def _refuse_line(path, lineno: int, line: bytes):
-    """Raise the error naming what is wrong in one line that did not parse."""
-    fields = line.split(b",")
-    if len(fields) != _CSV_COLUMNS:
-        raise InputFileError(path, f"line {lineno}", f"{len(fields)} fields, expected "
-                                                     f"{_CSV_COLUMNS}: {_CSV_LAYOUT}")
-    for name, field in zip(_CSV_NAMES, fields):
-        text = field.strip().decode("ascii", "replace")[:24]
-        try:
-            value = float(field)
-        except ValueError:
-            raise InputFileError(path, f"line {lineno}, column {name}",
-                                 f"{text!r} is not a number ({_CSV_LAYOUT})") from None
-        if not np.isfinite(value):
-            raise InputFileError(path, f"line {lineno}, column {name}",
-                                 f"{text!r} is not a finite number")
-
-
-def _check_ticks_increase(path, tick, kept):
-    step = np.diff(tick)
-    bad = np.flatnonzero(step <= 0)
-    if bad.size:
-        k = bad[0]
-        what = (f"repeats the previous tick {tick[k]:.0f}" if step[k] == 0 else
-                f"{tick[k + 1]:.0f} after {tick[k]:.0f}")
-        raise InputFileError(path, f"line {kept[k + 1] + 1}, column tick",
-                             f"{what}: ticks must increase")
-
-
-def read_imu_csv(path):
-    """Rows of an IMU CSV with partial first/last lines, blank and comment lines dropped.
-
-    Returns
-    -------
-    data : ndarray, shape (K, 7)
-    kept : ndarray of int, shape (K,)
-        0-based line index of each row in the file.
-    line_lengths : ndarray of int
-        Length of every line of the file (without ``\\n``).
-    file_size : int
-    """
-    path = Path(path)
-    raw = path.read_bytes()
-    lines = raw.split(b"\n")
-    if raw.endswith(b"\n"):
-        lines = lines[:-1]
-    last = len(lines) if raw.endswith(b"\n") else len(lines) - 1
-    kept = _data_lines(lines, 1, last)
-    if kept.size < 2:
-        raise InputFileError(path, "lines", "fewer than two complete sample lines")
-    body = b"\n".join(lines[i] for i in kept)
-    try:
-        data = np.loadtxt(io.BytesIO(body), delimiter=",", ndmin=2, comments=None)
-    except ValueError:
-        data = None
-    if data is None or data.shape[1] != _CSV_COLUMNS or not np.all(np.isfinite(data)):
-        for i in kept:
-            _refuse_line(path, i + 1, lines[i])
-        raise InputFileError(path, "", f"not a CSV of {_CSV_LAYOUT}")  # parsed line by line
-    _check_ticks_increase(path, data[:, 6], kept)
-    return data, kept, np.array([len(x) for x in lines], dtype=np.int64), len(raw)
-
-
 # -- time alignment -----------------------------------------------------------------------------
 def align_time(tag, clock, kept, line_lengths, file_size, imu_delay_s):
     """GPST offset [s] from tag start of every kept sample, and the :class:`TimeAlignment`."""
@@ -246,12 +170,24 @@ def _resolve_mounting(mounting, directory: Path, files: dict):
     return Mounting.from_toml(mounting)
 
 
-def _imu_data(data, t_s, mounting, resample_hz, span):
-    """Increments in the body frame between the chosen boundaries."""
-    rates = np.column_stack([data[:, 3:6] * units.DPS, data[:, 0:3] * units.G0])
-    if mounting is not None:
-        c = mounting.matrix
-        rates = np.column_stack([rates[:, :3] @ c.T, rates[:, 3:] @ c.T])
+def _rates_of(data, mounting):
+    """``rates(a, b)``: gyro [rad/s] and accelerometer [m/s^2] rates of rows ``a .. b-1``,
+    in the body frame."""
+    c = None if mounting is None else mounting.matrix
+
+    def rates(a, b):
+        rows = data[a:b]
+        out = np.column_stack([rows[:, 3:6] * units.DPS, rows[:, 0:3] * units.G0])
+        if c is not None:
+            out = np.column_stack([out[:, :3] @ c.T, out[:, 3:] @ c.T])
+        return out
+
+    return rates
+
+
+def _imu_data(data, t_s, mounting, resample_hz, span, block_rows=None):
+    """Increments in the body frame between the chosen boundaries (the rates made and
+    integrated ``block_rows`` samples at a time: :func:`~.increments.integrate_rates`)."""
     lo, hi = max(t_s[0], span[0]), min(t_s[-1], span[1])
     if resample_hz is None:
         bounds = t_s[(t_s >= lo) & (t_s <= hi)]
@@ -260,7 +196,7 @@ def _imu_data(data, t_s, mounting, resample_hz, span):
     if bounds.size < 2:
         raise InputFileError(None, "span_s", f"leaves no IMU data (IMU covers {t_s[0]:.3f} "
                                              f"to {t_s[-1]:.3f} s)")
-    inc = increments.integrate_rates(t_s, rates, bounds)
+    inc = increments.integrate_rates(t_s, _rates_of(data, mounting), bounds, block_rows)
     return ImuData(time_s=bounds, dtheta_b=inc[:, :3], dv_b=inc[:, 3:])
 
 
@@ -283,7 +219,8 @@ def _fixes(pos, epoch: int, t_lo: float, t_hi: float, lever_arm_b, fixed_only: b
 
 def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
                 resample_hz="nominal", span_s=None, session=None,
-                gnss_velocity_lag_s=0.0, limits=None, start=None) -> Recording:
+                gnss_velocity_lag_s=0.0, limits=None, start=None,
+                chunk_rows=DEFAULT_CHUNK_ROWS) -> Recording:
     """Load an RTKLIB-logged IMU + GNSS recording.
 
     Parameters
@@ -312,6 +249,9 @@ def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
     start : StartOptions, optional
         How the initial state is found (:mod:`fuzzynav.realdata.start_options`; default: the
         car drive's); its ``lever_arm_b_m``, if set, replaces the mounting's.
+    chunk_rows : int or None
+        Lines of the IMU CSV parsed at a time (:func:`read_imu_csv`; ``None``: the whole
+        file at once); the recording is the same whatever it is.
 
     Returns
     -------
@@ -328,7 +268,7 @@ def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
     files = find_files(directory, session)
     mount = _resolve_mounting(mounting, directory, files)
     tag = timetag.read_timetag(files["tag"])
-    data, kept, lengths, size = read_imu_csv(files["imu"])
+    data, kept, lengths, size = read_imu_csv(files["imu"], chunk_rows)
     limits = checks.DEFAULT_LIMITS if limits is None else limits
     rate_hz = checks.imu_ticks(files["imu"], data[:, 6], kept + 1, limits)
     checks.imu_physics(files["imu"], data[:, 0:3], data[:, 3:6], kept + 1, rate_hz, limits)
@@ -342,7 +282,7 @@ def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
     span = (-np.inf, np.inf) if span_s is None else (t_s[0] + span_s[0], t_s[0] + span_s[1])
     rate = round(1000.0 / clock.period_ms) if resample_hz == "nominal" else resample_hz
     try:
-        imu = _imu_data(data, t_s, mount, rate, span)
+        imu = _imu_data(data, t_s, mount, rate, span, chunk_rows)
     except InputFileError as exc:  # a span outside the data
         raise InputFileError(directory, exc.where, exc.what) from None
     imu.meta.update(n_missing_samples=clock.n_missing, max_gap_s=clock.max_gap_ms / 1000.0,

@@ -13,7 +13,7 @@ from pathlib import Path
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.tuning.kinds import StudyKind, register_kind
 
-__all__ = ["BaselinePlan", "run_baselines"]
+__all__ = ["BaselinePlan"]
 
 
 class BaselinePlan:
@@ -129,17 +129,6 @@ class BaselinePlan:
         from fuzzynav.tuning.baseline_report import write_baseline_report
 
         return write_baseline_report(self.bcfg, out, self.cache_dir, evaluate)
-
-
-def run_baselines(bcfg, trials=None, storage=None, cache_dir=None,
-                  workers: int = 1, progress: bool = False) -> Path:
-    """Tune every filter of the config (ALS: estimate) with the one study driver
-    (:func:`fuzzynav.tuning.study_run.run_plan`) and write their parameter file; returns it."""
-    from fuzzynav.tuning.study_run import run_plan
-
-    plan = BaselinePlan(bcfg, cache_dir)
-    run_plan(plan, trials, workers, storage, progress)
-    return bcfg.out
 
 
 def _load(path, cache_dir=None) -> BaselinePlan:

@@ -1,0 +1,143 @@
+"""The IMU CSV of an RTKLIB-logged recording, read a block of lines at a time.
+
+``imu_<id>.csv`` has no header; ``acc x, y, z [g], gyro x, y, z [deg/s], tick [ms since IMU
+power-up]``; the first and the last line may be cut (logging started or stopped inside
+them): the first line is always dropped, the last unless the file ends with a newline.
+Blank lines and whole-line ``#`` comments are skipped (their bytes still count for the
+time tag, :mod:`.timetag`).  The blocks are those of :mod:`.chunked`.
+"""
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+
+from fuzzynav.errors import InputFileError
+from fuzzynav.realdata.loaders import chunked
+from fuzzynav.realdata.loaders.chunked import DEFAULT_CHUNK_ROWS
+
+__all__ = ["read_imu_csv"]
+
+_CSV_COLUMNS = 7
+_CSV_NAMES = ("acc x", "acc y", "acc z", "gyro x", "gyro y", "gyro z", "tick")
+_CSV_LAYOUT = "acc x,y,z [g], gyro x,y,z [deg/s], tick [ms]"
+
+
+def _data_lines(lines, first: int) -> np.ndarray:
+    """Positions in ``lines`` (a block whose first line is line ``first`` of the file, 0-based)
+    of the lines that hold data.
+
+    The file's first line is dropped (logging started inside it), and its last unless it
+    ends with a newline (only the last line can lack one).  Blank lines and whole-line ``#``
+    comments (an edited or concatenated copy) are skipped; their bytes still count in the
+    offsets matched against the tag.
+    """
+    return np.array([j for j, line in enumerate(lines)
+                     if first + j >= 1 and line.endswith(b"\n") and line.strip()
+                     and not line.lstrip().startswith(b"#")], dtype=np.int64)
+
+
+def _refuse_line(path, lineno: int, line: bytes):
+    """Raise the error naming what is wrong in one line that did not parse."""
+    fields = line.split(b",")
+    if len(fields) != _CSV_COLUMNS:
+        raise InputFileError(path, f"line {lineno}", f"{len(fields)} fields, expected "
+                                                     f"{_CSV_COLUMNS}: {_CSV_LAYOUT}")
+    for name, field in zip(_CSV_NAMES, fields):
+        text = field.strip().decode("ascii", "replace")[:24]
+        try:
+            value = float(field)
+        except ValueError:
+            raise InputFileError(path, f"line {lineno}, column {name}",
+                                 f"{text!r} is not a number ({_CSV_LAYOUT})") from None
+        if not np.isfinite(value):
+            raise InputFileError(path, f"line {lineno}, column {name}",
+                                 f"{text!r} is not a finite number")
+
+
+def _tick_error(path, tick, lineno):
+    """The error of the first tick that does not increase (``None`` if all do); ``lineno``
+    the 1-based line of each tick."""
+    step = np.diff(tick)
+    bad = np.flatnonzero(step <= 0)
+    if not bad.size:
+        return None
+    k = bad[0]
+    what = (f"repeats the previous tick {tick[k]:.0f}" if step[k] == 0 else
+            f"{tick[k + 1]:.0f} after {tick[k]:.0f}")
+    return InputFileError(path, f"line {lineno[k + 1]}, column tick",
+                          f"{what}: ticks must increase")
+
+
+def _parse_block(path, lines, rows) -> np.ndarray:
+    """The numbers of the data lines ``rows`` of a block (positions in ``lines``), parsed
+    at once; ``None`` when some line does not parse (:func:`_refuse_line` then says which)."""
+    body = b"".join(lines[j] for j in rows)
+    try:
+        data = np.loadtxt(io.BytesIO(body), delimiter=",", ndmin=2, comments=None)
+    except ValueError:
+        data = None
+    if data is None or data.shape[1] != _CSV_COLUMNS or not np.all(np.isfinite(data)):
+        return None
+    return data
+
+
+#: what a whole read refuses first (after too few lines): a line that does not parse, a file
+#: that does not parse although no line fails alone, a tick that does not increase
+_ERROR_ORDER = ("line", "csv", "tick")
+
+
+def read_imu_csv(path, chunk_rows=DEFAULT_CHUNK_ROWS):
+    """Rows of an IMU CSV with partial first/last lines, blank and comment lines dropped.
+
+    The file is read ``chunk_rows`` lines at a time (:mod:`.chunked`; ``None``: at once):
+    each block's lines are parsed and checked, the tick order across block boundaries too;
+    every block size gives the same arrays and the same error.
+
+    Returns
+    -------
+    data : ndarray, shape (K, 7)
+    kept : ndarray of int, shape (K,)
+        0-based line index of each row in the file.
+    line_lengths : ndarray of int
+        Length of every line of the file (without ``\\n``).
+    file_size : int
+    """
+    path = Path(path)
+    chunk_rows = chunked.check_chunk_rows(chunk_rows)
+    errors = chunked.FirstErrors(_ERROR_ORDER)
+    n = chunked.count_lines(path)
+    # every line's length, the data lines' indices and rows: at most one per line
+    lengths, kept_rows = (chunked.Rows(path, n, None, np.int64) for _ in range(2))
+    data_rows = chunked.Rows(path, n, _CSV_COLUMNS)
+    last = None  # (tick, line number) of the previous block's last row
+    with open(path, "rb") as f:
+        for first, lines in chunked.line_blocks(f, chunk_rows):
+            lengths.add([len(x) - x.endswith(b"\n") for x in lines])
+            rows = _data_lines(lines, first)
+            kept_rows.add(rows + first)
+            if not rows.size or "line" in errors:  # past a bad line only lines are counted
+                continue
+            data = _parse_block(path, lines, rows)
+            if data is None:
+                try:
+                    for j in rows:
+                        _refuse_line(path, first + j + 1, lines[j][:-1])  # without its "\n"
+                    errors.note("csv", InputFileError(path, "", f"not a CSV of {_CSV_LAYOUT}"))
+                except InputFileError as exc:
+                    errors.note("line", exc)
+                continue
+            lineno = rows + (first + 1)
+            tick = data[:, 6] if last is None else np.concatenate([[last[0]], data[:, 6]])
+            bad = _tick_error(path, tick, lineno if last is None else
+                              np.concatenate([[last[1]], lineno]))
+            if bad is not None:
+                errors.note("tick", bad)
+            last = (data[-1, 6], lineno[-1])
+            data_rows.add(data)
+    kept = kept_rows.array()
+    if kept.size < 2:
+        raise InputFileError(path, "lines", "fewer than two complete sample lines")
+    errors.raise_first()
+    return data_rows.array(), kept, lengths.array(), path.stat().st_size
