@@ -13,71 +13,13 @@ import pandas as pd
 
 from fuzzynav.errors import FuzzynavError, UnknownNameError
 from fuzzynav.filters.named import FilterContext, FilterSetup
-from fuzzynav.filters.runner import InitialState
 from fuzzynav.metrics import (StreamingRms, errors_vs_trajectory, improvement_ci, mean_ci,
                               rms_metrics)
 from fuzzynav.metrics_rscale import usage_metrics
-from fuzzynav.nav import attitude, earth
 from fuzzynav.runpath import RunInputs, RunOutcome, check_outcomes, make_setup, run
-from fuzzynav.sim.sensor_log import SensorLog, component_rng, simulate
+from fuzzynav.simsource import OnSimulatedLog, perturbed_initial_state  # noqa: F401 (API)
+from fuzzynav.sim.sensor_log import SensorLog, simulate
 from fuzzynav.sim.scenario import Scenario, load_scenario
-
-
-#: initial states drawn so far, keyed by everything a draw depends on (the seed, the nine
-#: initial sigmas, the truth's first sample): every candidate of a study starts its run on a
-#: log from the same state, and drawing it costs a generator and four small conversions
-_INITIAL = {}
-_INITIAL_MAX = 512
-
-
-def perturbed_initial_state(log: SensorLog, setup: FilterSetup) -> InitialState:
-    """Truth at the first sample plus attitude, velocity and position errors from P0."""
-    truth = log.truth
-    sig = np.sqrt(np.diag(setup.config.P0())[:9])
-    first = [np.asarray(a[0], float).tobytes() for a in (truth.lla, truth.vel_n, truth.q_bn)]
-    key = (int(log.seed), sig.tobytes(), float(truth.time_s[0]), *first)
-    got = _INITIAL.get(key)
-    if got is None:
-        if len(_INITIAL) >= _INITIAL_MAX:
-            _INITIAL.clear()
-        got = _INITIAL[key] = _draw_initial_state(log.seed, truth, sig)
-    # fresh arrays: a caller may change its copy
-    return InitialState(got.time_s, got.lla.copy(), got.vel_n.copy(), got.q_bn.copy())
-
-
-def _draw_initial_state(seed, truth, sig) -> InitialState:
-    """The draw of :func:`perturbed_initial_state` (``sig``: its nine initial sigmas)."""
-    x0 = component_rng(seed, "filter-init").normal(0.0, 1.0, 9) * sig
-    C0 = (np.eye(3) - attitude.skew(x0[:3])) @ attitude.quat_to_dcm(truth.q_bn[0])
-    d = earth.enu_to_delta_lla(x0[6:9], truth.lla[0, 0], truth.lla[0, 2])
-    return InitialState(float(truth.time_s[0]), truth.lla[0] + np.array(d),
-                        truth.vel_n[0] + x0[3:6], attitude.dcm_to_quat(C0))
-
-
-class OnSimulatedLog:
-    """What every run source on a simulated log (attribute ``log``) shares: its name and
-    seed, the filter context of the log, and that every RMS and maximum must be finite."""
-
-    # a scenario file sets its sensors' noise, outages and mounting itself
-    SETTINGS = frozenset({"mc", "t_start"})
-    KIND = "simulated scenarios"
-    SETTINGS_NOTE = ("they take their noise, outages and mounting from the scenario file; "
-                     "the recording options need --data")
-
-    @property
-    def name(self) -> str:
-        return self.log.scenario.name
-
-    @property
-    def seed(self) -> int:
-        return self.log.seed
-
-    def context(self, options=None) -> FilterContext:
-        return FilterContext(imu_noise=self.log.scenario.imu.noise_si(),
-                             sensors=dict(self.log.sensors), options=dict(options or {}))
-
-    def required(self, metrics: dict) -> tuple:
-        return tuple(m for m in metrics if m.startswith(("rms_", "max_")))
 
 
 @dataclass(frozen=True)
@@ -173,8 +115,10 @@ def monte_carlo(scenario, filters, seeds, options=None, cache_dir=None, t_start_
         :func:`fuzzynav.align.alignment_run.seed_runs`); ``options``, ``cache_dir``,
         ``t_start_s`` and ``refuse_diverged`` are then its own business and refused here.
     streaming : dict, optional
-        ``chunk_samples`` and ``output_rate_hz`` of every navigation run
-        (:func:`run_on_log`).
+        ``chunk_samples``, ``output_rate_hz`` and ``output_dir`` of every navigation run:
+        each is then simulated chunk by chunk (:func:`fuzzynav.streamrun.run_streamed`, the
+        same data and filter arithmetic as the whole log, nothing of the run's length
+        held) instead of simulated whole and cached.
     """
     outcomes = []
     if seed_runs is None:
@@ -209,17 +153,36 @@ def _navigation_runs(scn, options, cache_dir, t_start_s, outcomes, streaming):
     """``seed -> (filter -> metrics)`` of named navigation filters on ``scn``'s logs (each
     run's outcome appended to ``outcomes``)."""
     def of_seed(seed):
-        log = simulate(scn, seed, cache_dir)
+        # a streamed run simulates its chunks itself: nothing of the run's length is held
+        log = None if streaming else simulate(scn, seed, cache_dir)
 
         def run_one(name):
             opts = {k: v for k, v in options.items() if not isinstance(v, dict)}
             opts.update(options.get(name, {}) if isinstance(options.get(name), dict) else {})
             # NAME@FILE: resolved by the run
-            out = run_on_log(log, name, opts, t_start_s, **streaming)
+            if streaming:
+                out = _streamed(scn, seed, name, opts, t_start_s, streaming)
+            else:
+                out = run_on_log(log, name, opts, t_start_s)
             outcomes.append(out)
             return out.metrics
         return run_one
     return of_seed
+
+
+def _streamed(scn, seed, name, opts, t_start_s, streaming) -> RunOutcome:
+    """One run of :func:`fuzzynav.streamrun.run_streamed` (``streaming``: its chunk, output
+    rate and output directory, one sub-directory per filter and seed)."""
+    from fuzzynav.fileio import safe_stem
+    from fuzzynav.streamrun import DEFAULT_CHUNK_SAMPLES, run_streamed
+
+    kw = dict(streaming)
+    out_dir = kw.pop("output_dir", None)
+    if out_dir is not None:
+        out_dir = f"{out_dir}/{safe_stem(name)}-seed{int(seed)}"
+    return run_streamed(scn, seed, name, opts, chunk_samples=kw.pop(
+        "chunk_samples", DEFAULT_CHUNK_SAMPLES), t_start_s=t_start_s, output_dir=out_dir,
+        **kw)
 
 
 def _progress(total, enabled, desc):

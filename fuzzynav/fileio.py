@@ -22,7 +22,7 @@ from pathlib import Path
 
 from fuzzynav.errors import InputFileError, OutputError, brief
 
-__all__ = ["FILE_MODE", "publish", "MAX_STEM", "safe_stem", "output_errors", "SYSTEM_DIRS",
+__all__ = ["write_npz", "FILE_MODE", "publish", "MAX_STEM", "safe_stem", "output_errors", "SYSTEM_DIRS",
            "is_inside", "check_place", "study_output", "make_dir", "write_atomic", "write_text_atomic",
            "publish_all", "process_alive", "sweep_staged", "staged", "json_ready"]
 
@@ -303,3 +303,22 @@ def json_ready(x):
     if isinstance(x, (list, tuple)):
         return [json_ready(v) for v in x]
     return None if isinstance(x, float) and not math.isfinite(x) else x
+
+
+def write_npz(path, arrays: dict, what: str) -> None:
+    """Write ``arrays`` to the ``.npz`` file ``path`` atomically (a temporary file beside it,
+    then renamed: a reader never sees half a file); a full disk or a read-only place is one
+    :class:`OutputError` naming ``what``, with an old file left intact."""
+    import numpy as np
+
+    path = Path(path)
+    make_dir(path.parent, what)
+    with output_errors(path, what):
+        fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
+        try:
+            with os.fdopen(fd, "wb") as f:
+                np.savez(f, **arrays)
+            publish(tmp, path)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise

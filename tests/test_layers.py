@@ -27,7 +27,12 @@ ALLOWED = {
     "metrics_rscale": set(),  # the metrics layer: usage of a sensor's R
     "report": {"metrics"},
     "runpath": {"filters"},
-    "experiment": {"runpath", "filters", "sim", "metrics", "metrics_rscale", "nav"},
+    "experiment": {"runpath", "filters", "sim", "metrics", "metrics_rscale", "nav", "simsource",
+                   "streamrun"},
+    # a simulated log as a run source (context, initial error): whole or streamed
+    "simsource": {"filters", "sim", "nav"},
+    # a run on a scenario simulated chunk by chunk (under experiment, which dispatches to it)
+    "streamrun": {"simsource", "runpath", "filters", "sim", "metrics", "metrics_rscale"},
     "align": {"runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "metrics_rscale", "report", "nav"},
     "realdata": {"runpath", "filters", "sim", "metrics", "metrics_rscale", "report", "nav", "plots"},
     "tuning": {"runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "metrics_rscale", "report", "nav", "plots",

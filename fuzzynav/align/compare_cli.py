@@ -107,7 +107,8 @@ def run_with_alignment(args) -> int:
     from fuzzynav.sim.scenario import load_scenario
 
     _refuse(args, ("plot", "--plot"), ("json", "--json"), ("t_start", "--t-start"),
-            ("output_rate", "--output-rate"), ("chunk", "--chunk"))
+            ("output_rate", "--output-rate"), ("chunk", "--chunk"),
+            ("output_dir", "--output-dir"))
     scn = load_scenario(args.scenario)
     seeds = list(range(args.seed, args.seed + args.mc))
     align, rules = parse_align_spec(args.align)

@@ -77,23 +77,33 @@ def add_streaming_arguments(p) -> None:
                         "(running sums for the RMS, exact maxima), equal to a whole-run "
                         "report up to rounding (a few ulps). Default: keep every output")
     g.add_argument("--chunk", type=float, metavar="S",
-                   help="feed the filter its IMU in chunks of S seconds, carrying its whole "
-                        "state across: the same result to the last bit, with the recorded "
-                        "output held one chunk at a time (default: one chunk, or "
-                        f"{DEFAULT_CHUNK_S:g} s with --output-rate)")
+                   help="simulate the scenario and run the filter in chunks of S seconds of "
+                        "IMU, carrying the sensors' random processes and the filter's whole "
+                        "state across: the same data and filter arithmetic as a whole run, "
+                        "with nothing of the run's length held, so a day-long run fits in a "
+                        f"few hundred MB (default {DEFAULT_CHUNK_S:g} s with --output-rate "
+                        "or --output-dir; without any of the three the log is simulated "
+                        "whole and cached)")
+    g.add_argument("--output-dir", metavar="DIR",
+                   help="write each chunk's kept solution (at --output-rate) and its event "
+                        "logs (innovations, S, NIS, flags, adaptation traces) to "
+                        "DIR/FILTER-seedK/chunk-NNNNNN.npz (each written to a temporary "
+                        "file, then renamed)")
 
 
 def streaming_options(args, imu_rate_hz: float) -> dict:
     """``run``'s ``chunk_samples`` / ``output_rate_hz`` from ``--chunk`` / ``--output-rate``
     (empty when neither is given); refuses a non-positive or non-finite value."""
     rate, chunk = getattr(args, "output_rate", None), getattr(args, "chunk", None)
-    out = {}
+    out_dir = getattr(args, "output_dir", None)
+    out = {} if out_dir is None else {"output_dir": out_dir}
     for flag, value in (("--output-rate", rate), ("--chunk", chunk)):
         if value is not None and not (0.0 < value < float("inf")):
             raise FuzzynavError(f"{flag} must be a positive number, got {value:g}")
     if rate is not None:
         out["output_rate_hz"] = float(rate)
-        chunk = DEFAULT_CHUNK_S if chunk is None else chunk
+    if (rate is not None or out_dir is not None) and chunk is None:
+        chunk = DEFAULT_CHUNK_S
     if chunk is not None:
         out["chunk_samples"] = max(1, int(round(chunk * imu_rate_hz)))
     return out
@@ -200,6 +210,9 @@ def _cmd_run(args) -> int:
     check_common(args)
     if args.data and args.align:
         raise FuzzynavError("--align: only with a simulated SCENARIO, not with --data")
+    if args.data and getattr(args, "output_dir", None):
+        raise FuzzynavError("--output-dir: only with a simulated SCENARIO (a recording's "
+                            "run is streamed with --output-rate, its chunks not written)")
     check_rules(args, [args.filter], "--filter")
     if args.data:
         from fuzzynav.realdata.cli import run_recording

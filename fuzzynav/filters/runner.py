@@ -76,14 +76,7 @@ def _sensor_tables(sensors, adapters, options, gate_probability):
     for i, p in enumerate(pars):
         s_mpar[i, :p.size] = p
     W = max([r.shape[1] for r in rows], default=1)
-    ev_t = np.concatenate([sensors[nm].time_s for nm in names] or [np.zeros(0)]).astype(float)
-    ev_s = np.concatenate([np.full(len(r), i) for i, r in enumerate(rows)] or [np.zeros(0)])
-    ev_data = np.zeros((ev_t.size, W))
-    o = 0
-    for r in rows:
-        ev_data[o:o + len(r), :r.shape[1]] = r
-        o += len(r)
-    order = np.argsort(ev_t, kind="stable")
+    ev = _event_table(sensors, names, rows, W)
     gate = np.zeros((max(len(names), 1), M + 1))
     if gate_probability is not None:
         gate[:, 1:] = chi2.ppf(gate_probability, np.arange(1, M + 1))
@@ -98,12 +91,27 @@ def _sensor_tables(sensors, adapters, options, gate_probability):
     ast, ast_off = flat([b.state for b in bounds], float)
     return dict(names=names, models=models, bounds=bounds, M=M, meas_fns=meas_fns,
                 s_meas=np.array([meas_index[m.kind] for m in models] or [0], np.int64),
-                s_mpar=s_mpar, ev_t=np.ascontiguousarray(ev_t[order]),
-                ev_s=np.ascontiguousarray(ev_s[order].astype(np.int64)),
-                ev_data=np.ascontiguousarray(ev_data[order]), order=order,
-                s_adapt=_adapter_ids(bounds),
+                s_mpar=s_mpar, **ev, s_adapt=_adapter_ids(bounds),
                 afp=afp, afp_off=afp_off, aip=aip, aip_off=aip_off, ast=ast, ast_off=ast_off,
                 gate=gate)
+
+
+def _event_table(sensors, names, rows, W: int) -> dict:
+    """The merged, time-ordered event arrays of the streams ``names`` (their ``rows``)."""
+    ev_t = np.concatenate([sensors[nm].time_s for nm in names] or [np.zeros(0)]).astype(float)
+    ev_s = np.concatenate([np.full(len(r), i) for i, r in enumerate(rows)] or [np.zeros(0)])
+    ev_data = np.zeros((ev_t.size, W))
+    o = 0
+    for r in rows:
+        if r.shape[1] > W:
+            raise FuzzynavError(f"a chunk's measurement rows are {r.shape[1]} wide, the "
+                                f"run's {W}")
+        ev_data[o:o + len(r), :r.shape[1]] = r
+        o += len(r)
+    order = np.argsort(ev_t, kind="stable")
+    return dict(ev_t=np.ascontiguousarray(ev_t[order]),
+                ev_s=np.ascontiguousarray(ev_s[order].astype(np.int64)),
+                ev_data=np.ascontiguousarray(ev_data[order]), order=order)
 
 
 def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterConfig(),
@@ -160,7 +168,7 @@ class FilterRun:
     carried from one chunk to the next, so feeding a run in chunks of any size gives the
     result of one call over the whole run, to the last bit (:func:`run_filter` is the
     one-chunk case).  The measurement streams are held whole (they are epochs, not IMU
-    samples); the recorded outputs of each chunk are handed to ``on_chunk`` and kept
+    samples), unless each chunk brings its own (``events_per_chunk``); the recorded outputs of each chunk are handed to ``on_chunk`` and kept
     decimated by ``keep_every``, so memory is bounded by the chunk, the streams and the
     kept outputs.
 
@@ -175,14 +183,28 @@ class FilterRun:
     on_chunk : callable, optional
         Called with a :class:`FilterResult` of each chunk's recorded outputs (every one,
         before decimation; no events) — e.g. a streaming metric accumulator.
+    events_per_chunk : bool
+        ``sensors`` are only the streams' first epochs (their kinds, constants and row
+        layout); each chunk brings its own epochs (:meth:`feed_arrays`), so the events are
+        held one chunk at a time, as a simulation made chunk by chunk has them
+        (:mod:`fuzzynav.streamrun`).  The loop's arithmetic is the same.
+    on_events : callable, optional
+        With ``events_per_chunk``: called with each chunk's event logs (name ->
+        :class:`EventLog`).
+    keep_events : bool
+        With ``events_per_chunk``: keep the chunks' event logs for :meth:`result`
+        (concatenated); ``False`` leaves its ``events`` empty.
     """
 
     def __init__(self, sensors, init: InitialState, config: FilterConfig = FilterConfig(),
                  adapters=None, sensor_options=None, dt_nom_s: float = 0.01,
-                 keep_every: int = 1, on_chunk=None):
+                 keep_every: int = 1, on_chunk=None, events_per_chunk: bool = False,
+                 on_events=None, keep_events: bool = True):
         if int(keep_every) != keep_every or keep_every < 1:
             raise FuzzynavError(f"keep_every must be a positive integer, got {keep_every}")
         self.config, self.keep_every, self.on_chunk = config, int(keep_every), on_chunk
+        self.events_per_chunk, self.on_events = bool(events_per_chunk), on_events
+        self.keep_events, self.event_parts = bool(keep_events) or not events_per_chunk, []
         self.tb = tb = _sensor_tables(dict(sensors), dict(adapters or {}),
                                       dict(sensor_options or {}), config.gate_probability)
         blk_start, blk_kind, blk_inv_tau = config.model.block_arrays()
@@ -190,10 +212,8 @@ class FilterRun:
         self.em = em = error_model_code(config.error_model)
         self.bank, self.state = _bank(config, tb["names"], init, em)
         self.stride = max(1, int(round(1.0 / (config.out_rate_hz * dt_nom_s))))
-        NL, E, M = self.bank.beta.size, tb["ev_t"].size, tb["M"]
-        self.ev = dict(r=np.full((E, M), np.nan), S=np.full((E, M), np.nan),
-                       nis=np.full(E, np.nan), flag=np.zeros(E, np.int64),
-                       diag=np.full((E, N_DIAG), np.nan))
+        NL, M = self.bank.beta.size, tb["M"]
+        self.ev = _event_outputs(tb["ev_t"].size, M)
         self.start = loop.Start(strapdown.make_nav(init.lla, init.vel_n, init.q_bn),
                                 np.zeros(n - N_CORE))
         self.model = loop.Model(blk_start, blk_kind, blk_inv_tau, em)
@@ -216,13 +236,20 @@ class FilterRun:
         time_s, dth, dv, _ = _imu_arrays(imu)
         self.feed_arrays(time_s, dth, dv)
 
-    def feed_arrays(self, time_s, dth, dv) -> None:
-        """:meth:`feed` with checked, contiguous float arrays."""
+    def feed_arrays(self, time_s, dth, dv, sensors=None) -> None:
+        """:meth:`feed` with checked, contiguous float arrays; with ``events_per_chunk``,
+        ``sensors`` are the streams' epochs after the last chunk's end up to this chunk's
+        (every epoch in exactly one chunk, as :class:`fuzzynav.sim.stream.Chunk` has them)."""
         if self.t_end is not None and time_s[0] != self.t_end:
             raise FuzzynavError(f"IMU chunk starts at t = {time_s[0]!r} s, not at the previous "
                                 f"chunk's last sample time {self.t_end!r} s")
         self.t_end = time_s[-1]
+        if self.events_per_chunk:
+            self._chunk_events(sensors)
+        elif sensors is not None:
+            raise FuzzynavError("FilterRun: sensors per chunk need events_per_chunk=True")
         if self.status != loop.ST_OK:  # the run stopped: later chunks record nothing
+            self._chunk_done()
             return
         count = self.carry.count
         k0, N, first = int(count[loop.CN_K0]), dth.shape[0], count[loop.CN_STARTED] == 0
@@ -254,6 +281,37 @@ class FilterRun:
             per_row = _PER_ROW + (_PER_LOCAL if NL > 1 else ())
             out = {k: (v.take(sel, 0) if k in per_row else v) for k, v in out.items()}
         self.parts.append(out)
+        self._chunk_done()
+
+    def _chunk_events(self, sensors) -> None:
+        """Make this chunk's event arrays (``events_per_chunk``): the loop's event index
+        starts again at 0 on them; its outputs are the chunk's."""
+        if sensors is None:
+            raise FuzzynavError("FilterRun(events_per_chunk=True) needs each chunk's sensors")
+        tb = self.tb
+        missing = sorted(set(tb["names"]) - set(sensors))
+        if missing:
+            raise FuzzynavError(f"chunk without the stream(s) {', '.join(missing)}")
+        rows = [mdl.rows(sensors[nm]) for nm, mdl in zip(tb["names"], tb["models"])]
+        ev = _event_table(sensors, tb["names"], rows, tb["ev_data"].shape[1])
+        self.chunk_tb = {**tb, **ev}
+        self.events = loop.Events(ev["ev_t"], ev["ev_s"], ev["ev_data"])
+        self.ev = _event_outputs(ev["ev_t"].size, tb["M"])
+        self.carry.count[loop.CN_EVENT] = 0
+
+    def _chunk_done(self) -> None:
+        """Hand a chunk's event logs on (``events_per_chunk``) and keep them if asked."""
+        if not self.events_per_chunk:
+            return
+        logs = _events(self.ev, self.chunk_tb)
+        if self.on_events is not None:
+            self.on_events(logs)
+        if self.keep_events:
+            self.event_parts.append(logs)
+
+    def kept(self, i: int = -1) -> FilterResult:
+        """The kept outputs of the ``i``-th chunk fed (no events), e.g. to write them out."""
+        return _solution(self.parts[i], self.config, self.state, self.bank.beta)
 
     def result(self) -> FilterResult:
         """The run's :class:`FilterResult`: the kept outputs of every chunk and the events."""
@@ -263,8 +321,31 @@ class FilterRun:
             out = {k: np.concatenate([p[k] for p in self.parts]) for k in self.parts[0]}
         msg = "ok" if self.status == loop.ST_OK else (
             f"stopped at t = {self.stop_t:.2f} s: covariance lost positive definiteness")
+        if not self.events_per_chunk:
+            events = _events(self.ev, self.tb)
+        elif not self.keep_events:
+            events = {}
+        else:
+            events = {nm: concat_event_logs([p[nm] for p in self.event_parts])
+                      for nm in self.tb["names"]}
         return dataclasses.replace(_solution(out, self.config, self.state, self.bank.beta),
-                                   events=_events(self.ev, self.tb), status=msg)
+                                   events=events, status=msg)
+
+
+def _event_outputs(E: int, M: int) -> dict:
+    """The loop's per-event output arrays for ``E`` events of at most ``M`` rows."""
+    return dict(r=np.full((E, M), np.nan), S=np.full((E, M), np.nan),
+                nis=np.full(E, np.nan), flag=np.zeros(E, np.int64),
+                diag=np.full((E, N_DIAG), np.nan))
+
+
+def concat_event_logs(parts) -> EventLog:
+    """One :class:`EventLog` of a stream's consecutive chunk logs (in order)."""
+    if len(parts) == 1:
+        return parts[0]
+    arrays = {f: np.concatenate([getattr(p, f) for p in parts])
+              for f in ("time_s", "residual", "S_diag", "nis", "flag", "diag")}
+    return EventLog(**arrays, diag_names=parts[0].diag_names, channels=parts[0].channels)
 
 
 #: the output arrays with one row per recorded output whatever the bank, and those of a

@@ -6,7 +6,13 @@ the trajectory generator's quadrature temporaries are held for one block of
 :data:`fuzzynav.sim.trajectory.BLOCK_SAMPLES` samples at most
 (:data:`BYTES_PER_BLOCK_SAMPLE` each); and per aiding-sensor epoch a few rows of
 measurements, sigmas and truth (:data:`BYTES_PER_EPOCH_COLUMN` per measurement column).
-The estimate is made from the sample counts alone (duration x rate), so a scenario of
+A run simulated and filtered chunk by chunk (:mod:`fuzzynav.sim.stream`,
+:func:`fuzzynav.streamrun.run_streamed`) holds one chunk of samples, the epoch indices of
+the streamed sensors, the sensors simulated whole and the kept outputs
+(:func:`streamed_estimate`).  A scenario is refused when it is read only if it does not
+fit even so (:func:`check_run_size`); one that fits only in chunks is refused when it is
+simulated whole (:func:`check_whole_run`), with both estimates and the options that stream
+it.  The estimate is made from the sample counts alone (duration x rate), so a scenario of
 10^11 samples is refused in microseconds with the estimate in the message, not after a
 ``MemoryError``, a swap storm or the out-of-memory killer.
 
@@ -23,7 +29,9 @@ from fuzzynav.errors import InputFileError
 __all__ = ["BYTES_PER_IMU_SAMPLE", "BYTES_PER_BLOCK_SAMPLE", "BYTES_PER_EPOCH_COLUMN",
            "MAX_SPELLS", "DEFAULT_SHARE", "ENV_VAR", "memory_limit", "human_bytes",
            "DEFAULT_CACHE_FILE_MB", "CACHE_ENV_VAR", "cache_file_limit",
-           "check_run_size"]
+           "check_run_size", "BYTES_PER_CHUNK_SAMPLE", "BYTES_PER_STREAM_EPOCH",
+           "BYTES_PER_OUTPUT_ROW", "DEFAULT_CHUNK_SAMPLES", "whole_estimate",
+           "streamed_estimate", "check_whole_run"]
 
 #: bytes held per IMU sample of the whole run through simulation and filtering, beyond the
 #: generator's block (marginal tracemalloc peaks of runs longer than a block: paper003
@@ -35,6 +43,18 @@ BYTES_PER_IMU_SAMPLE = 1024
 BYTES_PER_BLOCK_SAMPLE = 3072
 #: bytes held per aiding-sensor epoch and measurement column (z, sigma, truth, temporaries)
 BYTES_PER_EPOCH_COLUMN = 128
+#: bytes per IMU sample of one chunk of a streamed run: its truth, IMU, sensor epochs,
+#: trajectory temporaries and filter outputs (the whole run's per-sample and block figures
+#: together: the chunk holds what a whole run holds per sample, and the block's temporaries)
+BYTES_PER_CHUNK_SAMPLE = 4096
+#: bytes per epoch of a sensor streamed epoch by epoch: its epoch index (int64) and the
+#: temporaries of making it (the epoch times, rounding, the mask and np.unique's sort)
+BYTES_PER_STREAM_EPOCH = 48
+#: bytes per kept output row of a streamed run (time, navigation state, sensor states and
+#: sigmas of up to 21 states: 35 floats, rounded up for the locals' and the concatenation)
+BYTES_PER_OUTPUT_ROW = 1024
+#: IMU samples per chunk of a streamed run when none is given (5 min at 50 Hz)
+DEFAULT_CHUNK_SAMPLES = 15_000
 #: most outage or cloud windows a sensor may have in one run
 MAX_SPELLS = 10_000
 #: default share of the physical memory one run may use
@@ -93,15 +113,42 @@ def human_bytes(n: float) -> str:
     return f"{n:.3g} PB"  # pragma: no cover
 
 
-def _refuse(where: str, what: str, need: float):
-    limit, source = memory_limit()
-    if need > limit:
-        raise InputFileError(None, where, f"{what} needs ~{human_bytes(need)}; the limit is "
-                                          f"{human_bytes(limit)} ({source})")
+def whole_estimate(duration_s: float, imu_rate_hz: float, sensors: dict) -> float:
+    """Bytes a run simulated and filtered whole holds (truth, IMU, streams, outputs)."""
+    from fuzzynav.sim.trajectory import BLOCK_SAMPLES
+
+    n_imu = duration_s * imu_rate_hz
+    need = n_imu * BYTES_PER_IMU_SAMPLE + min(n_imu, BLOCK_SAMPLES) * BYTES_PER_BLOCK_SAMPLE
+    return need + sum(duration_s * sp.rate_hz * _columns(sp) * BYTES_PER_EPOCH_COLUMN
+                      for sp in sensors.values())
+
+
+def streamed_estimate(duration_s: float, imu_rate_hz: float, sensors: dict,
+                      chunk_samples: float = DEFAULT_CHUNK_SAMPLES,
+                      output_rate_hz: float = 1.0) -> float:
+    """Bytes a run simulated and filtered chunk by chunk holds
+    (:func:`fuzzynav.streamrun.run_streamed`): one chunk of samples
+    (:data:`BYTES_PER_CHUNK_SAMPLE`), the epoch indices of the streamed sensors
+    (:data:`BYTES_PER_STREAM_EPOCH`), the sensors simulated whole (their epochs, as a
+    whole run holds them) and the kept outputs (:data:`BYTES_PER_OUTPUT_ROW` per row at
+    ``output_rate_hz``)."""
+    n_imu = duration_s * imu_rate_hz
+    need = min(n_imu, chunk_samples) * BYTES_PER_CHUNK_SAMPLE
+    for sp in sensors.values():
+        epochs = duration_s * sp.rate_hz
+        need += epochs * (BYTES_PER_STREAM_EPOCH if hasattr(sp, "stream")
+                          else _columns(sp) * BYTES_PER_EPOCH_COLUMN)
+    return need + duration_s * output_rate_hz * BYTES_PER_OUTPUT_ROW
+
+
+def _columns(spec) -> int:
+    return spec.columns() if hasattr(spec, "columns") else 6
 
 
 def check_run_size(duration_s: float, imu_rate_hz: float, sensors: dict) -> None:
-    """Refuse a run whose estimated memory exceeds :func:`memory_limit`.
+    """Refuse a run that does not fit :func:`memory_limit` even simulated and filtered in
+    chunks (:func:`streamed_estimate` with 1-Hz kept output); a run that fits only so is
+    refused later, when it is simulated whole (:func:`check_whole_run`).
 
     Parameters
     ----------
@@ -110,30 +157,52 @@ def check_run_size(duration_s: float, imu_rate_hz: float, sensors: dict) -> None
     imu_rate_hz : float
     sensors : Mapping[str, Spec]
         Aiding sensors; each with ``rate_hz`` and optionally ``columns()`` (measurement
-        columns per epoch, default 6) and ``spell_count(duration_s)`` returning
-        ``(key, count)`` of its largest window pattern.
+        columns per epoch, default 6), ``stream`` (simulated epoch by epoch) and
+        ``spell_count(duration_s)`` returning ``(key, count)`` of its largest window
+        pattern.
 
     Raises
     ------
     InputFileError
         Without a file; ``where`` is the key that sets the size.
     """
-    from fuzzynav.sim.trajectory import BLOCK_SAMPLES
-
     n_imu = duration_s * imu_rate_hz
-    _refuse("imu.rate_hz", f"[imu] rate_hz x duration = {imu_rate_hz:g} Hz x {duration_s:g} s "
-                           f"= {n_imu:.3g} samples",
-            n_imu * BYTES_PER_IMU_SAMPLE + min(n_imu, BLOCK_SAMPLES) * BYTES_PER_BLOCK_SAMPLE)
+    need = streamed_estimate(duration_s, imu_rate_hz, sensors)
+    limit, source = memory_limit()
+    if need > limit:
+        raise InputFileError(None, "imu.rate_hz", f"[imu] rate_hz x duration = {imu_rate_hz:g} "
+                             f"Hz x {duration_s:g} s = {n_imu:.3g} samples needs "
+                             f"~{human_bytes(need)} even simulated and filtered in chunks of "
+                             f"{DEFAULT_CHUNK_SAMPLES} samples with 1-Hz output; the limit is "
+                             f"{human_bytes(limit)} ({source})")
     for name, spec in sensors.items():
         where = f"sensors.{name}"
-        epochs = duration_s * spec.rate_hz
-        cols = spec.columns() if hasattr(spec, "columns") else 6
-        _refuse(f"{where}.rate_hz", f"rate_hz x duration = {spec.rate_hz:g} Hz x "
-                                    f"{duration_s:g} s = {epochs:.3g} epochs of {cols} columns",
-                epochs * cols * BYTES_PER_EPOCH_COLUMN)
         if hasattr(spec, "spell_count"):
             key, count = spec.spell_count(duration_s)
             if count > MAX_SPELLS:
                 raise InputFileError(None, f"{where}.{key}", f"makes ~{count:.3g} windows over "
                                      f"the {duration_s:g}-s run; at most {MAX_SPELLS} are "
                                      "supported (use longer periods or spells)")
+
+
+def check_whole_run(duration_s: float, imu_rate_hz: float, sensors: dict,
+                    what: str = "the scenario") -> None:
+    """Refuse to simulate a run whole when :func:`whole_estimate` exceeds
+    :func:`memory_limit`; the message gives the streamed estimate and how to ask for it.
+
+    Raises
+    ------
+    InputFileError
+        ``where`` ``imu.rate_hz``.
+    """
+    need = whole_estimate(duration_s, imu_rate_hz, sensors)
+    limit, source = memory_limit()
+    if need > limit:
+        streamed = streamed_estimate(duration_s, imu_rate_hz, sensors)
+        raise InputFileError(None, "imu.rate_hz", f"{what}: [imu] rate_hz x duration = "
+                             f"{imu_rate_hz:g} Hz x {duration_s:g} s = "
+                             f"{duration_s * imu_rate_hz:.3g} samples needs "
+                             f"~{human_bytes(need)} simulated whole; the limit is "
+                             f"{human_bytes(limit)} ({source}). Simulated and filtered in "
+                             f"chunks it needs ~{human_bytes(streamed)}: run it with "
+                             "--output-rate HZ (or --chunk S, --output-dir DIR)")

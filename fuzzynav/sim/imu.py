@@ -26,7 +26,8 @@ from fuzzynav.errors import InputFileError
 from fuzzynav.sim import gauss_markov as gm
 from fuzzynav.sim.tomltable import Table
 
-__all__ = ["FILTER_STATES", "TriadNoise", "ImuNoise", "ImuData", "ImuSpec"]
+__all__ = ["FILTER_STATES", "TriadNoise", "TriadStream", "ImuNoise", "ImuData", "ImuSpec",
+           "ImuStream"]
 
 _ZERO3 = (0.0, 0.0, 0.0)
 _ZERO33 = (_ZERO3, _ZERO3, _ZERO3)
@@ -98,25 +99,52 @@ class TriadNoise:
         turn_on : ndarray, shape (3,)
             The turn-on bias drawn for this run.
         """
-        g_on, g_white, g_gm, g_rw = rng.spawn(4)
-        n = ideal.shape[0]
-        turn_on = self.bias_sigma * g_on.standard_normal(3)
-        const = np.asarray(self.bias, dtype=float) + turn_on
-        out = ideal @ self.matrix.T + const * h_s[:, None]
-        if self.white > 0.0:
-            out += self.white * np.sqrt(h_s)[:, None] * g_white.standard_normal((n, 3))
-        bias = np.broadcast_to(const, (n + 1, 3)).copy()
-        if self.gm_sigma > 0.0:
-            b0 = self.gm_sigma * g_gm.standard_normal(3)
-            b, integral = gm.propagate(gm.gm_coefficients(h_s, self.gm_sigma, self.gm_tau_s),
-                                       b0, g_gm)
+        stream = TriadStream(self, rng)
+        out, bias = stream.corrupt(ideal, h_s)
+        return out, bias, stream.turn_on
+
+
+class TriadStream:
+    """The errors of one triad applied chunk by chunk (:meth:`TriadNoise.corrupt` is the
+    one-chunk case).
+
+    Each error term has its own generator, spawned from ``rng`` as the whole run spawns
+    them, and draws its chunk's normals in order: numpy draws of ``n1`` then ``n2`` values
+    are the draw of ``n1 + n2``, so consecutive chunks give the whole run's noise to the
+    last bit.  The Gauss-Markov and random-walk states are carried across chunks.
+    """
+
+    def __init__(self, noise: TriadNoise, rng):
+        self.noise = noise
+        g_on, self.g_white, self.g_gm, self.g_rw = rng.spawn(4)
+        self.turn_on = noise.bias_sigma * g_on.standard_normal(3)
+        self.const = np.asarray(noise.bias, dtype=float) + self.turn_on
+        self.matrix_t = noise.matrix.T
+        # the processes' values at the chunk's first sample (the run's start: b0 drawn)
+        self.b_gm = noise.gm_sigma * self.g_gm.standard_normal(3) if noise.gm_sigma > 0 \
+            else None
+        self.b_rw = np.zeros(3) if noise.rrw > 0.0 else None
+
+    def corrupt(self, ideal, h_s):
+        """Measured increments (N, 3) and total bias at the N+1 sample times of the next
+        chunk (its first sample is the last one of the chunk before)."""
+        nz, n = self.noise, ideal.shape[0]
+        out = ideal @ self.matrix_t + self.const * h_s[:, None]
+        if nz.white > 0.0:
+            out += nz.white * np.sqrt(h_s)[:, None] * self.g_white.standard_normal((n, 3))
+        bias = np.broadcast_to(self.const, (n + 1, 3)).copy()
+        if self.b_gm is not None:
+            b, integral = gm.propagate(gm.gm_coefficients(h_s, nz.gm_sigma, nz.gm_tau_s),
+                                       self.b_gm, self.g_gm)
             out += integral
             bias += b
-        if self.rrw > 0.0:
-            b, integral = gm.propagate(gm.rw_coefficients(h_s, self.rrw), np.zeros(3), g_rw)
+            self.b_gm = b[-1].copy()
+        if self.b_rw is not None:
+            b, integral = gm.propagate(gm.rw_coefficients(h_s, nz.rrw), self.b_rw, self.g_rw)
             out += integral
             bias += b
-        return out, bias, turn_on
+            self.b_rw = b[-1].copy()
+        return out, bias
 
 
 @dataclass(frozen=True)
@@ -337,15 +365,12 @@ class ImuSpec:
         ImuData
             Measured increments with the applied bias series as truth.
         """
-        h_s = np.diff(np.asarray(ideal.time_s, dtype=float))
-        noise = self.noise_si()
-        g_gyro, g_accel = rng.spawn(2)
-        dtheta, gyro_bias, gyro_on = noise.gyro.corrupt(np.asarray(ideal.dtheta_b), h_s, g_gyro)
-        dv, accel_bias, accel_on = noise.accel.corrupt(np.asarray(ideal.dv_b), h_s, g_accel)
-        meta = {"gyro_turn_on_rps": gyro_on, "accel_turn_on_mps2": accel_on,
-                "gyro_matrix": noise.gyro.matrix, "accel_matrix": noise.accel.matrix}
-        return ImuData(time_s=np.array(ideal.time_s, dtype=float), dtheta_b=dtheta, dv_b=dv,
-                       gyro_bias_rps=gyro_bias, accel_bias_mps2=accel_bias, meta=meta)
+        return self.stream(rng).corrupt(ideal)
+
+    def stream(self, rng) -> "ImuStream":
+        """The errors applied chunk by chunk (:class:`ImuStream`; :meth:`corrupt` is the
+        one-chunk case)."""
+        return ImuStream(self.noise_si(), rng)
 
     # -- TOML ---------------------------------------------------------------------------
     @classmethod
@@ -376,3 +401,25 @@ class ImuSpec:
         return {k: (list(map(list, v)) if k.endswith("misalign_deg") else
                     list(v) if isinstance(v, tuple) else v) for k, v in asdict(self).items()
                 if k != "filter_states" or v != "constant"}
+
+
+class ImuStream:
+    """An IMU's errors applied to consecutive chunks of ideal increments, to the last bit
+    those of one :meth:`ImuSpec.corrupt` over the whole run (:class:`TriadStream`)."""
+
+    def __init__(self, noise: ImuNoise, rng):
+        g_gyro, g_accel = rng.spawn(2)
+        self.gyro, self.accel = TriadStream(noise.gyro, g_gyro), TriadStream(noise.accel, g_accel)
+        self.meta = {"gyro_turn_on_rps": self.gyro.turn_on,
+                     "accel_turn_on_mps2": self.accel.turn_on,
+                     "gyro_matrix": noise.gyro.matrix, "accel_matrix": noise.accel.matrix}
+
+    def corrupt(self, ideal) -> ImuData:
+        """The next chunk: ``ideal`` with ``time_s`` (N+1,) starting at the last chunk's
+        end, ``dtheta_b`` and ``dv_b`` (N, 3)."""
+        time_s = np.array(ideal.time_s, dtype=float)
+        h_s = np.diff(time_s)
+        dtheta, gyro_bias = self.gyro.corrupt(np.asarray(ideal.dtheta_b), h_s)
+        dv, accel_bias = self.accel.corrupt(np.asarray(ideal.dv_b), h_s)
+        return ImuData(time_s=time_s, dtheta_b=dtheta, dv_b=dv, gyro_bias_rps=gyro_bias,
+                       accel_bias_mps2=accel_bias, meta=dict(self.meta))

@@ -18,8 +18,6 @@ from __future__ import annotations
 
 import hashlib
 import operator
-import os
-import tempfile
 import zlib
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,8 +25,8 @@ from pathlib import Path
 import numpy as np
 
 from fuzzynav.errors import InputFileError
-from fuzzynav.fileio import make_dir, output_errors, publish, safe_stem
-from fuzzynav.sim.budget import CACHE_ENV_VAR, cache_file_limit, human_bytes
+from fuzzynav.fileio import safe_stem, write_npz
+from fuzzynav.sim.budget import CACHE_ENV_VAR, cache_file_limit, check_whole_run, human_bytes
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.sim.scenario import Scenario
 from fuzzynav.sim.sensors import SensorData
@@ -167,17 +165,7 @@ def _read_cache(path: Path, key: str, scenario: Scenario, seed: int):
 
 def _write_cache(path: Path, arrays: dict):
     """Write atomically; a full disk or a read-only place is one :class:`OutputError`."""
-    what = "simulation cache file (see --cache / $FUZZYNAV_CACHE)"
-    make_dir(path.parent, what)
-    with output_errors(path, what):
-        fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
-        try:
-            with os.fdopen(fd, "wb") as f:
-                np.savez(f, **arrays)
-            publish(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+    write_npz(path, arrays, "simulation cache file (see --cache / $FUZZYNAV_CACHE)")
 
 
 def cache_path(cache_dir, scenario: Scenario, seed: int) -> Path:
@@ -203,6 +191,9 @@ def simulate(scenario: Scenario, seed: int, cache_dir=None) -> SensorLog:
     SensorLog
     """
     seed = check_seed(seed)
+    # a run too long to hold whole is refused here, with the estimate of streaming it
+    check_whole_run(scenario.duration_s, scenario.imu.rate_hz, scenario.sensors,
+                    f"scenario {scenario.name!r}")
     if cache_dir is None:
         return _generate(scenario, seed)
     key = cache_key(scenario, seed)

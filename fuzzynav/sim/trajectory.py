@@ -20,7 +20,7 @@ import numpy as np
 from fuzzynav.nav import attitude, earth
 from fuzzynav.sim.segments import SEGMENT_KINDS, Profile, Segment  # noqa: F401 (re-exported)
 
-__all__ = ["Trajectory", "generate"]
+__all__ = ["Blocks", "Trajectory", "generate"]
 
 #: Gauss-Legendre nodes per quadrature interval (exact for polynomials of degree 9)
 _GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(5)
@@ -218,42 +218,82 @@ def generate(start_lla_rad, segments, imu_rate_hz, initial_speed_mps=0.0,
     -------
     Trajectory
     """
-    profile = Profile(segments, initial_speed_mps, initial_heading_rad)
-
-    def evaluate(t):
-        prof = profile.evaluate(t)
-        return prof if sea is None else sea.apply(prof, t)
-
-    dt = 1.0 / float(imu_rate_hz)
-    n = int(np.floor(profile.duration_s * imu_rate_hz + 1e-9))
-    time_s = np.arange(n + 1) / float(imu_rate_hz)
-    # split sample intervals where a piece starts or ends: the integrands' higher
-    # derivatives jump there, which would spoil the quadrature's exactness
-    b = profile.boundaries()
-    b = b[(b > 0.0) & (b < time_s[-1])]
-    b = b[np.abs(b / dt - np.round(b / dt)) > 1e-9]
-    edges = np.union1d(time_s, b)
-    on_grid = np.searchsorted(edges, time_s)
-    lla0 = np.asarray(start_lla_rad, float)
+    gen = Blocks(start_lla_rad, segments, imu_rate_hz, initial_speed_mps,
+                 initial_heading_rad, sea)
+    n = gen.n_samples
     if n <= BLOCK_SAMPLES:  # one block: no copies into the run's arrays
-        lla, vel_n, att, omega_nb_b, dtheta_b, dv_b, _ = _block(edges, time_s, on_grid,
-                                                               evaluate, lla0, None)
-    else:
-        lla, vel_n, att, omega_nb_b = (np.empty((n + 1, 3)) for _ in range(4))
-        dtheta_b, dv_b = np.empty((n, 3)), np.empty((n, 3))
-        carry = None
-        for k0 in range(0, n, BLOCK_SAMPLES):
-            k1 = min(k0 + BLOCK_SAMPLES, n)
-            e0, e1 = on_grid[k0], on_grid[k1]
-            part = _block(edges[e0:e1 + 1], time_s[k0:k1 + 1], on_grid[k0:k1 + 1] - e0,
-                          evaluate, lla0, carry)
-            for whole, got in zip((lla, vel_n, att, omega_nb_b), part[:4]):
-                whole[k0:k1 + 1] = got  # a block's first sample is the last one's end
-            dtheta_b[k0:k1], dv_b[k0:k1], carry = part[4], part[5], part[6]
-    return Trajectory(time_s=time_s, lla=lla, vel_n=vel_n, att=att,
+        return gen.block(0, n)
+    lla, vel_n, att, omega_nb_b = (np.empty((n + 1, 3)) for _ in range(4))
+    dtheta_b, dv_b = np.empty((n, 3)), np.empty((n, 3))
+    for k0 in range(0, n, BLOCK_SAMPLES):
+        k1 = min(k0 + BLOCK_SAMPLES, n)
+        part = gen.block(k0, k1, quat=False)
+        for whole, got in zip((lla, vel_n, att, omega_nb_b),
+                              (part.lla, part.vel_n, part.att, part.omega_nb_b)):
+            whole[k0:k1 + 1] = got  # a block's first sample is the last one's end
+        dtheta_b[k0:k1], dv_b[k0:k1] = part.dtheta_b, part.dv_b
+    return Trajectory(time_s=gen.times(0, n), lla=lla, vel_n=vel_n, att=att,
                       q_bn=attitude.euler_to_quat(att), dtheta_b=dtheta_b, dv_b=dv_b,
-                      omega_nb_b=omega_nb_b, imu_rate_hz=float(imu_rate_hz),
+                      omega_nb_b=omega_nb_b, imu_rate_hz=gen.rate_hz,
                       segments=tuple(segments), sea=sea)
+
+
+class Blocks:
+    """A trajectory made block by block, in order: :meth:`block` gives samples ``k0..k1``.
+
+    Consecutive blocks (each starting where the last ended) carry the running integrals
+    (height, each latitude sweep, longitude), so any cut gives the arithmetic of one block
+    over the whole run to the last bit; nothing of the run's length is held (the sample
+    times and quadrature edges of a block are made for it).  :func:`generate` is the
+    whole trajectory made of such blocks.
+
+    Parameters
+    ----------
+    start_lla_rad, segments, imu_rate_hz, initial_speed_mps, initial_heading_rad, sea
+        As :func:`generate`.
+    """
+
+    def __init__(self, start_lla_rad, segments, imu_rate_hz, initial_speed_mps=0.0,
+                 initial_heading_rad=0.0, sea=None):
+        self.profile = profile = Profile(segments, initial_speed_mps, initial_heading_rad)
+        self.sea, self.segments = sea, tuple(segments)
+        self.rate_hz = float(imu_rate_hz)
+        self.n_samples = n = int(np.floor(profile.duration_s * imu_rate_hz + 1e-9))
+        dt = 1.0 / self.rate_hz
+        t_end = n / self.rate_hz
+        # split sample intervals where a piece starts or ends: the integrands' higher
+        # derivatives jump there, which would spoil the quadrature's exactness
+        b = profile.boundaries()
+        b = b[(b > 0.0) & (b < t_end)]
+        self.splits = b[np.abs(b / dt - np.round(b / dt)) > 1e-9]
+        self.lla0 = np.asarray(start_lla_rad, float)
+        self._next, self._carry = 0, None
+
+    def evaluate(self, t):
+        prof = self.profile.evaluate(t)
+        return prof if self.sea is None else self.sea.apply(prof, t)
+
+    def times(self, k0: int, k1: int) -> np.ndarray:
+        """Sample times ``k0..k1`` [s] (the values of one ``arange`` over the run)."""
+        return np.arange(k0, k1 + 1) / self.rate_hz
+
+    def block(self, k0: int, k1: int, quat: bool = True) -> Trajectory:
+        """Samples ``k0..k1`` (``k1 - k0`` increments); ``k0`` must be where the block
+        before ended (0 first).  ``quat=False`` leaves ``q_bn`` empty (made by the caller)."""
+        if k0 != self._next or not k0 <= k1 <= self.n_samples:
+            raise ValueError(f"trajectory blocks must follow each other: asked {k0}..{k1}, "
+                             f"next is {self._next} of {self.n_samples}")
+        time_s = self.times(k0, k1)
+        b = self.splits[(self.splits > time_s[0]) & (self.splits < time_s[-1])]
+        edges = np.union1d(time_s, b)
+        on_grid = np.searchsorted(edges, time_s)
+        lla, vel_n, att, omega_nb_b, dtheta_b, dv_b, self._carry = _block(
+            edges, time_s, on_grid, self.evaluate, self.lla0, self._carry)
+        self._next = k1
+        return Trajectory(time_s=time_s, lla=lla, vel_n=vel_n, att=att,
+                          q_bn=attitude.euler_to_quat(att) if quat else np.empty((0, 4)),
+                          dtheta_b=dtheta_b, dv_b=dv_b, omega_nb_b=omega_nb_b,
+                          imu_rate_hz=self.rate_hz, segments=self.segments, sea=self.sea)
 
 
 def _block(edges, time_s, on_grid, evaluate, lla0, carry):

@@ -102,7 +102,10 @@ def test_cache_on_a_full_or_read_only_disk(capsys, tmp_path, monkeypatch, target
     old = cache_path(tmp_path, load_scenario(TINY), 0)
     old.write_bytes(b"an old damaged cache file")  # not trusted, so it is rewritten
     module, name = target.split(".")
-    monkeypatch.setattr(getattr(fuzzynav.sim.sensor_log, module), name, _raise(code))
+    import tempfile
+
+    # the cache is written by fuzzynav.fileio.write_npz: numpy's and tempfile's functions
+    monkeypatch.setattr({"np": np, "tempfile": tempfile}[module], name, _raise(code))
     code_, _, err = _run(capsys, "run", TINY, "--cache", tmp_path)
     assert code_ == 2 and _one_line(err)
     assert str(old) in err and "simulation cache" in err and os.strerror(code) in err

@@ -230,7 +230,7 @@ def test_quat_to_euler_equals_the_angles_of_the_full_dcm():
 def test_a_remembered_initial_state_is_the_draw_itself_in_fresh_arrays():
     from types import SimpleNamespace
 
-    from fuzzynav import experiment
+    from fuzzynav import experiment, simsource
     from fuzzynav.filters.config import FilterConfig
 
     tr = trajectory()
@@ -238,7 +238,7 @@ def test_a_remembered_initial_state_is_the_draw_itself_in_fresh_arrays():
     setup = SimpleNamespace(config=FilterConfig())
     first = experiment.perturbed_initial_state(log, setup)
     sig = np.sqrt(np.diag(FilterConfig().P0())[:9])
-    drawn = experiment._draw_initial_state(3, tr, sig)
+    drawn = simsource._draw_initial_state(3, tr, sig)
     for got in (first, experiment.perturbed_initial_state(log, setup)):
         # the same draw on the same inputs: exact
         for name in ("lla", "vel_n", "q_bn"):

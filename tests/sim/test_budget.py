@@ -36,15 +36,53 @@ def _write(path, text):
 def test_the_estimate_is_samples_times_bytes_and_names_the_limit(tmp_path, monkeypatch):
     monkeypatch.setenv(budget.ENV_VAR, "0.5")
     # 100 Hz x 20 000 s = 2e6 samples x 1024 B + one block of 2**18 samples x 3072 B
-    # = 2 048 000 000 + 805 306 368 B = 2.66 GiB, computed by hand
+    # + 20 000 GNSS epochs x 6 columns x 128 B = 2 048 000 000 + 805 306 368 + 15 360 000 B
+    # = 2.67 GiB whole; in chunks 15 000 x 4096 B + the GNSS epochs + 20 000 1-Hz output
+    # rows x 1024 B = 61 440 000 + 15 360 000 + 20 480 000 B = 92.8 MiB (by hand)
     path = _write(tmp_path / "big.toml", RUN.format(rate=100, duration=20000))
+    scn = load_scenario(path)  # it fits in chunks
     with pytest.raises(InputFileError) as exc:
-        load_scenario(path)
+        simulate(scn, 0)
     assert exc.value.where == "imu.rate_hz"
-    assert "= 2e+06 samples needs ~2.66 GB" in exc.value.what
+    assert "= 2e+06 samples needs ~2.67 GB simulated whole" in exc.value.what
     assert "the limit is 512 MB ($FUZZYNAV_MAX_MEMORY_GB)" in exc.value.what
+    assert "in chunks it needs ~92.8 MB" in exc.value.what
+    monkeypatch.setenv(budget.ENV_VAR, "0.05")  # 51.2 MiB: not even in chunks
+    with pytest.raises(InputFileError, match="samples needs ~92.8 MB even simulated and "
+                                             "filtered in chunks of 15000 samples with 1-Hz "
+                                             "output; the limit is 51.2 MB"):
+        load_scenario(path)
     monkeypatch.setenv(budget.ENV_VAR, "8")
     assert load_scenario(path).duration_s == 20000.0
+
+
+def _traced_streamed(path):
+    """The traced peak of a streamed EKF run on ``path`` (chunks of 500 samples, 1 Hz)."""
+    from fuzzynav.streamrun import run_streamed
+
+    scn = load_scenario(path)
+    tracemalloc.start()
+    try:
+        run_streamed(scn, 0, "ekf", chunk_samples=500, output_rate_hz=1.0)
+        return tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+
+
+def test_the_streamed_figures_bound_a_real_streamed_run(tmp_path):
+    # a streamed run's peak grows with the run by the streamed sensors' epoch indices and
+    # the kept outputs only (a ship's log at the IMU's 50 Hz: one epoch a sample), and its
+    # chunk's share stays under the per-chunk-sample figure
+    text = RUN.replace('[sensors.gps]\nkind = "gnss"', '[sensors.log]\nkind = "log"\n'
+                       'rate_hz = 50.0')
+    paths = [_write(tmp_path / f"{d}.toml", text.format(rate=50, duration=d))
+             for d in (2, 40, 80)]
+    _traced_streamed(paths[0])
+    small, large = _traced_streamed(paths[1]), _traced_streamed(paths[2])
+    per_sample = (large - small) / (40 * 50)
+    assert per_sample < budget.BYTES_PER_STREAM_EPOCH + budget.BYTES_PER_OUTPUT_ROW / 50
+    assert small < 500 * budget.BYTES_PER_CHUNK_SAMPLE + 2000 * (
+        budget.BYTES_PER_STREAM_EPOCH + budget.BYTES_PER_OUTPUT_ROW / 50) + 2**20
 
 
 @pytest.mark.parametrize("value", ["0", "-1", "lots", "inf"])

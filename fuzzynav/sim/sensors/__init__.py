@@ -56,11 +56,80 @@ def spec_table(spec, rename=None) -> dict:
 
 
 def epoch_indices(truth, start_s: float, rate_hz: float) -> np.ndarray:
-    """Indices of the IMU samples nearest to a sensor's epochs ``start_s + k / rate_hz``."""
-    t = np.asarray(truth.time_s)
-    t_meas = np.arange(start_s, t[-1] + 1e-9, 1.0 / rate_hz)
-    idx = np.round((t_meas - t[0]) * truth.imu_rate_hz).astype(np.int64)
-    return np.unique(idx[(idx >= 0) & (idx < t.size)])
+    """Indices of the IMU samples nearest to a sensor's epochs ``start_s + k / rate_hz``.
+
+    ``truth`` is a :class:`~fuzzynav.sim.trajectory.Trajectory`, or anything with a
+    ``grid`` ``(t0_s, t_end_s, n_rows)`` and ``imu_rate_hz`` (:class:`Grid`, the run of a
+    chunked simulation) and optionally ``remap(idx)`` (a truth holding some rows only).
+    """
+    grid = getattr(truth, "grid", None)
+    if grid is None:
+        t = np.asarray(truth.time_s)
+        grid = (t[0], t[-1], t.size)
+    t0, t_end, size = grid
+    t_meas = np.arange(start_s, t_end + 1e-9, 1.0 / rate_hz)
+    idx = np.round((t_meas - t0) * truth.imu_rate_hz).astype(np.int64)
+    idx = np.unique(idx[(idx >= 0) & (idx < size)])
+    remap = getattr(truth, "remap", None)
+    return idx if remap is None else remap(idx)
+
+
+@dataclass(frozen=True)
+class Grid:
+    """The IMU sample grid of a run, without its samples: what a sensor's stream needs to
+    place its epochs (:func:`epoch_indices`) and time its processes.
+
+    Attributes
+    ----------
+    t0_s, t_end_s : float
+        First and last sample time [s].
+    n_rows : int
+        Number of samples (increments + 1).
+    imu_rate_hz : float
+    sea : SeaState or None
+    """
+
+    t0_s: float
+    t_end_s: float
+    n_rows: int
+    imu_rate_hz: float
+    sea: object = None
+
+    @property
+    def grid(self) -> tuple:
+        return self.t0_s, self.t_end_s, self.n_rows
+
+
+class EpochStream:
+    """Base of a sensor simulated chunk by chunk: the run's epoch indices, and those of a
+    chunk (:meth:`local`).
+
+    A chunk of the run is the truth at samples ``k0..k1``; it carries the epochs at samples
+    ``lo..k1`` (``lo = k0`` for the run's first chunk, ``k0 + 1`` after: the chunk before
+    carried sample ``k0``), so every epoch is simulated once, in order.  A subclass
+    ``chunk(truth, k0, lo, whole=False)`` (``whole``: the run is one chunk) draws each random term from its own generator in epoch order,
+    so the chunks' draws are the whole run's (numpy draws of ``n1`` then ``n2`` values
+    are the draw of ``n1 + n2``) and the one-chunk case is ``simulate``.
+    """
+
+    def __init__(self, idx):
+        self.idx = np.asarray(idx, np.int64)
+
+    def local(self, k0: int, lo: int, k1: int) -> np.ndarray:
+        """Indices, into a chunk whose first row is sample ``k0``, of the epochs at
+        samples ``lo..k1``."""
+        a, b = np.searchsorted(self.idx, [lo, k1 + 1])
+        return self.idx[a:b] - k0
+
+
+def skipped(rng, count: int, block: int = 1 << 20):
+    """A copy of ``rng`` advanced past ``count`` standard normals (drawn in blocks and
+    dropped): where a second draw of the same generator starts, without holding the first."""
+    g = np.random.Generator(type(rng.bit_generator)())
+    g.bit_generator.state = rng.bit_generator.state
+    for a in range(0, int(count), block):
+        g.standard_normal(min(block, int(count) - a))
+    return g
 
 
 @dataclass(frozen=True)

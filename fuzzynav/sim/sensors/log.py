@@ -23,10 +23,10 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from fuzzynav.nav import attitude
-from fuzzynav.sim.sensors import SensorData, epoch_indices, register
+from fuzzynav.sim.sensors import EpochStream, SensorData, epoch_indices, register
 from fuzzynav.sim.tomltable import Table
 
-__all__ = ["body_velocity", "Spec"]
+__all__ = ["body_velocity", "LogStream", "Spec"]
 
 
 def body_velocity(truth, idx, through_water: bool = True) -> np.ndarray:
@@ -81,19 +81,12 @@ class Spec:
 
     def simulate(self, truth, rng, start_utc=None) -> SensorData:
         """Log readings along ``truth`` (the current from ``truth.sea``, none without one)."""
-        idx = epoch_indices(truth, self.start_s, self.rate_hz)
-        time_s = np.asarray(truth.time_s)[idx]
-        fwd = body_velocity(truth, idx)[:, 1]
-        z = (1.0 + self.scale) * fwd + self.bias_mps + self.noise_mps * rng.standard_normal(idx.size)
-        current = (np.zeros((idx.size, 3)) if truth.sea is None
-                   else truth.sea.current_n(time_s))
-        C_bn = attitude.quat_to_dcm(np.asarray(truth.q_bn)[idx])
-        meta = {"true_sigma": np.full((idx.size, 1), self.noise_mps),
-                "bias_mps": float(self.bias_mps), "scale": float(self.scale),
-                "current_fwd_mps": np.einsum("kj,kj->k", C_bn[:, :, 1], current),
-                "rate_hz": float(self.rate_hz)}
-        return SensorData(kind=self.kind, time_s=time_s, z=z[:, None],
-                          sigma=np.full((idx.size, 1), self.claimed()), meta=meta)
+        return self.stream(truth, rng).chunk(truth, 0, 0)
+
+    def stream(self, grid, rng, start_utc=None) -> "LogStream":
+        """The readings chunk by chunk (:class:`~fuzzynav.sim.sensors.EpochStream`)."""
+        return LogStream(self, epoch_indices(grid, self.start_s, self.rate_hz), rng)
+
 
     @classmethod
     def from_dict(cls, d: dict, where: str) -> "Spec":
@@ -115,3 +108,30 @@ class Spec:
     def to_dict(self) -> dict:
         """The sensor table (TOML-ready, ``None`` left out)."""
         return {"kind": self.kind, **{k: v for k, v in asdict(self).items() if v is not None}}
+
+
+class LogStream(EpochStream):
+    """A log simulated chunk by chunk: one white-noise draw per epoch, in order."""
+
+    def __init__(self, spec: Spec, idx, rng):
+        super().__init__(idx)
+        self.spec, self.rng = spec, rng
+
+    def chunk(self, truth, k0: int, lo: int, whole: bool = False) -> SensorData:
+        """The readings at samples ``lo..`` of ``truth`` (rows from sample ``k0``; ``whole``:
+        the run is this one chunk)."""
+        sp = self.spec
+        idx = self.local(k0, lo, k0 + truth.time_s.size - 1)
+        time_s = np.asarray(truth.time_s)[idx]
+        fwd = body_velocity(truth, idx)[:, 1]
+        z = (1.0 + sp.scale) * fwd + sp.bias_mps + sp.noise_mps * self.rng.standard_normal(
+            idx.size)
+        current = (np.zeros((idx.size, 3)) if truth.sea is None
+                   else truth.sea.current_n(time_s))
+        C_bn = attitude.quat_to_dcm(np.asarray(truth.q_bn)[idx])
+        meta = {"true_sigma": np.full((idx.size, 1), sp.noise_mps),
+                "bias_mps": float(sp.bias_mps), "scale": float(sp.scale),
+                "current_fwd_mps": np.einsum("kj,kj->k", C_bn[:, :, 1], current),
+                "rate_hz": float(sp.rate_hz)}
+        return SensorData(kind=sp.kind, time_s=time_s, z=z[:, None],
+                          sigma=np.full((idx.size, 1), sp.claimed()), meta=meta)

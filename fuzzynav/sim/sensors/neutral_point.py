@@ -32,10 +32,10 @@ from fuzzynav.errors import InputFileError
 from fuzzynav.nav import attitude
 from fuzzynav.nav.neutral_points import images
 from fuzzynav.sim import sun
-from fuzzynav.sim.sensors import SensorData, epoch_indices, register
+from fuzzynav.sim.sensors import EpochStream, SensorData, epoch_indices, register, skipped
 from fuzzynav.sim.tomltable import Table
 
-__all__ = ["Spec"]
+__all__ = ["NeutralPointStream", "Spec"]
 
 
 @register("neutral_point")
@@ -93,40 +93,17 @@ class Spec:
 
     def simulate(self, truth, rng, start_utc) -> SensorData:
         """Line angles through the neutral points along ``truth``."""
+        return self.stream(truth, rng, start_utc).chunk(truth, 0, 0)
+
+    def stream(self, grid, rng, start_utc) -> "NeutralPointStream":
+        """The line angles chunk by chunk (:class:`~fuzzynav.sim.sensors.EpochStream`)."""
         if start_utc is None:
             raise InputFileError(None, "start_utc", "the neutral-point sensor needs the "
                                                     "scenario's UTC start time (the sun)")
-        per_epoch = max(1.0, self.rate_hz / float(truth.imu_rate_hz))  # detections averaged
-        idx = epoch_indices(truth, 0.0, self.rate_hz / per_epoch)
-        time_s = np.asarray(truth.time_s)[idx]
-        lla = np.asarray(truth.lla)[idx]
-        jd = sun.julian_day(start_utc) + (time_s - truth.time_s[0]) / 86400.0
-        sp = sun.sun_position(jd, lla[:, 0], lla[:, 1])
-        C_bn = attitude.quat_to_dcm(np.asarray(truth.q_bn)[idx])
-        delta, fov = np.deg2rad(self.delta_deg), np.deg2rad(self.fov_deg)
-        img = np.array([images(C, s, delta) for C, s in zip(C_bn, sp.sun_n)])  # (k, 4, 3)
-        seen = img[:, :, 2] < fov
-        pair = np.where(seen[:, 2] & seen[:, 0], 0, np.where(seen[:, 1] & seen[:, 0], 1, -1))
-        scale = self._cloud_scale(time_s - truth.time_s[0])
-        elev = np.rad2deg(sp.elevation_rad)
-        keep = ((pair >= 0) & (scale > 0) & (elev <= self.max_sun_elevation_deg)
-                & (elev >= self.min_sun_elevation_deg))
-        a = np.where(pair == 0, 2, 1)
-        k = np.arange(idx.size)
-        sig = self.point_sigma() * scale / np.sqrt(per_epoch)
-        pa = img[k, a, :2] + sig[:, None] * rng.standard_normal((idx.size, 2))
-        pb = img[k, 0, :2] + sig[:, None] * rng.standard_normal((idx.size, 2))
-        beta = np.arctan2(pb[:, 1] - pa[:, 1], pb[:, 0] - pa[:, 0])
-        base = np.hypot(*(img[k, 0, :2] - img[k, a, :2]).T)
-        z = np.column_stack([beta, sp.sun_n, pair])[keep]
-        claimed = self.angle_noise_rad if self.claimed_sigma_rad is None else self.claimed_sigma_rad
-        sigma = np.zeros_like(z)
-        sigma[:, 0] = claimed / np.sqrt(per_epoch)
-        true = np.zeros_like(z)
-        true[:, 0] = (np.sqrt(2.0) * sig / np.maximum(base, 1e-9))[keep]
-        meta = {"delta_rad": float(delta), "fov_deg": float(self.fov_deg), "true_sigma": true,
-                "rate_hz": float(self.rate_hz)}
-        return SensorData(kind=self.kind, time_s=time_s[keep], z=z, sigma=sigma, meta=meta)
+        per_epoch = max(1.0, self.rate_hz / float(grid.imu_rate_hz))  # detections averaged
+        idx = epoch_indices(grid, 0.0, self.rate_hz / per_epoch)
+        t0 = grid.grid[0] if hasattr(grid, "grid") else float(np.asarray(grid.time_s)[0])
+        return NeutralPointStream(self, idx, rng, start_utc, per_epoch, t0)
 
     @classmethod
     def from_dict(cls, d: dict, where: str) -> "Spec":
@@ -158,3 +135,53 @@ class Spec:
             if v is not None:
                 out[k] = [list(w) for w in v] if k == "clouds" else v
         return out
+
+
+class NeutralPointStream(EpochStream):
+    """Neutral points simulated chunk by chunk.
+
+    The whole run draws the first point's noise for every epoch, then the second's, from
+    one generator: the second draw's generator is a copy advanced past the first's
+    (:func:`~fuzzynav.sim.sensors.skipped`), so each chunk draws both in epoch order.
+    """
+
+    def __init__(self, spec: Spec, idx, rng, start_utc, per_epoch: float, t0_s: float):
+        super().__init__(idx)
+        self.spec, self.per_epoch, self.t0_s = spec, per_epoch, t0_s
+        self.jd0 = sun.julian_day(start_utc)
+        self.g_a, self.g_b = rng, skipped(rng, 2 * self.idx.size)
+
+    def chunk(self, truth, k0: int, lo: int, whole: bool = False) -> SensorData:
+        """The line angles at samples ``lo..`` of ``truth`` (rows from sample ``k0``;
+        ``whole``: the run is this one chunk)."""
+        sp, per_epoch = self.spec, self.per_epoch
+        idx = self.local(k0, lo, k0 + truth.time_s.size - 1)
+        time_s = np.asarray(truth.time_s)[idx]
+        lla = np.asarray(truth.lla)[idx]
+        jd = self.jd0 + (time_s - self.t0_s) / 86400.0
+        sp_ = sun.sun_position(jd, lla[:, 0], lla[:, 1])
+        C_bn = attitude.quat_to_dcm(np.asarray(truth.q_bn)[idx])
+        delta, fov = np.deg2rad(sp.delta_deg), np.deg2rad(sp.fov_deg)
+        img = np.array([images(C, s, delta) for C, s in zip(C_bn, sp_.sun_n)]).reshape(-1, 4, 3)
+        seen = img[:, :, 2] < fov
+        pair = np.where(seen[:, 2] & seen[:, 0], 0, np.where(seen[:, 1] & seen[:, 0], 1, -1))
+        scale = sp._cloud_scale(time_s - self.t0_s)
+        elev = np.rad2deg(sp_.elevation_rad)
+        keep = ((pair >= 0) & (scale > 0) & (elev <= sp.max_sun_elevation_deg)
+                & (elev >= sp.min_sun_elevation_deg))
+        a = np.where(pair == 0, 2, 1)
+        k = np.arange(idx.size)
+        sig = sp.point_sigma() * scale / np.sqrt(per_epoch)
+        pa = img[k, a, :2] + sig[:, None] * self.g_a.standard_normal((idx.size, 2))
+        pb = img[k, 0, :2] + sig[:, None] * self.g_b.standard_normal((idx.size, 2))
+        beta = np.arctan2(pb[:, 1] - pa[:, 1], pb[:, 0] - pa[:, 0])
+        base = np.hypot(*(img[k, 0, :2] - img[k, a, :2]).T)
+        z = np.column_stack([beta, sp_.sun_n, pair])[keep]
+        claimed = sp.angle_noise_rad if sp.claimed_sigma_rad is None else sp.claimed_sigma_rad
+        sigma = np.zeros_like(z)
+        sigma[:, 0] = claimed / np.sqrt(per_epoch)
+        true = np.zeros_like(z)
+        true[:, 0] = (np.sqrt(2.0) * sig / np.maximum(base, 1e-9))[keep]
+        meta = {"delta_rad": float(delta), "fov_deg": float(sp.fov_deg), "true_sigma": true,
+                "rate_hz": float(sp.rate_hz)}
+        return SensorData(kind=sp.kind, time_s=time_s[keep], z=z, sigma=sigma, meta=meta)

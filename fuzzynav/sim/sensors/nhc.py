@@ -21,11 +21,11 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from fuzzynav.sim.sensors import SensorData, epoch_indices, register
+from fuzzynav.sim.sensors import EpochStream, SensorData, epoch_indices, register
 from fuzzynav.sim.sensors.log import body_velocity
 from fuzzynav.sim.tomltable import Table
 
-__all__ = ["Spec"]
+__all__ = ["NhcStream", "Spec"]
 
 
 @register("nhc")
@@ -61,21 +61,12 @@ class Spec:
 
     def simulate(self, truth, rng, start_utc=None) -> SensorData:
         """Constraint pseudo-measurements along ``truth``."""
-        idx = epoch_indices(truth, 0.0, self.rate_hz)
-        z = np.zeros((idx.size, 2))
-        water_b = body_velocity(truth, idx)
-        ground_b = body_velocity(truth, idx, through_water=False)
-        if self.current_error:
-            # body-lateral current = lateral ground velocity minus lateral water velocity
-            z[:, 0] -= ground_b[:, 0] - water_b[:, 0]
-        z[:, 0] -= water_b[:, 1] * np.tan(np.deg2rad(self.leeway_deg))
-        z += self.noise_mps * rng.standard_normal(z.shape)
-        # the error a filter meets: the true body velocity minus the pseudo-measurement
-        err = ground_b[:, [0, 2]] - z
-        rms = np.sqrt(np.mean(err**2, axis=0)) if idx.size else np.zeros(2)
-        meta = {"true_sigma": np.tile(rms, (idx.size, 1)), "rate_hz": float(self.rate_hz)}
-        return SensorData(kind=self.kind, time_s=np.asarray(truth.time_s)[idx], z=z,
-                          sigma=np.full((idx.size, 2), self.sigma_mps), meta=meta)
+        return self.stream(truth, rng).chunk(truth, 0, 0, whole=True)
+
+    def stream(self, grid, rng, start_utc=None) -> "NhcStream":
+        """The pseudo-measurements chunk by chunk (:class:`~fuzzynav.sim.sensors.
+        EpochStream`)."""
+        return NhcStream(self, epoch_indices(grid, 0.0, self.rate_hz), rng)
 
     @classmethod
     def from_dict(cls, d: dict, where: str) -> "Spec":
@@ -94,3 +85,36 @@ class Spec:
         """The sensor table (TOML-ready)."""
         return {"kind": self.kind, **asdict(self)}
 
+
+class NhcStream(EpochStream):
+    """Ship constraints simulated chunk by chunk: one white-noise draw per epoch, in order.
+
+    ``meta["true_sigma"]`` is the RMS of the error over the whole run, known only once the
+    run is over: a chunk of a longer run (``whole=False``) leaves it out, so the oracle
+    filter (``ekf-true``) refuses a streamed run rather than being told another figure.
+    """
+
+    def __init__(self, spec: Spec, idx, rng):
+        super().__init__(idx)
+        self.spec, self.rng = spec, rng
+
+    def chunk(self, truth, k0: int, lo: int, whole: bool = False) -> SensorData:
+        """The pseudo-measurements at samples ``lo..`` of ``truth`` (rows from ``k0``)."""
+        sp = self.spec
+        idx = self.local(k0, lo, k0 + truth.time_s.size - 1)
+        z = np.zeros((idx.size, 2))
+        water_b = body_velocity(truth, idx)
+        ground_b = body_velocity(truth, idx, through_water=False)
+        if sp.current_error:
+            # body-lateral current = lateral ground velocity minus lateral water velocity
+            z[:, 0] -= ground_b[:, 0] - water_b[:, 0]
+        z[:, 0] -= water_b[:, 1] * np.tan(np.deg2rad(sp.leeway_deg))
+        z += sp.noise_mps * self.rng.standard_normal(z.shape)
+        meta = {"rate_hz": float(sp.rate_hz)}
+        if whole:
+            # the error a filter meets: the true body velocity minus the pseudo-measurement
+            err = ground_b[:, [0, 2]] - z
+            rms = np.sqrt(np.mean(err**2, axis=0)) if idx.size else np.zeros(2)
+            meta = {"true_sigma": np.tile(rms, (idx.size, 1)), **meta}
+        return SensorData(kind=sp.kind, time_s=np.asarray(truth.time_s)[idx], z=z,
+                          sigma=np.full((idx.size, 2), sp.sigma_mps), meta=meta)

@@ -1,0 +1,106 @@
+"""A run on a scenario simulated chunk by chunk gives the whole log's run.
+
+:func:`fuzzynav.streamrun.run_streamed` against :func:`fuzzynav.experiment.run_on_log` on
+the whole simulated log fed in the same chunks (the same data, filter arithmetic and
+streamed sums: identical metrics, solution and event logs), and against the whole run in
+one chunk; on every paper's scenario family that navigates on simulated data.  Also: the
+files of ``--output-dir``, the refusals (an oracle told the whole run's noise, a run too
+long to simulate whole, one too long even in chunks).
+"""
+import numpy as np
+import pytest
+
+from fuzzynav.errors import FuzzynavError, InputFileError
+from fuzzynav.experiment import run_on_log
+from fuzzynav.sim import budget
+from fuzzynav.sim.sensor_log import simulate
+from fuzzynav.streamrun import run_streamed
+
+from tests.sim.test_budget import RUN as BUDGET_RUN
+from tests.sim.test_stream import short
+
+
+def _same(a, b):
+    assert a.keys() == b.keys()
+    for k in a:
+        assert a[k] == b[k] or (np.isnan(a[k]) and np.isnan(b[k])), k
+
+
+@pytest.mark.parametrize("name, filt", [("paper000", "fuzzy"), ("paper001", "fuzzy-mag"),
+                                        ("paper003", "fuzzy-ship"), ("paper004", "huber"),
+                                        ("paper003-storm", "ekf"),
+                                        ("paper000", "strong-tracking")])
+def test_streamed_run_is_the_whole_logs_run(name, filt):
+    scn = short(name, 60.0)
+    chunk = int(round(7.3 * scn.imu.rate_hz))  # boundaries between and (every 73 s) on epochs
+    whole = run_on_log(simulate(scn, 2), filt, chunk_samples=chunk, output_rate_hz=1.0)
+    got = run_streamed(scn, 2, filt, chunk_samples=chunk, output_rate_hz=1.0,
+                       keep_events=True)
+    _same(got.metrics, whole.metrics)
+    if name == "paper001":
+        assert any(k.startswith("r_use") for k in got.metrics)
+    for f in ("time_s", "lla", "vel_n", "q_bn", "sigma", "sensor_states"):
+        np.testing.assert_array_equal(getattr(got.result, f), getattr(whole.result, f))
+    assert got.result.events.keys() == whole.result.events.keys()
+    for nm, ev in whole.result.events.items():
+        for f in ("time_s", "residual", "S_diag", "nis", "flag", "diag"):
+            np.testing.assert_array_equal(getattr(got.result.events[nm], f), getattr(ev, f),
+                                          err_msg=f"{nm}.{f}")
+
+
+def test_one_chunk_is_the_whole_run():
+    scn = short("paper003", 60.0)
+    whole = run_on_log(simulate(scn, 0), "ekf")
+    got = run_streamed(scn, 0, "ekf", chunk_samples=10**6, keep_events=True)
+    _same({k: v for k, v in got.metrics.items()}, whole.metrics)
+    np.testing.assert_array_equal(got.result.lla, whole.result.lla)
+
+
+def test_output_dir_holds_every_chunk(tmp_path):
+    scn = short("paper003", 30.0)
+    out = run_streamed(scn, 0, "ekf", chunk_samples=500, output_rate_hz=2.0,
+                       output_dir=tmp_path / "out")
+    files = sorted((tmp_path / "out").iterdir())
+    assert [f.name for f in files] == [f"chunk-{i:06d}.npz" for i in range(3)]
+    assert not out.result.events  # written, not kept
+    with np.load(files[1]) as z:
+        t = z["time_s"]
+        assert np.all(np.diff(t) == 0.5) and t[0] == 10.5  # 2 Hz, after chunk 0's 0..10 s
+        ev_t = z["events.log.time_s"]  # the log's epochs of samples 501..1000 (50 Hz)
+        np.testing.assert_array_equal(ev_t, np.arange(501, 1001) / 50.0)
+        assert z["events.log.nis"].shape == ev_t.shape
+
+
+def test_an_oracle_told_the_whole_runs_noise_is_refused():
+    with pytest.raises(FuzzynavError, match="ekf-true: told each epoch's sigma"):
+        run_streamed(short("paper004", 20.0), 0, "ekf-true", chunk_samples=100)
+
+
+#: a cruise with a ship's log at the IMU's rate (one epoch a sample)
+RUN = BUDGET_RUN.replace('[sensors.gps]\nkind = "gnss"', '[sensors.log]\nkind = "log"\n'
+                         'rate_hz = {rate}')
+
+
+def test_a_run_that_fits_only_in_chunks_is_refused_whole_with_both_estimates(tmp_path,
+                                                                             monkeypatch):
+    from fuzzynav.sim.scenario import load_scenario
+
+    monkeypatch.setenv(budget.ENV_VAR, "1")
+    # 200 Hz x 86 400 s = 1.728e7 samples; whole: x 1024 B + 2**18 x 3072 B + the log's
+    # 1.728e7 epochs x 1 column x 128 B = 20 711 866 368 B = 19.3 GiB; in chunks:
+    # 15 000 x 4096 B + 1.728e7 epoch indices x 48 B + 86 400 1-Hz rows x 1024 B
+    # = 979 353 600 B = 934 MiB (by hand; twice as long: 1 897 267 200 B = 1.77 GiB)
+    path = tmp_path / "day.toml"
+    path.write_text(RUN.format(rate=200, duration=86400))
+    scn = load_scenario(path)  # fits in chunks: accepted
+    with pytest.raises(InputFileError) as exc:
+        simulate(scn, 0)
+    assert exc.value.where == "imu.rate_hz"
+    assert "needs ~19.3 GB simulated whole; the limit is 1 GB" in exc.value.what
+    assert "in chunks it needs ~934 MB: run it with --output-rate" in exc.value.what
+    # twice as long does not fit even in chunks: refused when read
+    path.write_text(RUN.format(rate=200, duration=2 * 86400))
+    with pytest.raises(InputFileError, match=r"samples needs ~1.77 GB even simulated and "
+                                             "filtered in chunks of 15000 samples with 1-Hz "
+                                             "output; the limit is 1 GB"):
+        load_scenario(path)
