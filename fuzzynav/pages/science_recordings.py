@@ -292,13 +292,16 @@ def regenerate_held_out(data: str | None = None, root: Path = ROOT,
     from fuzzynav.fileio import write_atomic
 
     droot = data_root(data)
+    split = split_section(droot, [SPLIT_SEED0 + k for k in range(mc_recordings)])[0] \
+        if "split" in parts else None
+    auv = auv_section(droot / "akit")[0] if "auv" in parts else None
+    # read the page only now: another splice may have rewritten it while these ran
     page = root / "docs" / "science.md"
     text = page.read_text()
-    if "split" in parts:
-        lines, _ = split_section(droot, [SPLIT_SEED0 + k for k in range(mc_recordings)])
+    if split is not None:
         a = text.index(SPLIT_HEADING)
         b = text.index(AUV_HEADING, a)
-        text = text[:a] + "\n".join(lines) + "\n" + text[b:]
-    if "auv" in parts:
-        text = splice_auv(text, auv_section(droot / "akit")[0])
+        text = text[:a] + "\n".join(split) + "\n" + text[b:]
+    if auv is not None:
+        text = splice_auv(text, auv)
     write_atomic(page, lambda tmp: Path(tmp).write_text(text))

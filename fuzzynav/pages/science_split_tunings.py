@@ -32,6 +32,8 @@ __all__ = ["tuning_file", "tuning_spec", "tunings_present", "differences", "spre
            "N_TUNINGS"]
 
 TALLY = ("wins against", "draws with", "loses to")
+#: the name of one pair, for the names of the pairs the pages use
+ONE = {"seeds": "seed", "noise seeds": "noise seed", "trajectories": "trajectory"}
 
 
 def tuning_file(path: str, k: int) -> str:
@@ -136,7 +138,7 @@ def _ci(est) -> str:
 
 
 def tunings_lines(scores: pd.DataFrame, scenarios, designs, *, best=None, pool=None,
-                  labels=None) -> tuple:
+                  labels=None, unit: str = "seeds") -> tuple:
     """Markdown rows (scenario x design) and the tally design -> {verdict: count} of the
     pooled verdicts.
 
@@ -144,7 +146,8 @@ def tunings_lines(scores: pd.DataFrame, scenarios, designs, *, best=None, pool=N
     difference (mean over test seeds, 95 % CI, verdict mark), the pooled difference over
     tunings and seeds (:func:`fuzzynav.metrics.crossed_ci`) and the spread between
     tunings and between seeds (:func:`spread`).  ``best``/``pool``: as in
-    :func:`differences`; ``labels``: filter -> the name printed.
+    :func:`differences`; ``labels``: filter -> the name printed; ``unit``: the pairs'
+    name (plural).
     """
     from fuzzynav.metrics import crossed_ci, mean_ci
     from fuzzynav.pages import scores as sr
@@ -154,7 +157,8 @@ def tunings_lines(scores: pd.DataFrame, scenarios, designs, *, best=None, pool=N
     tunings = sorted(scores["tuning"].unique())
     lines = ["| set | design | best classical per tuning | "
              + " | ".join(f"tuning {t}" for t in tunings)
-             + " | pooled (tuning × seed) | SD between tunings | SD between seeds |",
+             + f" | pooled (tuning × {ONE.get(unit, unit)}) | SD between tunings | "
+             f"SD between {unit} |",
              "|---|---|---|" + "---|" * (len(tunings) + 3)]
     tally = {d: dict.fromkeys(TALLY, 0) for d in designs}
     for s in scenarios:
@@ -173,14 +177,15 @@ def tunings_lines(scores: pd.DataFrame, scenarios, designs, *, best=None, pool=N
     return lines, tally
 
 
-def score_spread_lines(scores: pd.DataFrame, filters, labels=None) -> list:
+def score_spread_lines(scores: pd.DataFrame, filters, labels=None,
+                       unit: str = "seeds") -> list:
     """Markdown: per filter, the mean score over every held-out run of each tuning, their
     range and standard deviation between tunings, and the pooled standard deviation of a
     run's score about its tuning's scenario mean (between test seeds)."""
     labels = dict(labels or {})
     tunings = sorted(scores["tuning"].unique())
     lines = ["| filter | " + " | ".join(f"tuning {t}" for t in tunings)
-             + " | min – max | SD between tunings | SD between seeds |",
+             + f" | min – max | SD between tunings | SD between {unit} |",
              "|---|" + "---|" * (len(tunings) + 3)]
     for f in filters:
         sub = scores[scores["filter"] == f]
@@ -281,12 +286,16 @@ def split_tunings_lines(splits, frames: dict, unit: str, root: Path = ROOT) -> l
     pool = list(json.loads((Path(root) / splits[0].params).read_text())["filters"])
     designs = list(dict.fromkeys(d for sp in splits for d in sp.designs()))
     studies = "; ".join(seeds_text([sp.study], ks, root) for sp in splits)
-    train = _split_training(splits, ks, root) if len(splits) == 1 else None
+    train = {}
+    for sp in splits:  # filter -> training score per tuning (with the set's name if several)
+        train.update({(f if len(splits) == 1 else f"{f} (`{sp.label}`)"): v
+                      for f, v in _split_training(sp, ks, root).items()})
     intro = (f"**Over {n} tunings.** Every tuned filter here, fuzzy and classical, was tuned "
              f"{n} times on the same training part with the same budget, nothing changed but "
              f"the sampler seed: {studies}; the further tunings' study files and outputs "
-             "carry `_t1`, `_t2` (e.g. `" + tuning_file(splits[0].params, 1) + "`; each "
-             "supervisor is warm-started at its parent of the same tuning). Each fuzzy design "
+             "carry `_t1`, `_t2` (e.g. `" + tuning_file(splits[0].params, 1) + "`"
+             + ("; each supervisor is warm-started at its parent of the same tuning"
+                if any(sp.supervisors for sp in splits) else "") + "). Each fuzzy design "
              "against the best equally tuned classical filter of the same tuning (lowest "
              "mean score on these held-out runs, which favours it)")
     return tunings_section(scores, [sp.label for sp in splits], designs, intro=intro,
@@ -295,13 +304,13 @@ def split_tunings_lines(splits, frames: dict, unit: str, root: Path = ROOT) -> l
                            spread_filters=[*designs, *pool], train=train)
 
 
-def _split_training(splits, ks, root: Path) -> dict:
-    """Filter -> its training score in each tuning ``ks`` of the one split."""
+def _split_training(split, ks, root: Path) -> dict:
+    """Filter -> its training score in each tuning ``ks`` of ``split``."""
     import json
 
     from fuzzynav.pages.best_classical import provenance_score
 
-    sps = [split_of(splits[0], k) for k in ks]
+    sps = [split_of(split, k) for k in ks]
     out = {sps[0].fuzzy: [provenance_score(Path(root) / sp.rules) for sp in sps]}
     for i, (label, _, _) in enumerate(sps[0].supervisors):
         out[label] = [provenance_score(Path(root) / sp.supervisors[i][2]) for sp in sps]
@@ -321,8 +330,8 @@ def tunings_section(scores, scenarios, designs, *, intro: str, unit: str, best=N
     filter that is the same in every tuning).  ``unit`` names the pairs (plural)."""
     labels = dict(labels or {})
     rows, tally = tunings_lines(scores, scenarios, designs, best=best, pool=pool,
-                                labels=labels)
-    one = unit[:-1] if unit.endswith("s") else unit
+                                labels=labels, unit=unit)
+    one = ONE.get(unit, unit)
     out = [intro + f", paired per {one}: each tuning's difference design − best (95 % CI "
            f"over {unit}; negative favours the design), then pooled with the tuning and the "
            f"{one} as crossed random factors (two-way random-effects model, Satterthwaite "
@@ -343,5 +352,5 @@ def tunings_section(scores, scenarios, designs, *, intro: str, unit: str, best=N
     if plain is not None:
         out += ["", f"Score of each tuned filter per tuning against {plain_ref} mean over "
                 f"every held-out run here, its spread between tunings and between {unit}:",
-                "", *score_spread_lines(plain, spread_filters, labels)]
+                "", *score_spread_lines(plain, spread_filters, labels, unit)]
     return out + [""]
