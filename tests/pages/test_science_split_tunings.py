@@ -172,3 +172,20 @@ def test_paper_tunings_lines_without_further_tunings(tmp_path):
                               pool=(), params="p.json", design_files={}, studies=[],
                               root=tmp_path)
     assert "not judged" in out[0]
+
+
+def test_regenerate_held_out_replaces_only_the_two_subsections(tmp_path, monkeypatch):
+    from fuzzynav.pages import science_recordings as sc
+
+    (tmp_path / "docs").mkdir()
+    page = ("# top\nkept\n" + sc.SPLIT_HEADING + "\nold split\n" + sc.AUV_HEADING
+            + "\nold auv\n" + sc.AUV_END + " tail\nend\n")
+    (tmp_path / "docs" / "science.md").write_text(page)
+    monkeypatch.setattr(sc, "split_section", lambda root, seeds: (
+        [sc.SPLIT_HEADING, f"new split {seeds[0]}-{seeds[-1]}"], None))
+    monkeypatch.setattr(sc, "auv_section", lambda d: ([sc.AUV_HEADING, "new auv"], None))
+    sc.regenerate_held_out(str(tmp_path), tmp_path, mc_recordings=3, parts=("split",))
+    got = (tmp_path / "docs" / "science.md").read_text()
+    assert got == page.replace("old split", "new split 100-102")
+    sc.regenerate_held_out(str(tmp_path), tmp_path, parts=("auv",))
+    assert (tmp_path / "docs" / "science.md").read_text() == got.replace("old auv", "new auv")
