@@ -130,7 +130,9 @@ def paired_terms_lines(df: pd.DataFrame, scenarios, design: str, best: str, term
 
 def paper_tunings_lines(dfs: dict, run, score, *, filters: dict, designs, pool, params,
                         design_files: dict, studies, train_score=provenance_score,
-                        unit: str = "seeds", root=None) -> list:
+                        unit: str = "seeds", root=None,
+                        plain_ref: str = "the score above: against an untuned filter, the "
+                                         "same in every tuning") -> list:
     """A paper page's tuning variance: each tuned design against the best equally tuned
     classical filter of the same tuning (chosen on that tuning's training scores), per
     tuning and pooled over tunings (:func:`fuzzynav.pages.science_split_tunings.
@@ -158,6 +160,8 @@ def paper_tunings_lines(dfs: dict, run, score, *, filters: dict, designs, pool, 
         score).
     studies : sequence of str
         The first tuning's study files (their ``_t<k>`` files give the sampler seeds).
+    plain_ref : str
+        What the score of a run is measured against, in words.
     """
     from fuzzynav.pages import science_split_tunings as st
     from fuzzynav.pages.common import REPO_ROOT
@@ -196,6 +200,5 @@ def paper_tunings_lines(dfs: dict, run, score, *, filters: dict, designs, pool, 
              "of the same tuning")
     labels = {f: f for f in tuned}
     return st.tunings_section(scores, list(dfs), list(designs), intro=intro, unit=unit,
-                              best=best, plain=scores, plain_ref="the score's untuned "
-                              "reference, the same in every tuning,",
+                              best=best, plain=scores, plain_ref=plain_ref,
                               spread_filters=tuned, labels=labels, train=train)

@@ -300,7 +300,7 @@ def split_tunings_lines(splits, frames: dict, unit: str, root: Path = ROOT) -> l
              "mean score on these held-out runs, which favours it)")
     return tunings_section(scores, [sp.label for sp in splits], designs, intro=intro,
                            unit=unit, pool=pool, plain=plain,
-                           plain_ref="the untuned `ekf`, the same in every tuning,",
+                           plain_ref="against the untuned `ekf`, the same in every tuning",
                            spread_filters=[*designs, *pool], train=train)
 
 
@@ -350,7 +350,7 @@ def tunings_section(scores, scenarios, designs, *, intro: str, unit: str, best=N
         out += [f"| {labels.get(f, f)} | " + " | ".join(f"{v:.3f}" for v in vals)
                 + f" | {np.std(vals, ddof=1):.3f} |" for f, vals in train.items()]
     if plain is not None:
-        out += ["", f"Score of each tuned filter per tuning against {plain_ref} mean over "
+        out += ["", f"Score of each tuned filter per tuning ({plain_ref}), mean over "
                 f"every held-out run here, its spread between tunings and between {unit}:",
                 "", *score_spread_lines(plain, spread_filters, labels, unit)]
     return out + [""]
