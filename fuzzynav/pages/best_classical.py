@@ -13,27 +13,13 @@ from pathlib import Path
 
 import pandas as pd
 
-from fuzzynav.errors import InputFileError
 from fuzzynav.pages import scores as sr
+from fuzzynav.pages import science_split_tunings as st
 from fuzzynav.pages.science_sections import MARKS, designs_lines
+# re-exported: the pages import it from here
+from fuzzynav.pages.science_split_tunings import provenance_score
 
 __all__ = ["paper_lines", "provenance_score", "paired_terms_lines"]
-
-
-def provenance_score(path) -> float:
-    """The training score a tuned rule file's study gave it (``provenance.objective.value``).
-
-    Raises
-    ------
-    InputFileError
-        The file has no such number.
-    """
-    doc = json.loads(Path(path).read_text(encoding="utf-8"))
-    value = ((doc.get("provenance") or {}).get("objective") or {}).get("value")
-    if not isinstance(value, (int, float)):
-        raise InputFileError(path, "$.provenance.objective.value", "missing: not a study's "
-                             "export, so its training score is unknown")
-    return float(value)
 
 
 def paper_lines(dfs: dict, *, designs, pool, params, metrics, weights=None,
@@ -163,7 +149,6 @@ def paper_tunings_lines(dfs: dict, run, score, *, filters: dict, designs, pool, 
     plain_ref : str
         What the score of a run is measured against, in words.
     """
-    from fuzzynav.pages import science_split_tunings as st
     from fuzzynav.pages.common import REPO_ROOT
 
     root = Path(root or REPO_ROOT)

@@ -29,7 +29,7 @@ from fuzzynav.pages.common import REPO_ROOT as ROOT
 __all__ = ["tuning_file", "tuning_spec", "tunings_present", "differences", "spread",
            "best_on_training", "tunings_lines", "score_spread_lines", "split_of",
            "split_frames", "split_scores", "split_tunings_lines", "tunings_section",
-           "N_TUNINGS"]
+           "N_TUNINGS", "provenance_score"]
 
 TALLY = ("wins against", "draws with", "loses to")
 #: the name of one pair, for the names of the pairs the pages use
@@ -308,8 +308,6 @@ def _split_training(split, ks, root: Path) -> dict:
     """Filter -> its training score in each tuning ``ks`` of ``split``."""
     import json
 
-    from fuzzynav.pages.best_classical import provenance_score
-
     sps = [split_of(split, k) for k in ks]
     out = {sps[0].fuzzy: [provenance_score(Path(root) / sp.rules) for sp in sps]}
     for i, (label, _, _) in enumerate(sps[0].supervisors):
@@ -354,3 +352,23 @@ def tunings_section(scores, scenarios, designs, *, intro: str, unit: str, best=N
                 f"every held-out run here, its spread between tunings and between {unit}:",
                 "", *score_spread_lines(plain, spread_filters, labels, unit)]
     return out + [""]
+
+
+def provenance_score(path) -> float:
+    """The training score a tuned rule file's study gave it (``provenance.objective.value``).
+
+    Raises
+    ------
+    InputFileError
+        The file has no such number.
+    """
+    import json
+
+    from fuzzynav.errors import InputFileError
+
+    doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    value = ((doc.get("provenance") or {}).get("objective") or {}).get("value")
+    if not isinstance(value, (int, float)):
+        raise InputFileError(path, "$.provenance.objective.value", "missing: not a study's "
+                             "export, so its training score is unknown")
+    return float(value)
