@@ -13,27 +13,13 @@ from pathlib import Path
 
 import pandas as pd
 
-from fuzzynav.errors import InputFileError
 from fuzzynav.pages import scores as sr
+from fuzzynav.pages import science_split_tunings as st
 from fuzzynav.pages.science_sections import MARKS, designs_lines
+# re-exported: the pages import it from here
+from fuzzynav.pages.science_split_tunings import provenance_score
 
 __all__ = ["paper_lines", "provenance_score", "paired_terms_lines"]
-
-
-def provenance_score(path) -> float:
-    """The training score a tuned rule file's study gave it (``provenance.objective.value``).
-
-    Raises
-    ------
-    InputFileError
-        The file has no such number.
-    """
-    doc = json.loads(Path(path).read_text(encoding="utf-8"))
-    value = ((doc.get("provenance") or {}).get("objective") or {}).get("value")
-    if not isinstance(value, (int, float)):
-        raise InputFileError(path, "$.provenance.objective.value", "missing: not a study's "
-                             "export, so its training score is unknown")
-    return float(value)
 
 
 def paper_lines(dfs: dict, *, designs, pool, params, metrics, weights=None,
@@ -126,3 +112,78 @@ def paired_terms_lines(df: pd.DataFrame, scenarios, design: str, best: str, term
         note = f" ({notes[s]})" if s in notes else ""
         lines.append(f"| `{s}`{note} | {n} | " + " | ".join(cells) + " |")
     return lines
+
+
+def paper_tunings_lines(dfs: dict, run, score, *, filters: dict, designs, pool, params,
+                        design_files: dict, studies, train_score=provenance_score,
+                        unit: str = "seeds", root=None,
+                        plain_ref: str = "the score above: against an untuned filter, the "
+                                         "same in every tuning") -> list:
+    """A paper page's tuning variance: each tuned design against the best equally tuned
+    classical filter of the same tuning (chosen on that tuning's training scores), per
+    tuning and pooled over tunings (:func:`fuzzynav.pages.science_split_tunings.
+    tunings_section`), or a note when the further tunings' files are absent.
+
+    Parameters
+    ----------
+    dfs : dict
+        Scenario -> the page's runs of the first tuning, ``filter`` the labels of
+        ``filters`` (every design and pool filter, and the reference ``score`` needs).
+    run : callable
+        ``run(specs)`` (label -> spec of one further tuning's designs and pool filters) ->
+        scenario -> their runs on the page's seeds, ``filter`` the labels.
+    score : callable
+        A frame of runs (with ``scenario``) -> ``scenario, seed, filter, score`` (e.g.
+        :func:`~fuzzynav.pages.scores.scores_to` against an untuned filter, the same in
+        every tuning: its rows of the first tuning are reused).
+    filters : dict
+        Label -> the first tuning's spec (tuning k's: :func:`~fuzzynav.pages.
+        science_split_tunings.tuning_spec`).
+    params : str
+        The first tuning's baseline parameter file (its ``train_score`` picks the best).
+    design_files : dict
+        Design label -> the first tuning's rule file (``train_score(path)``: its training
+        score).
+    studies : sequence of str
+        The first tuning's study files (their ``_t<k>`` files give the sampler seeds).
+    plain_ref : str
+        What the score of a run is measured against, in words.
+    """
+    from fuzzynav.pages.common import REPO_ROOT
+
+    root = Path(root or REPO_ROOT)
+    tuned = [*designs, *pool]
+    files = [f for label in tuned for f in filters[label].partition("@")[2].split("+")]
+    ks = st.tunings_present(files, st.N_TUNINGS, root)
+    if len(ks) < 2 or ks[0] != 0:
+        return [f"*Further tunings not judged: the `_t1`/`_t2` files of {', '.join(files)} "
+                "are absent.*", ""]
+    parts = []
+    for k in ks:
+        frames = dfs if k == 0 else run({f: st.tuning_spec(filters[f], k) for f in tuned})
+        for s, df in frames.items():
+            rest = dfs[s][~dfs[s]["filter"].isin(tuned)]  # the untuned: the same runs
+            one = df if k == 0 else pd.concat([df, rest], ignore_index=True)
+            parts.append(one.assign(scenario=s, tuning=k))
+    runs = pd.concat(parts, ignore_index=True)
+    scores = pd.concat([score(runs[runs["tuning"] == k]).assign(tuning=k) for k in ks],
+                       ignore_index=True)
+    best = st.best_on_training({k: root / st.tuning_file(params, k) for k in ks},
+                               {f: filters[f] for f in pool})
+    train = {d: [train_score(root / st.tuning_file(design_files[d], k)) for k in ks]
+             for d in designs}
+    for f in pool:
+        name = filters[f].partition("@")[0]
+        train[f] = [json.loads((root / st.tuning_file(params, k)).read_text())
+                    ["train_score"][name] for k in ks]
+    intro = (f"**Over {len(ks)} tunings.** Every tuned filter of this section, fuzzy and "
+             f"classical, tuned {len(ks)} times with the same budget, training runs and "
+             "objective, nothing changed but the sampler seed ("
+             f"{st.seeds_text(studies, ks, root)}; the further "
+             "tunings' study files and outputs carry `_t1`, `_t2`). Each tuned design "
+             "against the equally tuned classical filter with the lowest training score "
+             "of the same tuning")
+    labels = {f: f for f in tuned}
+    return st.tunings_section(scores, list(dfs), list(designs), intro=intro, unit=unit,
+                              best=best, plain=scores, plain_ref=plain_ref,
+                              spread_filters=tuned, labels=labels, train=train)

@@ -187,12 +187,10 @@ def split_section(root: Path, seeds, cache=None) -> tuple:
 
     with _data_env(root):
         df = ss.split_frame(sp, cache, seeds)
-        more = st.frames_of(sp, cache, seeds, ROOT)
+        frames = st.split_frames(sp, df, st.N_TUNINGS, cache, seeds, ROOT)
     what = (f"noise seeds {seeds[0]}–{seeds[-1]} of the one held-out half: the spread of the "
             "noise added to its fixes, not of drives")
-    tail = st.tunings_lines([df, *more], ss.SPLIT_METRICS, "noise seeds") if more else \
-        ["*Further tunings not judged: " + ", ".join(f"`{f}`" for t in st.CAR_TUNINGS
-                                                     for f in t) + " absent.*", ""]
+    tail = st.split_tunings_lines([sp], {sp.label: frames}, "noise seeds")
     return head + note + ss.splits_lines([sp], {sp.label: df}, "noise seeds", what) + tail, df
 
 
@@ -216,10 +214,15 @@ def auv_section(directory: Path, cache=None) -> tuple:
     note = ss.missing_note(ss.AKIT_FOLDS)
     if not folds:
         return head + note + [""], None
+    from fuzzynav.pages import science_split_tunings as st
+
     with _data_env(directory.parent):
         frames = {f.label: ss.split_frame(f, cache) for f in folds}
+        tuned = {f.label: st.split_frames(f, frames[f.label], st.N_TUNINGS, cache)
+                 for f in folds}
     lines = ss.splits_lines(folds, frames, "trajectories",
                             "the four held-out trajectories of each fold")
+    lines += st.split_tunings_lines(folds, tuned, "trajectories")
     return head + note + lines, pd.concat(frames.values(), ignore_index=True)
 
 
@@ -242,3 +245,41 @@ def recordings_section(args, params: Path, systems: dict, supervisors=None) -> t
     auv, auv_df = auv_section(root / "akit", getattr(args, "cache", None))
     frames = [d for d in (car_df, split_df, auv_df) if d is not None]
     return lines + car + split + auv, (pd.concat(frames) if frames else None)
+
+
+AUV_HEADING = "### The AUV trajectories held out"
+AUV_END = "Every run's metrics:"
+
+
+def splice_auv(page: str, auv_lines: list) -> str:
+    """``page`` (docs/science.md) with its AUV subsection replaced by ``auv_lines``: from its
+    heading up to the closing "Every run's metrics" line, the rest untouched."""
+    a = page.index(AUV_HEADING)
+    b = page.index(AUV_END, a)
+    return page[:a] + "\n".join(auv_lines) + "\n" + page[b:]
+
+
+SPLIT_HEADING = "### The car drive's second half, every filter tuned on its first half"
+
+
+def regenerate_held_out(data: str | None = None, root: Path = ROOT,
+                        mc_recordings: int = 5, parts=("split", "auv")) -> None:
+    """Rerun the car drive's split and/or the AUV subsection of docs/science.md (with their
+    tuning-variance tables) and splice them in, the rest of the page untouched (the split's
+    first-tuning rows are docs/science_recordings.csv's already)."""
+    from fuzzynav.fileio import write_atomic
+
+    droot = data_root(data)
+    split = split_section(droot, [SPLIT_SEED0 + k for k in range(mc_recordings)])[0] \
+        if "split" in parts else None
+    auv = auv_section(droot / "akit")[0] if "auv" in parts else None
+    # read the page only now: another splice may have rewritten it while these ran
+    page = root / "docs" / "science.md"
+    text = page.read_text()
+    if split is not None:
+        a = text.index(SPLIT_HEADING)
+        b = text.index(AUV_HEADING, a)
+        text = text[:a] + "\n".join(split) + "\n" + text[b:]
+    if auv is not None:
+        text = splice_auv(text, auv)
+    write_atomic(page, lambda tmp: Path(tmp).write_text(text))

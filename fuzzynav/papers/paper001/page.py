@@ -161,10 +161,10 @@ def build(ctx, mc: int = 50, mc_variants: int = 20, add=()) -> str:
     filters = {k: v for k, v in {**FILTERS, **TUNED_FILTERS}.items()
                if all(Path(f).is_file() for f in _files(v))}
     filters.update(dict(a.split("=", 1) for a in add))
-    main_df = run_family("paper001", filters, range(1000, 1000 + mc), cache)
-    dfs = {"paper001": main_df}
-    for name in VARIANTS:
-        dfs[name] = run_family(name, filters, range(2000, 2000 + mc_variants), cache)
+    seeds = {"paper001": range(1000, 1000 + mc),
+             **{name: range(2000, 2000 + mc_variants) for name in VARIANTS}}
+    dfs = {name: run_family(name, filters, s, cache) for name, s in seeds.items()}
+    main_df = dfs["paper001"]
     shown = {k: v for k, v in filters.items() if v in ("centralized", "ekf-bds-pol",
                                                        "ekf-bds-mag", "fuzzy-mag",
                                                        "federated-p001",
@@ -190,6 +190,7 @@ def build(ctx, mc: int = 50, mc_variants: int = 20, add=()) -> str:
         "the seeds; filters that keep R constant are left out. A controller that holds R "
         "ten times above nominal where nothing is wrong has switched the sensor off.", "",
         usage_table(main_df, filters), "",
-        *tuned_lines(dfs, filters), "",
+        *tuned_lines(dfs, filters, lambda specs: {s: run_family(s, specs, seeds[s], cache)
+                                                  for s in dfs}), "",
         f"![heading error through the disturbance](figures/{fig.name})", "",
         f"![the shares of federated-fuzzy-beta through the disturbance](figures/{fig_b.name})"])

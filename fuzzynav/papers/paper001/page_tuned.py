@@ -93,9 +93,10 @@ def usage_table(df, filters) -> str:
     return table
 
 
-def tuned_lines(dfs, filters) -> list:
+def tuned_lines(dfs, filters, run=None) -> list:
     """The section on the tuned fuzzy controller against the best equally tuned classical
-    filter (empty unless every filter of it ran)."""
+    filter (empty unless every filter of it ran); ``run(specs)`` (label -> spec) -> scenario
+    -> runs on the page's seeds: the same over the further tunings."""
     if not all(k in filters for k in (*DESIGNS, *POOL, REF)):
         return []
     return ["### The tuned fuzzy R against the best equally tuned classical filter", "",
@@ -116,4 +117,20 @@ def tuned_lines(dfs, filters) -> list:
                          labels={v: k for k, v in filters.items()},
                          score_text="the studies' objective (position, velocity, attitude "
                                     "RMS ratios to the centralized EKF and 0.1 × r_use)",
-                         design_train={filters[DESIGNS[0]]: provenance_score(TUNED)})]
+                         design_train={filters[DESIGNS[0]]: provenance_score(TUNED)}),
+            *([] if run is None else ["", "### The same over three tunings", "",
+                                      *tunings_part(dfs, filters, run)])]
+
+
+def tunings_part(dfs, filters, run) -> list:
+    """:func:`fuzzynav.pages.best_classical.paper_tunings_lines` of the tuned fuzzy R and
+    the classical filters tuned as it was (``dfs``: scenario -> runs, ``filter`` the
+    labels)."""
+    from fuzzynav.pages import scores as sr
+    from fuzzynav.pages.best_classical import paper_tunings_lines
+
+    studies = ["studies/paper001_tune.toml", "studies/paper001_baselines.toml"]
+    return paper_tunings_lines(
+        dfs, run, lambda df: sr.scores_to(df, REF, SCORE_METRICS, SCORE_WEIGHTS),
+        filters=filters, designs=DESIGNS, pool=POOL, params=BASELINES,
+        design_files={DESIGNS[0]: TUNED}, studies=studies)

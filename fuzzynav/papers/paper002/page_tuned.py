@@ -100,7 +100,47 @@ def section(runs: dict) -> str:
         *paired_terms_lines(df, order, FUZZY, CLASSICAL, TERMS, notes), "",
         f"On the {len(tally)} held-out scenarios, in the objective, the tuned fuzzy filter "
         f"wins {tally.count('wins against')}, draws {tally.count('draws with')} and loses "
-        f"{tally.count('loses to')}.", "", _study_test(fuzzy, classical), ""])
+        f"{tally.count('loses to')}.", "", _study_test(fuzzy, classical), "",
+        "### Over three tunings", "", *tunings_part(runs, df), ""])
+
+
+def tunings_part(runs: dict, df: pd.DataFrame) -> list:
+    """The two tuned filters over their tunings (``_t1``, ``_t2`` study files and outputs:
+    :func:`fuzzynav.pages.best_classical.paper_tunings_lines`), scored by the objective."""
+    from fuzzynav.align import alignment_run as R
+    from fuzzynav.experiment import monte_carlo
+    from fuzzynav.pages.best_classical import paper_tunings_lines
+
+    rel = {FUZZY: f"align-fuzzy@{TUNED.relative_to(REPO_ROOT).as_posix()}",
+           CLASSICAL: f"align-kf-tuned@{BASELINES.relative_to(REPO_ROOT).as_posix()}"}
+    weight = _studies()[0].azimuth_weight
+
+    def run(specs):
+        out = {}
+        for name in held:
+            scn, d = runs[name]
+            seeds = sorted(d["seed"].unique())
+            kf = monte_carlo(scn, [specs[CLASSICAL]], seeds, seed_runs=R.seed_runs(scn))
+            rules = str(REPO_ROOT / specs[FUZZY].partition("@")[2])
+            fz = monte_carlo(scn, ["align-fuzzy"], seeds, seed_runs=R.seed_runs(scn, rules))
+            both = pd.concat([kf.assign(filter=CLASSICAL), fz.assign(filter=FUZZY)],
+                             ignore_index=True)
+            out[name] = frame({name: (scn, both)}, weight).drop(columns="scenario")
+        return out
+
+    def train(path):
+        return json.loads(path.read_text())["provenance"]["objective"]["train"]["tuned"]
+
+    studies = ["studies/align/paper002_tune.toml", "studies/align/paper002_baselines.toml"]
+    # the held-out scenarios only: the page's seeds 0-1 of the others were training runs
+    held = [s for s in HELD_OUT if s in runs]
+    dfs = {s: df[df["scenario"] == s].drop(columns="scenario") for s in held}
+    return paper_tunings_lines(
+        dfs, run, lambda d: d.assign(score=d["objective"])[["scenario", "seed", "filter",
+                                                            "score"]],
+        filters=rel, designs=(FUZZY,), pool=(CLASSICAL,), params=rel[CLASSICAL].split("@")[1],
+        design_files={FUZZY: rel[FUZZY].split("@")[1]}, studies=studies,
+        train_score=train, plain_ref="the objective itself, lower is better")
 
 
 def _study_test(fuzzy, classical) -> str:

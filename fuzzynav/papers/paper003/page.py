@@ -18,7 +18,7 @@ from fuzzynav.papers.paper003.claims import PAPER003
 from fuzzynav.experiment import monte_carlo, run_on_log
 from fuzzynav.filters.named import parse_filter_spec
 from fuzzynav.metrics import errors_vs_trajectory
-from fuzzynav.pages.best_classical import paper_lines, provenance_score
+from fuzzynav.pages.best_classical import paper_lines, paper_tunings_lines, provenance_score
 from fuzzynav.pages.common import machine
 from fuzzynav.report import ci_cell, ratio_table, render
 from fuzzynav.sim.sensor_log import simulate
@@ -91,6 +91,27 @@ def figures(filters, cache, fig_dir: Path) -> list:
     return out
 
 
+def tunings_part(dfs, filters, seeds: dict, cache) -> list:
+    """The tuned filters over their tunings (``dfs``: scenario -> the first tuning's runs,
+    ``filter`` the specs; ``seeds``: scenario -> its seeds)."""
+    from fuzzynav.pages import scores as sr
+
+    def relabel(df, specs):
+        back = {v: k for k, v in specs.items()}
+        return df.assign(filter=df["filter"].map(lambda f: back.get(f, f)))
+
+    def run(specs):
+        return {s: relabel(monte_carlo(s, list(specs.values()), seeds[s], cache_dir=cache),
+                           specs) for s in dfs}
+
+    studies = ["studies/paper003_tune.toml", "studies/paper003_baselines.toml"]
+    return paper_tunings_lines(
+        {s: relabel(df, filters) for s, df in dfs.items()}, run,
+        lambda df: sr.scores_to(df, "EKF", SCORE_METRICS, SCORE_WEIGHTS),
+        filters=filters, designs=DESIGNS, pool=POOL, params=BASELINES,
+        design_files={DESIGNS[0]: TUNED[0]}, studies=studies)
+
+
 def build(ctx, mc: int = 50, mc_variants: int = 5) -> str:
     """The results section and figures: ``mc`` seeds of paper003, ``mc_variants`` of each
     variant."""
@@ -100,11 +121,9 @@ def build(ctx, mc: int = 50, mc_variants: int = 5) -> str:
                if "tuned" not in k or have["classical" if k in POOL else "fuzzy"]}
     specs = list(filters.values())
     t0 = time.perf_counter()
-    dfs = {"paper003": monte_carlo("paper003", specs, range(1000, 1000 + mc),
-                                   cache_dir=cache)}
-    for name in VARIANTS:
-        dfs[name] = monte_carlo(name, specs, range(2000, 2000 + mc_variants),
-                                cache_dir=cache)
+    seeds = {"paper003": range(1000, 1000 + mc),
+             **{name: range(2000, 2000 + mc_variants) for name in VARIANTS}}
+    dfs = {name: monte_carlo(name, specs, s, cache_dir=cache) for name, s in seeds.items()}
     n_runs = sum(len(df) for df in dfs.values())
     per_run = (time.perf_counter() - t0) / n_runs  # simulation included: what a seed costs
     failed = {k: int((df["completed"] < 1).sum()) for k, df in dfs.items()}
@@ -132,6 +151,8 @@ def build(ctx, mc: int = 50, mc_variants: int = 5) -> str:
                                           "horizontal velocity and horizontal position RMS "
                                           "ratios to the EKF (the studies' objective)",
                                design_train={FILTERS[d]: provenance_score(TUNED[0])
-                                             for d in DESIGNS}), ""]
+                                             for d in DESIGNS}), "",
+                  "### The same over three tunings", "",
+                  *tunings_part(dfs, filters, seeds, cache)]
     parts += [f"![{f.stem}]({f.as_posix()})" for f in figs]
     return "\n".join(parts)

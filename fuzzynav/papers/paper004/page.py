@@ -217,7 +217,7 @@ def real_part(data, fig_dir: Path) -> tuple[list, list]:
     sentence saying they were skipped when the recordings are absent."""
     if not (data / "IMU_trajectory1.csv").is_file():
         return [f"(A-KIT recordings not found at {data}: real-data tables skipped.)", ""], []
-    from fuzzynav.papers.paper004.page_heldout import heldout_frame, section
+    from fuzzynav.papers.paper004.page_heldout import heldout_frame, section, tunings_lines
 
     recs, real, ekf_results = real_data(data)
     return [f"{REAL_HEAD}: horizontal RMS (m) against the post-processed reference", "",
@@ -227,7 +227,8 @@ def real_part(data, fig_dir: Path) -> tuple[list, list]:
             "filter beats a plain EKF by more than 49.5 % in position (claim).", "",
             real_table(real), "",
             "End error as % of the distance travelled:", "",
-            real_table(real, "end_pos_h_pct"), ""] + section(heldout_frame()), \
+            real_table(real, "end_pos_h_pct"), ""] + section(heldout_frame()) + \
+        tunings_lines(), \
         akit_figures(recs, ekf_results, fig_dir)
 
 

@@ -121,6 +121,20 @@ def paired_best(df: pd.DataFrame, key: str = "rms_pos_h_m") -> list:
     return rows
 
 
+def tunings_lines(folds=AKIT_FOLDS, cache=None) -> list:
+    """Both folds over their three tunings (every tuned filter tuned again with two more
+    sampler seeds: :func:`fuzzynav.pages.science_split_tunings.split_tunings_lines`, the
+    table of docs/science.md's AUV section)."""
+    from fuzzynav.pages import science_split_tunings as st
+
+    frames = {f.label: st.split_frames(f, split_frame(f, cache), st.N_TUNINGS, cache)
+              for f in folds}
+    return ["### Over three tunings", "",
+            "Scores here are the studies' objective (mean of the 3-D position and velocity "
+            "RMS ratios), not the horizontal RMS above.", "",
+            *st.split_tunings_lines(list(folds), frames, "trajectories")]
+
+
 def section(frame: tuple) -> list:
     """The markdown lines of the held-out section (``frame``: :func:`heldout_frame`)."""
     df, best = frame
