@@ -85,9 +85,10 @@ def _make_loop(BANK: bool, ST: bool):
         adapt, gate and update, fuse and feed back -- each a commented block over the
         arrays unpacked here once per chunk.  The steps that run per sample or per epoch are
         not functions of their own: every way numba has of making them one (an inlined
-        function, an inlined closure, a plain call) copies each array it touches on every
-        call, with a reference count taken and dropped, and that made the paper000 EKF run
-        4-17 % slower (docs/benchmarks.md, "The loop as steps").  The rare ones are:
+        function, an inlined closure, a plain call) pays per array it touches on every call
+        (the inlined ones a reference count taken and dropped, a plain call the array's
+        fields passed), and that made the paper000 EKF run
+        4-35 % slower (docs/benchmarks.md, "The loop as steps").  The rare ones are:
         :func:`~fuzzynav.filters.bank_fusion.propagate_locals`,
         :func:`~fuzzynav.filters.bank_fusion.fuse_and_feed_back` (a bank's fusion; the
         single filter feeds its own estimate back), :func:`_begin`, :func:`_park`, and
