@@ -122,12 +122,22 @@ def run_ms(log, setup, sensors, repeat=5):
     return 1e3 * float(np.median(t)), res
 
 
+def _tables(tb) -> dict:
+    """The sensor tables as the dict older revisions returned (``bench_ekf.py`` runs this
+    file against a base revision's package too)."""
+    if isinstance(tb, dict):
+        return tb
+    ev, se = tb.events, tb.sensors
+    return dict(names=tb.names, M=tb.M, meas_fns=tb.meas_fns, ev_t=ev.t, ev_s=ev.s,
+                ev_data=ev.data, s_meas=se.meas, s_mpar=se.mpar)
+
+
 def profile(cache_dir=None) -> dict:
     """Per-part costs and counts of a paper000 ``ekf`` run (see the module docstring)."""
     log = simulate(load_scenario("paper000"), 0, cache_dir or tempfile.mkdtemp())
     setup = setup_for(log, "ekf")
     cfg, sensors = setup.config, setup.sensors_for(log.sensors)
-    tb = _sensor_tables(sensors, {}, {}, None)
+    tb = _tables(_sensor_tables(sensors, {}, {}, None))
     n, M, k0 = cfg.model.n_states, tb["M"], 30000
     tr = log.truth
     nav = strapdown.make_nav(tr.lla[k0], tr.vel_n[k0], tr.q_bn[k0])

@@ -11,9 +11,10 @@ import math
 import numba as nb
 import numpy as np
 
-from fuzzynav.filters import kalman
-from fuzzynav.filters.error_model import block_end, discretize_tail, fill_F
-from fuzzynav.filters.error_st import EM_ST, discretize_dense, st_process_noise, st_system
+from fuzzynav.filters import error_hook, kalman
+from fuzzynav.filters.bank_beta import update_shares
+from fuzzynav.filters.error_model import block_end, fill_F
+from fuzzynav.filters.feedback import feedback
 from fuzzynav.filters.layout import N_CORE
 
 
@@ -205,43 +206,69 @@ def fusion_work(n):
 
 
 @nb.njit(cache=True, error_model="numpy")
-def propagate_locals(state, Qacc3, keep_q, carry, xs, nav, sumC, sumf, tau, Cm, fm, F, Phi, Qd,
-                     work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc):
+def propagate_locals(state, model, em, acc, nav, xs, tau, keep_q, carry):
     """Propagate every local's P (and, with ``carry``, its x) over the accumulated interval
-    and decay the shared Gauss-Markov estimates.
+    ``tau`` and decay the shared Gauss-Markov estimates ``xs``.
 
-    One ``F`` for all locals (one mechanization); each local its own noise densities.
-    ``em`` selects the error model; the ST model maps the phi model's F and noise.  With
-    ``keep_q`` each local's discrete noise is summed into ``Qacc3`` (the noise since its last
-    update, which a policy that scales the predicted covariance needs)."""
+    ``state`` is the :class:`~fuzzynav.filters.loop_args.BankState`, ``model`` the
+    :class:`~fuzzynav.filters.loop_args.Model`, ``em`` the error-model argument of
+    :mod:`fuzzynav.filters.error_hook`, ``acc`` the
+    :class:`~fuzzynav.filters.loop_args.Propagation` (its sums restart from zero).  One
+    ``F`` for all locals (one mechanization); each local its own noise densities.  With
+    ``keep_q`` each local's discrete noise is summed into ``acc.Qacc`` (the noise since its
+    last update, which a policy that scales the predicted covariance needs)."""
     P3, X, QD = state.P, state.x, state.qd
+    sumC, sumf, Cm, fm = acc.sumC, acc.sumf, acc.Cm, acc.fm
+    F, Phi, Qd, work = acc.F, acc.Phi, acc.Qd, acc.work
+    blk_start, blk_inv_tau = model.blk_start, model.blk_inv_tau
     for i in range(3):
         fm[i] = sumf[i] / tau
         sumf[i] = 0.0
         for j in range(3):
             Cm[i, j] = sumC[i, j] / tau
             sumC[i, j] = 0.0
-    fill_F(F, nav, Cm, fm, blk_start, blk_kind, blk_inv_tau)
-    if em == EM_ST:
-        st_system(F, nav)
+    fill_F(F, nav, Cm, fm, blk_start, model.blk_kind, blk_inv_tau)
+    error_hook.system(em, F, nav)
     n = F.shape[0]
     tail = kalman.diagonal_tail(F)  # the sensor blocks only decay: Phi keeps F's tail
     for b in range(X.shape[0]):
-        if em == EM_ST:
-            st_process_noise(Qc, QD[b], nav)
-            discretize_dense(F, Qc, tau, Phi, Qd, work)
-        else:
-            discretize_tail(F, QD[b], tau, Phi, Qd, work, tail)
+        error_hook.discretize(em, F, QD[b], tau, Phi, Qd, work, tail, acc.Qc, nav)
         kalman.propagate_tail(P3[b], Phi, Qd, work, tail)
         if keep_q:
-            Qacc = Qacc3[b]
+            Qacc = acc.Qacc[b]
             for i in range(n):
                 for j in range(n):
                     Qacc[i, j] += Qd[i, j]
         if carry:
-            propagate_state(Phi, X[b], dx)
+            propagate_state(Phi, X[b], acc.dx)
     for b in range(blk_start.size):
         if blk_inv_tau[b] > 0.0:
             d = math.exp(-tau * blk_inv_tau[b])
             for i in range(blk_start[b], block_end(blk_start, b, n)):
                 xs[i - N_CORE] *= d
+
+
+@nb.njit(cache=True, error_model="numpy")
+def fuse_and_feed_back(em, bank, state, fu, Qacc3, nav, prev, xs, li, t_meas, t_fused):
+    """A bank after an update of local ``li`` at ``t_meas``: when the fusion is due, new
+    shares (share controller), the fusion, the sharing of the fused solution and its
+    feedback into ``nav``, ``prev``, ``xs``.
+
+    ``bank``, ``state``, ``fu`` are the loop's :class:`~fuzzynav.filters.loop_args.Bank`,
+    :class:`~fuzzynav.filters.loop_args.BankState` and
+    :class:`~fuzzynav.filters.loop_args.FusionWork`, ``em`` the error-model argument of
+    :mod:`fuzzynav.filters.error_hook`.  Returns ``(ok, fusion state, time of the last
+    fusion)``, ``ok`` whether the covariance the step leaves (the fused one, else the
+    updated local's) is still one.
+    """
+    if not (bank.period <= 0.0 or t_meas - t_fused >= bank.period - 1e-9):  # not due yet
+        return kalman.covariance_ok(state.P[li]), STALE, t_fused
+    if bank.ctl.on:  # new shares first: a reset shares P_g by them
+        update_shares(bank.ctl, bank.beta, state.qd)
+    if not fuse(state.P, state.x, state.Pg, state.xg, fu.work):
+        return False, STALE, t_fused
+    fb = error_hook.fused_feedback(em, state.xg, state.Pg, nav, fu.xphi)
+    share(state.P, state.x, Qacc3, state.Pg, state.xg, bank.beta, bank.reset)
+    error_hook.regauge(em, state.P, state.x, fb, bank.reset)
+    feedback(nav, prev, xs, fb)
+    return kalman.covariance_ok(state.Pg), FUSED_NOW, t_meas

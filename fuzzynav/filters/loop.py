@@ -7,9 +7,11 @@ so propagating every sample would cost ~100x more for no accuracy (docs/benchmar
 Measurement epochs go through the sensor's measurement model, its adaptation policy, optional
 chi-square gating, the Joseph update and closed-loop feedback.  The filter is a bank of local
 filters over the one mechanization (:mod:`fuzzynav.filters.bank`): each measurement updates
-the local that owns its sensor, the master fuses the locals and feeds the fused estimate back;
-the single filter is the bank of one, which skips the fusion.  Memory is independent of the
-run length apart from the outputs (every ``out_stride`` samples) and the per-epoch event log.
+the local that owns its sensor, the master fuses the locals and feeds the fused estimate back
+(:func:`~fuzzynav.filters.bank_fusion.fuse_and_feed_back`); the single filter is the bank of
+one, which skips the fusion.  What depends on the error model is behind its hook
+(:mod:`fuzzynav.filters.error_hook`).  Memory is independent of the run length apart from
+the outputs (every ``out_stride`` samples) and the per-epoch event log.
 """
 from __future__ import annotations
 
@@ -18,24 +20,21 @@ import math
 import numba as nb
 import numpy as np
 
-from fuzzynav.filters import kalman, precompile
+from fuzzynav.filters import error_hook, kalman, precompile
 from fuzzynav.filters.adaptation import context
-from fuzzynav.filters.bank_beta import push_innovation, update_shares
-from fuzzynav.filters.bank_fusion import FUSED_NOW, SHARED, STALE, after_propagation, fuse, \
-    fusion_work, local_residual, master_covariance, propagate_locals, share
-from fuzzynav.filters.numba_patch_dispatch import memoise_table_types
-from fuzzynav.filters.error_st import EM_PHI, EM_ST, st_fused, st_measurement, st_regauge, \
-    st_reset, st_to_phi
+from fuzzynav.filters.bank_beta import push_innovation
+from fuzzynav.filters.bank_fusion import SHARED, STALE, after_propagation, fuse_and_feed_back, \
+    local_residual, master_covariance, propagate_locals
+from fuzzynav.filters.error_st import EM_ST
 from fuzzynav.filters.feedback import bias_totals, feedback
 from fuzzynav.filters.layout import AUX_FORCE, AUX_RATE, AUX_XS
 # the argument bundles, named here too: callers build them as loop.Imu(...), ...
 from fuzzynav.filters.loop_args import (  # noqa: F401
     Bank, BankState, Carry, EventOutputs, Events, Imu, Model, Outputs, Sensors, Settings, Start,
     new_carry)
+from fuzzynav.filters.numba_patch_dispatch import memoise_table_types
 from fuzzynav.filters.record import record_output
-from fuzzynav.nav.state_layout import PREV_SIZE
 from fuzzynav.nav.strapdown import init_prev, mech_step, quat_to_dcm_into
-
 
 #: adapter id of a sensor without adaptation (the loop skips the policy's call)
 NO_ADAPTER = -1
@@ -56,9 +55,11 @@ def _make_loop(BANK: bool, ST: bool):
     several locals (and of the share controller) / of the ST error model.
 
     The flags are constants of the copy: numba drops the branches they turn off before
-    typing, so their kernels are not compiled for it.  Every copy runs the same operations
-    in the same order for the runs it takes (:func:`loop_for`), so results are the same
-    whichever runs them; each copy has its own entry in numba's cache.
+    typing, so their kernels are not compiled for it (without ``ST`` the error-model
+    argument is ``None``, which compiles every hook point to the phi model's code).  Every
+    copy runs the same operations in the same order for the runs it takes
+    (:func:`loop_for`), so results are the same whichever runs them; each copy has its own
+    entry in numba's cache.
     """
 
     @nb.njit(cache=True, error_model="numpy")
@@ -67,79 +68,71 @@ def _make_loop(BANK: bool, ST: bool):
         """Run the filter bank over one chunk of IMU samples; returns ``(status,
         samples_done)``, counted from the run's first sample.
 
-        Arguments are the named tuples above (:class:`Imu`, :class:`Start`, :class:`Model`,
-        :class:`Events`, :class:`Sensors`, :class:`Bank`, :class:`BankState`,
-        :class:`Settings`, :class:`Outputs`, :class:`EventOutputs`, :class:`Carry`) and the
-        kernel tuples of the measurement models and adaptation policies.  ``imu.time_s`` has
-        N+1 entries (increment k spans ``time_s[k]..time_s[k+1]``); the next chunk starts at
-        this one's last time.  Outputs are written into the preallocated ``out`` arrays
-        (every ``out_stride`` samples of the run, starting with the initial state; row 0 of
-        ``out`` is the run's row ``chunk.count[CN_ROW0]``) and ``evout`` (one row per event
-        of the run); ``sensors.ast`` (adapter states), ``state`` and ``chunk`` (everything
-        else the loop keeps between samples) are updated in place, so calling the loop again
-        with the next chunk continues the run exactly: a run in one chunk is the special case.
+        Arguments are the named tuples of :mod:`fuzzynav.filters.loop_args` (:class:`Imu`,
+        :class:`Start`, :class:`Model`, :class:`Events`, :class:`Sensors`, :class:`Bank`,
+        :class:`BankState`, :class:`Settings`, :class:`Outputs`, :class:`EventOutputs`,
+        :class:`Carry`) and the kernel tuples of the measurement models and adaptation
+        policies.  ``imu.time_s`` has N+1 entries (increment k spans
+        ``time_s[k]..time_s[k+1]``); the next chunk starts at this one's last time.  Outputs
+        are written into the preallocated ``out`` arrays (every ``out_stride`` samples of the
+        run, starting with the initial state; row 0 of ``out`` is the run's row
+        ``chunk.count[CN_ROW0]``) and ``evout`` (one row per event of the run);
+        ``sensors.ast`` (adapter states), ``state`` and ``chunk`` (everything else the loop
+        keeps between samples) are updated in place, so calling the loop again with the next
+        chunk continues the run exactly: a run in one chunk is the special case.
+
+        The body reads as the filter's steps -- strapdown, propagate if due, measure,
+        adapt, gate and update, fuse and feed back -- each a commented block over the
+        arrays unpacked here once per chunk.  The steps that run per sample or per epoch are
+        not functions of their own: every way numba has of making them one (an inlined
+        function, an inlined closure, a plain call) pays per array it touches on every call
+        (the inlined ones a reference count taken and dropped, a plain call the array's
+        fields passed), and that made the paper000 EKF run
+        4-35 % slower (docs/benchmarks.md, "The loop as steps").  The rare ones are:
+        :func:`~fuzzynav.filters.bank_fusion.propagate_locals`,
+        :func:`~fuzzynav.filters.bank_fusion.fuse_and_feed_back` (a bank's fusion; the
+        single filter feeds its own estimate back), :func:`_begin`, :func:`_park`, and
+        what depends on the error model is one hook (:mod:`fuzzynav.filters.error_hook`).
         """
-        # plain local names: the loop body reads as the algorithm, and numba sees bare arrays
         dth, dv, time_s = imu
-        nav0, xs0 = start
-        blk_start, blk_kind, blk_inv_tau, em = model
-        if not ST:  # a constant: the callees compile without their ST branches
-            em = EM_PHI
+        em = model.error_model if ST else None  # None: the phi model, known when compiled
+        blk_start, blk_kind = model.blk_start, model.blk_kind
         ev_t, ev_s, ev_data = events
         s_meas, s_mpar, s_adapt, afp, afp_off, aip, aip_off, ast, ast_off, s_gate = sensors
-        s_local, beta, reset, period, ctl = bank
-        P3, X, QD, Pg, xg = state
-        max_prop_dt, out_stride = settings
+        s_local, beta, reset, period = bank.local, bank.beta, bank.reset, bank.period
+        P3, X, QD = state.P, state.x, state.qd
         ev_r, ev_S, ev_nis, ev_flag, ev_diag = evout
-        NL, n = X.shape
-        M = ev_r.shape[1]
-        N = dth.shape[0]
-        E = ev_t.size
+        nv, acc, up, ad, fu, clock, count = chunk
+        nav, prev, xs, C, bg, ba, dth_c, dv_c = nv
+        sumC, sumf, dv_sf, Qacc3 = acc.sumC, acc.sumf, acc.dv_sf, acc.Qacc
+        H, z, R, chan, PHt, HPH, S, L, K, AP, APHt, dx, wv = up
+        out_a, diag, ctx, aux = ad
+        max_prop_dt, out_stride = settings
+        NL, N, E, M = X.shape[0], dth.shape[0], ev_t.size, ev_r.shape[1]
         # a local's estimate survives between updates only in a bank of several locals that
         # does not reset to the fused solution after every update
         carry = BANK and NL > 1 and (reset == 0 or period > 0.0)
         # only a policy may scale the predicted covariance by the noise since the last update
         keep_q = np.any(s_adapt != NO_ADAPTER)
-        # everything the loop keeps between samples lives in ``chunk`` (:class:`Carry`), so a
-        # run over consecutive chunks of the IMU is the same arithmetic as one over the whole
-        (nav, prev, xs, C, sumC, sumf, dv_sf, Cm, fm, F, Phi, Qd, Qacc3, Qc, work, AP, H, z, R,
-         chan, PHt, APHt, K, HPH, S, L, dx, wv, out_a, diag, ctx, aux, bg, ba, dth_c, dv_c,
-         fwork, Pf, xf, xphi, clock, count) = chunk
+
         k0, row0 = count[CN_K0], count[CN_ROW0]
         if count[CN_STARTED] == 0:  # the run's first chunk: its start
-            count[CN_STARTED] = 1
-            nav[:] = nav0
-            init_prev(nav, prev)
-            xs[:] = xs0
-            quat_to_dcm_into(nav, C)
-            ctx[context.CTX_M] = M
-            count[CN_FSTATE] = SHARED  # every local starts from P0 / beta_i
-            clock[CL_T_FUSED] = -math.inf
-            clock[CL_TAU] = 0.0
-            # bias totals change only with xs (feedback, Gauss-Markov decay): formed then,
-            # not per sample
-            bias_totals(xs, blk_start, blk_kind, bg, ba)
-            count[CN_SINCE_OUT] = 0  # samples since the last recorded output
-            e = 0
-            while e < E and ev_t[e] < time_s[0] - 1e-9:
-                ev_flag[e] = EV_BEFORE_START
-                e += 1
-            count[CN_EVENT] = e
+            _begin(start, model, ev_t, ev_flag, nv, ctx, M, clock, count, time_s)
             record_output(0 - row0, time_s[0], nav, xs, state,
-                          master_covariance(P3, X, beta, Pg, SHARED, Pf, xf, fwork)
-                          if BANK and NL > 1 else P3[0],
+                          master_covariance(P3, X, beta, state.Pg, SHARED, fu.Pf, fu.xf,
+                                            fu.work) if BANK and NL > 1 else P3[0],
                           beta, out, em)
-        fstate = count[CN_FSTATE]
-        t_fused = clock[CL_T_FUSED]
-        tau = clock[CL_TAU]
-        e = count[CN_EVENT]
-        since_out = count[CN_SINCE_OUT]
+        # the scalars live in locals while the chunk runs, in ``chunk`` between chunks
+        fstate, e, since_out = count[CN_FSTATE], count[CN_EVENT], count[CN_SINCE_OUT]
+        t_fused, tau = clock[CL_T_FUSED], clock[CL_TAU]
         for k in range(N):
+            # strapdown: bias-corrected increments, the mechanization (C follows the new
+            # attitude), the interval's sums of attitude and specific force
             dt = time_s[k + 1] - time_s[k]
             for i in range(3):
                 dth_c[i] = dth[k, i] - bg[i] * dt
                 dv_c[i] = dv[k, i] - ba[i] * dt
-            mech_step(nav, prev, dth_c, dv_c, dt, dv_sf, C)  # C follows the new attitude
+            mech_step(nav, prev, dth_c, dv_c, dt, dv_sf, C)
             for i in range(3):
                 sumf[i] += dv_sf[i]  # the interval's mean force is sumf / tau
                 for j in range(3):
@@ -147,16 +140,15 @@ def _make_loop(BANK: bool, ST: bool):
             tau += dt
             t = time_s[k + 1]
             while e < E and ev_t[e] <= t + 1e-9:
-                if tau > 0.0:
-                    propagate_locals(state, Qacc3, keep_q, carry, xs, nav, sumC, sumf, tau, Cm,
-                                     fm, F, Phi, Qd, work, dx, blk_start, blk_kind, blk_inv_tau,
-                                     em, Qc)
+                if tau > 0.0:  # propagate if due: every local up to the epoch
+                    propagate_locals(state, model, em, acc, nav, xs, tau, keep_q, carry)
                     tau = 0.0
                     fstate = after_propagation(fstate, reset)
                     bias_totals(xs, blk_start, blk_kind, bg, ba)
+                # measure: the sensor's (z, H, R), in the error model's rows
                 s = ev_s[e]
-                a = s_adapt[s]
-                P, x, qd, Qacc = P3[s_local[s]], X[s_local[s]], QD[s_local[s]], Qacc3[s_local[s]]
+                li = s_local[s]
+                P, x, qd, Qacc = P3[li], X[li], QD[li], Qacc3[li]
                 H[:, :] = 0.0
                 for i in range(3):  # the latest interval's rate and force, for the models only
                     aux[AUX_RATE + i] = dth_c[i] / dt
@@ -169,12 +161,14 @@ def _make_loop(BANK: bool, ST: bool):
                     ev_flag[e] = EV_EMPTY
                     e += 1
                     continue
-                if ST and em == EM_ST:  # the models write phi-model rows: H_ST = H A^-1
-                    st_measurement(H, m, nav)
-                if carry:
+                error_hook.rows(em, H, m, nav)  # the models write phi-model rows
+                if carry:  # a local's estimate not fed back yet: its own innovation
                     local_residual(z, H, m, x)
                 kalman.innovation_cov(P, H, m, PHt, HPH)
+                # adapt: the policy's weights (P, Q, then R per row; Q and R now, P once the
+                # gate has passed), then S, its factor and the NIS
                 out_a[0] = 1.0
+                a = s_adapt[s]
                 if a != NO_ADAPTER:  # what the plain EKF's policy would return: ones, no diag
                     context.fill(ctx, nav, aux, R, m, ev_data[e])
                     adapt_fns[a](afp[afp_off[s]:afp_off[s + 1]], aip[aip_off[s]:aip_off[s + 1]],
@@ -186,13 +180,13 @@ def _make_loop(BANK: bool, ST: bool):
                         R[i] *= out_a[2 + i]
                 for i in range(diag.size):
                     ev_diag[e, i] = diag[i]
-                ok = _innovation(HPH, R, m, S, L, z, wv, ev_r, ev_S, ev_nis, e)
-                if not ok:
+                if not _innovation(HPH, R, m, S, L, z, wv, ev_r, ev_S, ev_nis, e):
                     ev_flag[e] = EV_BAD_S
                     e += 1
                     continue
-                if BANK and ctl.on:  # the share controller reads every formed innovation
-                    push_innovation(ctl.stat[s_local[s]], ev_nis[e], m, z, S)
+                if BANK and bank.ctl.on:  # the share controller reads every innovation
+                    push_innovation(bank.ctl.stat[li], ev_nis[e], m, z, S)
+                # gate, then update the sensor's local
                 thr = s_gate[s, m]
                 if thr > 0.0 and ev_nis[e] > thr:
                     ev_flag[e] = EV_GATED
@@ -207,46 +201,30 @@ def _make_loop(BANK: bool, ST: bool):
                         e += 1
                         continue
                 kalman.correct(L, P, H, R, m, z, PHt, K, dx, AP, APHt, wv)
-                if keep_q:
+                if keep_q:  # the noise since this local's last update starts again
                     Qacc[:, :] = 0.0
-                for i in range(n):
+                for i in range(x.size):
                     x[i] += dx[i]
                 ev_flag[e] = EV_ACCEPTED
                 t_meas = ev_t[e]  # the fusion clock runs on measurement times, not IMU times
                 e += 1
+                # fuse and feed back (the single filter: its own estimate)
                 fstate = STALE
-                if not (BANK and NL > 1):
-                    if ST and em == EM_ST:
-                        st_to_phi(x, nav)
-                        st_reset(P, x)
+                if BANK and NL > 1:
+                    ok, fstate, t_fused = fuse_and_feed_back(em, bank, state, fu, Qacc3, nav,
+                                                             prev, xs, li, t_meas, t_fused)
+                else:
+                    error_hook.single_feedback(em, P, x, nav)
                     feedback(nav, prev, xs, x)
                     x[:] = 0.0
-                    ok = kalman.covariance_ok(P)
-                elif period <= 0.0 or t_meas - t_fused >= period - 1e-9:
-                    if ctl.on:  # new shares first: a reset shares P_g by them
-                        update_shares(ctl, beta, QD)
-                    ok = fuse(P3, X, Pg, xg, fwork)
-                    if ok:
-                        fb = xg  # the ST model fuses ST states, feeds back their phi form
-                        if ST and em == EM_ST:
-                            fb = st_fused(xg, Pg, nav, xphi)
-                        share(P3, X, Qacc3, Pg, xg, beta, reset)
-                        if ST and em == EM_ST and not reset:
-                            st_regauge(P3, X, fb)
-                        feedback(nav, prev, xs, fb)
-                        t_fused = t_meas
-                        fstate = FUSED_NOW
-                        ok = kalman.covariance_ok(Pg)
-                else:
                     ok = kalman.covariance_ok(P)
                 quat_to_dcm_into(nav, C)
                 bias_totals(xs, blk_start, blk_kind, bg, ba)
                 if not ok:
                     _park(chunk, fstate, t_fused, tau, e, since_out, k0 + k + 1)
                     return ST_COVARIANCE, k0 + k + 1
-            if tau >= max_prop_dt - 1e-12:
-                propagate_locals(state, Qacc3, keep_q, carry, xs, nav, sumC, sumf, tau, Cm, fm, F,
-                                 Phi, Qd, work, dx, blk_start, blk_kind, blk_inv_tau, em, Qc)
+            if tau >= max_prop_dt - 1e-12:  # propagate if due: the longest interval passed
+                propagate_locals(state, model, em, acc, nav, xs, tau, keep_q, carry)
                 tau = 0.0
                 fstate = after_propagation(fstate, reset)
                 bias_totals(xs, blk_start, blk_kind, bg, ba)  # Gauss-Markov decay of xs
@@ -254,12 +232,38 @@ def _make_loop(BANK: bool, ST: bool):
             if since_out == out_stride:
                 since_out = 0
                 record_output((k0 + k + 1) // out_stride - row0, t, nav, xs, state,
-                              master_covariance(P3, X, beta, Pg, fstate, Pf, xf, fwork)
-                              if BANK and NL > 1 else P3[0], beta, out, em)
+                              master_covariance(P3, X, beta, state.Pg, fstate, fu.Pf, fu.xf,
+                                                fu.work) if BANK and NL > 1 else P3[0],
+                              beta, out, em)
         _park(chunk, fstate, t_fused, tau, e, since_out, k0 + N)
         return ST_OK, k0 + N
 
     return memoise_table_types(run_loop)  # the kernel tables: typed once per tuple
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _begin(start, model, ev_t, ev_flag, nv, ctx, M, clock, count, time_s):
+    """The run's start (its first chunk): the initial state, the clocks and counters, and
+    the events before the first IMU sample marked."""
+    count[CN_STARTED] = 1
+    nav = nv.nav
+    nav[:] = start.nav0
+    init_prev(nav, nv.prev)
+    nv.xs[:] = start.xs0
+    quat_to_dcm_into(nav, nv.C)
+    ctx[context.CTX_M] = M
+    count[CN_FSTATE] = SHARED  # every local starts from P0 / beta_i
+    clock[CL_T_FUSED] = -math.inf
+    clock[CL_TAU] = 0.0
+    # bias totals change only with xs (feedback, Gauss-Markov decay): formed then, not per
+    # sample
+    bias_totals(nv.xs, model.blk_start, model.blk_kind, nv.bg, nv.ba)
+    count[CN_SINCE_OUT] = 0  # samples since the last recorded output
+    e = 0
+    while e < ev_t.size and ev_t[e] < time_s[0] - 1e-9:
+        ev_flag[e] = EV_BEFORE_START
+        e += 1
+    count[CN_EVENT] = e
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -271,25 +275,6 @@ def _park(chunk, fstate, t_fused, tau, e, since_out, done):
     chunk.count[CN_SINCE_OUT] = since_out
     chunk.count[CN_FSTATE] = fstate
     chunk.count[CN_K0] = done
-
-
-#: the plain loop (a single filter, phi model: the EKF and the policies) and the full one;
-#: two copies, not one per combination, so that a test run or a comparison across filter
-#: kinds compiles the loop at most twice
-PLAIN_LOOP = _make_loop(False, False)
-run_loop = _make_loop(True, True)
-
-
-def loop_for(n_local: int, error_model: int, controller_on: int):
-    """The compiled loop for a filter of ``n_local`` locals, error model code
-    ``error_model``, share controller on or off: :data:`PLAIN_LOOP` for a single phi-model
-    filter, else :func:`run_loop` (each compiled on first use).  On a cold kernel cache the
-    covariance kernels are compiled meanwhile in a second process
-    (:func:`fuzzynav.filters.precompile.start`)."""
-    precompile.start()
-    if n_local == 1 and not controller_on and error_model != EM_ST:
-        return PLAIN_LOOP
-    return run_loop
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -312,3 +297,22 @@ def _innovation(HPH, R, m, S, L, z, wv, ev_r, ev_S, ev_nis, e):
         return False
     ev_nis[e] = kalman.nis(L, m, z, wv)
     return True
+
+
+#: the plain loop (a single filter, phi model: the EKF and the policies) and the full one;
+#: two copies, not one per combination, so that a test run or a comparison across filter
+#: kinds compiles the loop at most twice
+PLAIN_LOOP = _make_loop(False, False)
+run_loop = _make_loop(True, True)
+
+
+def loop_for(n_local: int, error_model: int, controller_on: int):
+    """The compiled loop for a filter of ``n_local`` locals, error model code
+    ``error_model``, share controller on or off: :data:`PLAIN_LOOP` for a single phi-model
+    filter, else :func:`run_loop` (each compiled on first use).  On a cold kernel cache the
+    covariance kernels are compiled meanwhile in a second process
+    (:func:`fuzzynav.filters.precompile.start`)."""
+    precompile.start()
+    if n_local == 1 and not controller_on and error_model != EM_ST:
+        return PLAIN_LOOP
+    return run_loop

@@ -118,18 +118,28 @@ class EventOutputs(NamedTuple):
     diag: np.ndarray
 
 
-class Carry(NamedTuple):
-    """Everything the loop keeps from one IMU sample to the next that is not in
-    :class:`BankState`: the navigation state, the strapdown's previous increments, the
-    sensor states, the attitude matrix, the propagation accumulators and every scratch
-    array (some hold values between epochs, e.g. the last adaptation diagnostics), the
-    clock scalars and the counters (``CN_EVENT`` ... in :mod:`fuzzynav.filters.loop`).  Made by
-    :func:`new_carry`; the loop fills it on its first chunk and updates it in place."""
+class NavCarry(NamedTuple):
+    """The navigation side: state ``nav``, the strapdown's previous increments ``prev``, the
+    sensor states ``xs``, the attitude matrix ``C``, the total gyro / accelerometer biases
+    ``bg``, ``ba`` (formed when ``xs`` changes) and the latest bias-corrected increments
+    ``dth_c``, ``dv_c``."""
 
     nav: np.ndarray
     prev: np.ndarray
     xs: np.ndarray
     C: np.ndarray
+    bg: np.ndarray
+    ba: np.ndarray
+    dth_c: np.ndarray
+    dv_c: np.ndarray
+
+
+class Propagation(NamedTuple):
+    """The covariance propagation: the sums of attitude matrix and specific force over the
+    interval (``sumC``, ``sumf``; ``dv_sf`` the last sample's), their means ``Cm``, ``fm``,
+    ``F``, ``Phi``, ``Qd``, per local the discrete noise since its last update ``Qacc``
+    (L, n, n), a full noise density ``Qc`` and scratch ``work`` (n, n), ``dx`` (n,)."""
+
     sumC: np.ndarray
     sumf: np.ndarray
     dv_sf: np.ndarray
@@ -138,34 +148,66 @@ class Carry(NamedTuple):
     F: np.ndarray
     Phi: np.ndarray
     Qd: np.ndarray
-    Qacc3: np.ndarray
+    Qacc: np.ndarray
     Qc: np.ndarray
     work: np.ndarray
-    AP: np.ndarray
+    dx: np.ndarray
+
+
+class UpdateWork(NamedTuple):
+    """An epoch's measurement ``z``, ``H``, ``R``, channels, and the update's products and
+    scratch (``M`` rows at most: ``P H^T``, ``H P H^T``, ``S`` and its factor ``L``, gain,
+    the Joseph form's ``A P`` and ``A P H^T``, correction ``dx``, vector scratch ``wv``)."""
+
     H: np.ndarray
     z: np.ndarray
     R: np.ndarray
     chan: np.ndarray
     PHt: np.ndarray
-    APHt: np.ndarray
-    K: np.ndarray
     HPH: np.ndarray
     S: np.ndarray
     L: np.ndarray
+    K: np.ndarray
+    AP: np.ndarray
+    APHt: np.ndarray
     dx: np.ndarray
     wv: np.ndarray
+
+
+class AdaptWork(NamedTuple):
+    """What the measurement models and the adaptation policies read and write: the
+    policy's weights ``out_a`` (P, Q, R per row), its diagnostics ``diag`` (kept from the
+    last epoch), the epoch context ``ctx`` and the models' inputs ``aux``."""
+
     out_a: np.ndarray
     diag: np.ndarray
     ctx: np.ndarray
     aux: np.ndarray
-    bg: np.ndarray
-    ba: np.ndarray
-    dth_c: np.ndarray
-    dv_c: np.ndarray
-    fwork: tuple
+
+
+class FusionWork(NamedTuple):
+    """The bank's fusion scratch (:func:`~fuzzynav.filters.bank_fusion.fusion_work`), the
+    master's covariance and state between fusions ``Pf``, ``xf``, and the fused ST
+    estimate's phi form ``xphi``."""
+
+    work: tuple
     Pf: np.ndarray
     xf: np.ndarray
     xphi: np.ndarray
+
+
+class Carry(NamedTuple):
+    """Everything the loop keeps from one IMU sample to the next that is not in
+    :class:`BankState`, by the step that uses it (some scratch holds values between
+    epochs, e.g. the last adaptation diagnostics), then the clock scalars and the counters
+    (``CN_EVENT`` ... in :mod:`fuzzynav.filters.loop`).  Made by :func:`new_carry`; the loop
+    fills it on its first chunk and updates it in place."""
+
+    nv: NavCarry
+    acc: Propagation
+    up: UpdateWork
+    ad: AdaptWork
+    fu: FusionWork
     clock: np.ndarray
     count: np.ndarray
 
@@ -179,13 +221,17 @@ def new_carry(n: int, n_local: int, M: int, n_diag: int, ctx_size: int) -> Carry
     from fuzzynav.nav.state_layout import NAV_SIZE, PREV_SIZE
 
     z = np.zeros
+    dx = z(n)  # the propagation's and the update's vector scratch: never both at once
     return Carry(
-        nav=z(NAV_SIZE), prev=z(PREV_SIZE), xs=z(n - N_CORE), C=z((3, 3)), sumC=z((3, 3)),
-        sumf=z(3), dv_sf=z(3), Cm=z((3, 3)), fm=z(3), F=z((n, n)), Phi=z((n, n)),
-        Qd=z((n, n)), Qacc3=z((n_local, n, n)), Qc=z((n, n)), work=z((n, n)), AP=z((n, n)),
-        H=z((M, n)), z=z(M), R=z(M), chan=z(M, dtype=np.int64), PHt=z((n, M)),
-        APHt=z((n, M)), K=z((n, M)), HPH=z((M, M)), S=z((M, M)), L=z((M, M)), dx=z(n),
-        wv=z(max(n, M)), out_a=z(2 + M), diag=z(n_diag), ctx=z(ctx_size),
-        aux=z(AUX_XS + n - N_CORE), bg=z(3), ba=z(3), dth_c=z(3), dv_c=z(3),
-        fwork=fusion_work(n), Pf=z((n, n)), xf=z(n), xphi=z(n), clock=z(2),
-        count=z(6, dtype=np.int64))
+        nv=NavCarry(nav=z(NAV_SIZE), prev=z(PREV_SIZE), xs=z(n - N_CORE), C=z((3, 3)),
+                    bg=z(3), ba=z(3), dth_c=z(3), dv_c=z(3)),
+        acc=Propagation(sumC=z((3, 3)), sumf=z(3), dv_sf=z(3), Cm=z((3, 3)), fm=z(3),
+                        F=z((n, n)), Phi=z((n, n)), Qd=z((n, n)),
+                        Qacc=z((n_local, n, n)), Qc=z((n, n)), work=z((n, n)), dx=dx),
+        up=UpdateWork(H=z((M, n)), z=z(M), R=z(M), chan=z(M, dtype=np.int64),
+                      PHt=z((n, M)), HPH=z((M, M)), S=z((M, M)), L=z((M, M)),
+                      K=z((n, M)), AP=z((n, n)), APHt=z((n, M)), dx=dx, wv=z(max(n, M))),
+        ad=AdaptWork(out_a=z(2 + M), diag=z(n_diag), ctx=z(ctx_size),
+                     aux=z(AUX_XS + n - N_CORE)),
+        fu=FusionWork(work=fusion_work(n), Pf=z((n, n)), xf=z(n), xphi=z(n)),
+        clock=z(2), count=z(6, dtype=np.int64))

@@ -6,20 +6,17 @@ import math
 
 import numba as nb
 
-from fuzzynav.filters.error_st import EM_ST, st_velocity_variance
-from fuzzynav.filters.layout import X_VEL
+from fuzzynav.filters import error_hook
 from fuzzynav.nav.state_layout import NAV_SIZE
 
 
 @nb.njit(cache=True, error_model="numpy")
 def sigma_into(row, P, nav, em):
     """``row = sqrt(diag P)`` (the velocity entries of the ST model: those of the velocity
-    error itself)."""
+    error itself); ``em`` is the error-model argument of :mod:`fuzzynav.filters.error_hook`."""
     for i in range(P.shape[0]):
         row[i] = math.sqrt(max(P[i, i], 0.0))
-    if em == EM_ST:  # report the sigma of the velocity error itself, as the phi model does
-        for i in range(3):
-            row[X_VEL + i] = math.sqrt(max(st_velocity_variance(P, nav, i), 0.0))
+    error_hook.sigma_velocity(em, row, P, nav)  # the velocity error's, whatever the state's
 
 
 @nb.njit(cache=True, error_model="numpy")

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from scipy.stats import chi2
@@ -59,7 +60,23 @@ def _imu_arrays(imu):
     return time_s, dth, dv, dt_nom
 
 
-def _sensor_tables(sensors, adapters, options, gate_probability):
+class SensorTables(NamedTuple):
+    """What :func:`_sensor_tables` packs of a run's sensors: their ``names`` (sorted: the
+    loop's sensor index), measurement ``models`` and bound adapters ``bounds``, the most
+    rows ``M`` a model writes, the measurement-kernel table ``meas_fns``, the merged epochs
+    ``events`` (:class:`~fuzzynav.filters.loop_args.Events`, in time order) and the per-sensor
+    arrays ``sensors`` (:class:`~fuzzynav.filters.loop_args.Sensors`)."""
+
+    names: list
+    models: list
+    bounds: list
+    M: int
+    meas_fns: tuple
+    events: loop.Events
+    sensors: loop.Sensors
+
+
+def _sensor_tables(sensors, adapters, options, gate_probability) -> SensorTables:
     """Per-sensor kernel ids, parameters, adapter arrays and gates; the merged event list."""
     names = sorted(sensors)
     models = [measurements.get(sensors[nm].kind) for nm in names]
@@ -89,11 +106,11 @@ def _sensor_tables(sensors, adapters, options, gate_probability):
     afp, afp_off = flat([b.fp for b in bounds], float)
     aip, aip_off = flat([b.ip for b in bounds], np.int64)
     ast, ast_off = flat([b.state for b in bounds], float)
-    return dict(names=names, models=models, bounds=bounds, M=M, meas_fns=meas_fns,
-                s_meas=np.array([meas_index[m.kind] for m in models] or [0], np.int64),
-                s_mpar=s_mpar, **ev, s_adapt=_adapter_ids(bounds),
-                afp=afp, afp_off=afp_off, aip=aip, aip_off=aip_off, ast=ast, ast_off=ast_off,
-                gate=gate)
+    events = loop.Events(ev["ev_t"], ev["ev_s"], ev["ev_data"])
+    per_sensor = loop.Sensors(
+        np.array([meas_index[m.kind] for m in models] or [0], np.int64), s_mpar,
+        _adapter_ids(bounds), afp, afp_off, aip, aip_off, ast, ast_off, gate)
+    return SensorTables(names, models, bounds, M, meas_fns, events, per_sensor)
 
 
 def _event_table(sensors, names, rows, W: int) -> dict:
@@ -210,23 +227,20 @@ class FilterRun:
         blk_start, blk_kind, blk_inv_tau = config.model.block_arrays()
         self.n = n = config.model.n_states
         self.em = em = error_model_code(config.error_model)
-        self.bank, self.state = _bank(config, tb["names"], init, em)
+        self.bank, self.state = _bank(config, tb.names, init, em)
         self.stride = max(1, int(round(1.0 / (config.out_rate_hz * dt_nom_s))))
-        NL, M = self.bank.beta.size, tb["M"]
-        self.ev = _event_outputs(tb["ev_t"].size, M)
+        NL, M = self.bank.beta.size, tb.M
+        self.ev = _event_outputs(tb.events.t.size, M)
         self.start = loop.Start(strapdown.make_nav(init.lla, init.vel_n, init.q_bn),
                                 np.zeros(n - N_CORE))
         self.model = loop.Model(blk_start, blk_kind, blk_inv_tau, em)
-        self.events = loop.Events(tb["ev_t"], tb["ev_s"], tb["ev_data"])
-        self.sens = loop.Sensors(tb["s_meas"], tb["s_mpar"], tb["s_adapt"], tb["afp"],
-                                 tb["afp_off"], tb["aip"], tb["aip_off"], tb["ast"],
-                                 tb["ast_off"], tb["gate"])
-        self.adapt_fns, _ = adaptation.kernel_table(used=tb["s_adapt"])  # the used ones only
+        self.events, self.sens = tb.events, tb.sensors
+        self.adapt_fns, _ = adaptation.kernel_table(used=tb.sensors.adapt)  # the used ones only
         # the loop without the bank's / the ST model's code when the run has none (cold start)
         self.run_loop = loop.loop_for(NL, em, self.bank.ctl.on)
         self.settings = loop.Settings(float(config.max_prop_dt_s), int(self.stride))
         self.carry = loop.new_carry(n, NL, M, N_DIAG,
-                                    context.size(M, tb["ev_data"].shape[1]))
+                                    context.size(M, tb.events.data.shape[1]))
         self.status, self.stop_t, self.t_end = loop.ST_OK, None, None
         self.parts = []
 
@@ -265,7 +279,7 @@ class FilterRun:
                    beta=np.empty((KL, NL)))
         status, done = self.run_loop(
             loop.Imu(dth, dv, time_s), self.start, self.model, self.events, self.sens,
-            self.bank, self.state, self.tb["meas_fns"], self.adapt_fns, self.settings,
+            self.bank, self.state, self.tb.meas_fns, self.adapt_fns, self.settings,
             loop.Outputs(**out), loop.EventOutputs(**self.ev), self.carry)
         if status != loop.ST_OK:
             self.status, self.stop_t = status, time_s[done - k0]
@@ -289,14 +303,14 @@ class FilterRun:
         if sensors is None:
             raise FuzzynavError("FilterRun(events_per_chunk=True) needs each chunk's sensors")
         tb = self.tb
-        missing = sorted(set(tb["names"]) - set(sensors))
+        missing = sorted(set(tb.names) - set(sensors))
         if missing:
             raise FuzzynavError(f"chunk without the stream(s) {', '.join(missing)}")
-        rows = [mdl.rows(sensors[nm]) for nm, mdl in zip(tb["names"], tb["models"])]
-        ev = _event_table(sensors, tb["names"], rows, tb["ev_data"].shape[1])
-        self.chunk_tb = {**tb, **ev}
+        rows = [mdl.rows(sensors[nm]) for nm, mdl in zip(tb.names, tb.models)]
+        ev = _event_table(sensors, tb.names, rows, tb.events.data.shape[1])
         self.events = loop.Events(ev["ev_t"], ev["ev_s"], ev["ev_data"])
-        self.ev = _event_outputs(ev["ev_t"].size, tb["M"])
+        self.chunk_tb = tb._replace(events=self.events)
+        self.ev = _event_outputs(ev["ev_t"].size, tb.M)
         self.carry.count[loop.CN_EVENT] = 0
 
     def _chunk_done(self) -> None:
@@ -327,7 +341,7 @@ class FilterRun:
             events = {}
         else:
             events = {nm: concat_event_logs([p[nm] for p in self.event_parts])
-                      for nm in self.tb["names"]}
+                      for nm in self.tb.names}
         return dataclasses.replace(_solution(out, self.config, self.state, self.bank.beta),
                                    events=events, status=msg)
 
@@ -389,10 +403,10 @@ def _bank(config: FilterConfig, names, init: InitialState, em: int):
 def _events(ev, tb) -> dict:
     """The per-sensor :class:`EventLog` of the run's event arrays."""
     events = {}
-    for i, (nm, mdl, bd) in enumerate(zip(tb["names"], tb["models"], tb["bounds"])):
+    for i, (nm, mdl, bd) in enumerate(zip(tb.names, tb.models, tb.bounds)):
         # an index array: take() gathers the rows several times faster than a boolean mask
-        sel = np.flatnonzero(tb["ev_s"] == i)
-        events[nm] = EventLog(time_s=tb["ev_t"].take(sel), residual=ev["r"].take(sel, 0),
+        sel = np.flatnonzero(tb.events.s == i)
+        events[nm] = EventLog(time_s=tb.events.t.take(sel), residual=ev["r"].take(sel, 0),
                               S_diag=ev["S"].take(sel, 0), nis=ev["nis"].take(sel),
                               flag=ev["flag"].take(sel),
                               diag=ev["diag"][:, :len(bd.diag_names)].take(sel, 0),

@@ -86,11 +86,11 @@ def _record(log, filter_name, options, monkeypatch):
     k = index[adapter.name]
     table = fns[:k] + (_recorder(fns[k]),) + fns[k + 1:]
     tables = runner._sensor_tables
-    kept = {}
+    kept = []
 
     def keep_tables(*args):  # the loop mutates the flat state array of these tables
-        kept.update(tables(*args))
-        return kept
+        kept.append(tables(*args))
+        return kept[-1]
 
     monkeypatch.setattr(adapter, "arrays", arrays)
     monkeypatch.setattr(adaptation, "kernel_table", lambda used=None: (table, index))
@@ -98,9 +98,9 @@ def _record(log, filter_name, options, monkeypatch):
     setup = dataclasses.replace(setup, adapters={"gps": adapter}, use_sensors=("gps",))
     res = run_on_log(log, filter_name, setup=setup).result
     monkeypatch.undo()
-    assert res.ok and kept["names"] == ["gps"]
-    return adapter, _epochs(kept["ast"][kept["ast_off"][0]:kept["ast_off"][1]]), \
-        res.events["gps"]
+    sens = kept[-1].sensors
+    assert res.ok and kept[-1].names == ["gps"]
+    return adapter, _epochs(sens.ast[sens.ast_off[0]:sens.ast_off[1]]), res.events["gps"]
 
 
 def _epochs(st):

@@ -140,7 +140,7 @@ def test_the_skipped_call_of_the_plain_ekf_is_a_policy_of_ones():
     tr = trajectory(1)
     imu, gnss, init, _, _ = run_inputs(tr, 6)
     tables = _sensor_tables({"gnss": gnss}, {}, {}, None)
-    assert _adapter_ids(tables["bounds"]).tolist() == [loop.NO_ADAPTER]
+    assert _adapter_ids(tables.bounds).tolist() == [loop.NO_ADAPTER]
     plain = run_filter(imu, {"gnss": gnss}, init, CONFIG)
     called = run_filter(imu, {"gnss": gnss}, init, CONFIG, {"gnss": ConstantScale()})
     for a, b in ((plain.lla, called.lla), (plain.sigma, called.sigma),
