@@ -24,7 +24,12 @@ import numpy as np
 from fuzzynav.experiment import perturbed_initial_state, setup_for, simulate
 from fuzzynav.filters import kalman, loop
 from fuzzynav.filters.error_model import discretize, fill_F
-from fuzzynav.filters.runner import _sensor_tables, run_filter
+from fuzzynav.filters.runner import run_filter
+
+try:  # this tree packs the sensors in their own module; a base revision in the runner
+    from fuzzynav.filters.sensor_tables import pack_sensors as _sensor_tables
+except ImportError:
+    from fuzzynav.filters.runner import _sensor_tables
 
 try:  # this tree: feedback has its own module (filter banks)
     from fuzzynav.filters.feedback import feedback as _apply_feedback

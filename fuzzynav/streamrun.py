@@ -21,7 +21,8 @@ from types import SimpleNamespace
 import numpy as np
 
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.filters.runner import FilterRun, concat_event_logs
+from fuzzynav.filters.runner import FilterRun
+from fuzzynav.filters.sensor_tables import concat_event_logs
 from fuzzynav.fileio import write_npz
 from fuzzynav.metrics import StreamingRms
 from fuzzynav.metrics_rscale import KIND as USAGE_KIND, usage_metrics

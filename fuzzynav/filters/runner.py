@@ -3,21 +3,21 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
-from scipy.stats import chi2
 
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.filters import adaptation, measurements
-from fuzzynav.filters.adaptation import N_DIAG, NoAdaptation, context
+from fuzzynav.filters import adaptation
+from fuzzynav.filters.adaptation import N_DIAG, context
 from fuzzynav.filters.bank_beta import share_control
 from fuzzynav.filters.config import FilterConfig
 from fuzzynav.filters.error_st import EM_ST, error_model_code, st_covariance
 from fuzzynav.filters.layout import N_CORE
 from fuzzynav.filters import loop
 from fuzzynav.filters.numba_patch_dispatch import memoise_kernel_addresses
-from fuzzynav.filters.result import EventLog, FilterResult, LocalStates
+from fuzzynav.filters.result import FilterResult, LocalStates
+from fuzzynav.filters.sensor_tables import (concat_event_logs, event_outputs, event_table,
+                                            pack_sensors, split_events)
 from fuzzynav.nav import strapdown
 from fuzzynav.nav.state_layout import LLA_SLICE, NAV_SIZE, Q_SLICE, VEL_SLICE
 
@@ -58,77 +58,6 @@ def _imu_arrays(imu):
         raise FuzzynavError("IMU sample times must increase strictly")
     dt_nom = float(np.median(step))
     return time_s, dth, dv, dt_nom
-
-
-class SensorTables(NamedTuple):
-    """What :func:`_sensor_tables` packs of a run's sensors: their ``names`` (sorted: the
-    loop's sensor index), measurement ``models`` and bound adapters ``bounds``, the most
-    rows ``M`` a model writes, the measurement-kernel table ``meas_fns``, the merged epochs
-    ``events`` (:class:`~fuzzynav.filters.loop_args.Events`, in time order) and the per-sensor
-    arrays ``sensors`` (:class:`~fuzzynav.filters.loop_args.Sensors`)."""
-
-    names: list
-    models: list
-    bounds: list
-    M: int
-    meas_fns: tuple
-    events: loop.Events
-    sensors: loop.Sensors
-
-
-def _sensor_tables(sensors, adapters, options, gate_probability) -> SensorTables:
-    """Per-sensor kernel ids, parameters, adapter arrays and gates; the merged event list."""
-    names = sorted(sensors)
-    models = [measurements.get(sensors[nm].kind) for nm in names]
-    # only the models this run uses are compiled (the others' slots hold a stand-in)
-    meas_fns, meas_index = measurements.kernel_table({measurements.MODELS.index()[m.kind]
-                                                      for m in models})
-    M = max([mdl.max_rows for mdl in models], default=1)
-    rows = [mdl.rows(sensors[nm]) for nm, mdl in zip(names, models)]
-    bounds = [adapters.get(nm, NoAdaptation()).bind(mdl, r)
-              for nm, mdl, r in zip(names, models, rows)]
-    pars = [np.asarray(mdl.pack(sensors[nm], options.get(nm, {})), float)
-            for nm, mdl in zip(names, models)]
-    s_mpar = np.zeros((max(len(names), 1), max([p.size for p in pars], default=1)))
-    for i, p in enumerate(pars):
-        s_mpar[i, :p.size] = p
-    W = max([r.shape[1] for r in rows], default=1)
-    ev = _event_table(sensors, names, rows, W)
-    gate = np.zeros((max(len(names), 1), M + 1))
-    if gate_probability is not None:
-        gate[:, 1:] = chi2.ppf(gate_probability, np.arange(1, M + 1))
-
-    def flat(arrs, dtype):
-        off = np.concatenate([[0], np.cumsum([a.size for a in arrs])]).astype(np.int64)
-        cat = np.concatenate(arrs).astype(dtype) if arrs else np.zeros(1, dtype)
-        return (cat if cat.size else np.zeros(1, dtype)), off
-
-    afp, afp_off = flat([b.fp for b in bounds], float)
-    aip, aip_off = flat([b.ip for b in bounds], np.int64)
-    ast, ast_off = flat([b.state for b in bounds], float)
-    events = loop.Events(ev["ev_t"], ev["ev_s"], ev["ev_data"])
-    per_sensor = loop.Sensors(
-        np.array([meas_index[m.kind] for m in models] or [0], np.int64), s_mpar,
-        _adapter_ids(bounds), afp, afp_off, aip, aip_off, ast, ast_off, gate)
-    return SensorTables(names, models, bounds, M, meas_fns, events, per_sensor)
-
-
-def _event_table(sensors, names, rows, W: int) -> dict:
-    """The merged, time-ordered event arrays of the streams ``names`` (their ``rows``)."""
-    ev_t = np.concatenate([sensors[nm].time_s for nm in names] or [np.zeros(0)]).astype(float)
-    ev_s = np.concatenate([np.full(len(r), i) for i, r in enumerate(rows)] or [np.zeros(0)])
-    ev_data = np.zeros((ev_t.size, W))
-    o = 0
-    for r in rows:
-        if r.shape[1] > W:
-            raise FuzzynavError(f"a chunk's measurement rows are {r.shape[1]} wide, the "
-                                f"run's {W}")
-        ev_data[o:o + len(r), :r.shape[1]] = r
-        o += len(r)
-    order = np.argsort(ev_t, kind="stable")
-    return dict(ev_t=np.ascontiguousarray(ev_t[order]),
-                ev_s=np.ascontiguousarray(ev_s[order].astype(np.int64)),
-                ev_data=np.ascontiguousarray(ev_data[order]), order=order)
 
 
 def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterConfig(),
@@ -222,7 +151,7 @@ class FilterRun:
         self.config, self.keep_every, self.on_chunk = config, int(keep_every), on_chunk
         self.events_per_chunk, self.on_events = bool(events_per_chunk), on_events
         self.keep_events, self.event_parts = bool(keep_events) or not events_per_chunk, []
-        self.tb = tb = _sensor_tables(dict(sensors), dict(adapters or {}),
+        self.tb = tb = pack_sensors(dict(sensors), dict(adapters or {}),
                                       dict(sensor_options or {}), config.gate_probability)
         blk_start, blk_kind, blk_inv_tau = config.model.block_arrays()
         self.n = n = config.model.n_states
@@ -230,7 +159,7 @@ class FilterRun:
         self.bank, self.state = _bank(config, tb.names, init, em)
         self.stride = max(1, int(round(1.0 / (config.out_rate_hz * dt_nom_s))))
         NL, M = self.bank.beta.size, tb.M
-        self.ev = _event_outputs(tb.events.t.size, M)
+        self.ev = event_outputs(tb.events.t.size, M)
         self.start = loop.Start(strapdown.make_nav(init.lla, init.vel_n, init.q_bn),
                                 np.zeros(n - N_CORE))
         self.model = loop.Model(blk_start, blk_kind, blk_inv_tau, em)
@@ -307,17 +236,17 @@ class FilterRun:
         if missing:
             raise FuzzynavError(f"chunk without the stream(s) {', '.join(missing)}")
         rows = [mdl.rows(sensors[nm]) for nm, mdl in zip(tb.names, tb.models)]
-        ev = _event_table(sensors, tb.names, rows, tb.events.data.shape[1])
+        ev = event_table(sensors, tb.names, rows, tb.events.data.shape[1])
         self.events = loop.Events(ev["ev_t"], ev["ev_s"], ev["ev_data"])
         self.chunk_tb = tb._replace(events=self.events)
-        self.ev = _event_outputs(ev["ev_t"].size, tb.M)
+        self.ev = event_outputs(ev["ev_t"].size, tb.M)
         self.carry.count[loop.CN_EVENT] = 0
 
     def _chunk_done(self) -> None:
         """Hand a chunk's event logs on (``events_per_chunk``) and keep them if asked."""
         if not self.events_per_chunk:
             return
-        logs = _events(self.ev, self.chunk_tb)
+        logs = split_events(self.ev, self.chunk_tb)
         if self.on_events is not None:
             self.on_events(logs)
         if self.keep_events:
@@ -336,7 +265,7 @@ class FilterRun:
         msg = "ok" if self.status == loop.ST_OK else (
             f"stopped at t = {self.stop_t:.2f} s: covariance lost positive definiteness")
         if not self.events_per_chunk:
-            events = _events(self.ev, self.tb)
+            events = split_events(self.ev, self.tb)
         elif not self.keep_events:
             events = {}
         else:
@@ -346,34 +275,10 @@ class FilterRun:
                                    events=events, status=msg)
 
 
-def _event_outputs(E: int, M: int) -> dict:
-    """The loop's per-event output arrays for ``E`` events of at most ``M`` rows."""
-    return dict(r=np.full((E, M), np.nan), S=np.full((E, M), np.nan),
-                nis=np.full(E, np.nan), flag=np.zeros(E, np.int64),
-                diag=np.full((E, N_DIAG), np.nan))
-
-
-def concat_event_logs(parts) -> EventLog:
-    """One :class:`EventLog` of a stream's consecutive chunk logs (in order)."""
-    if len(parts) == 1:
-        return parts[0]
-    arrays = {f: np.concatenate([getattr(p, f) for p in parts])
-              for f in ("time_s", "residual", "S_diag", "nis", "flag", "diag")}
-    return EventLog(**arrays, diag_names=parts[0].diag_names, channels=parts[0].channels)
-
-
 #: the output arrays with one row per recorded output whatever the bank, and those of a
 #: bank of several locals only (a bank of one leaves them placeholders)
 _PER_ROW = ("t", "nav", "xs", "sig")
 _PER_LOCAL = ("xl", "sigl", "beta")
-
-
-def _adapter_ids(bounds) -> np.ndarray:
-    """The loop's adapter id per sensor: :data:`~fuzzynav.filters.loop.NO_ADAPTER` where the
-    plain EKF's policy is bound (its call, all ones, is skipped)."""
-    none = adaptation.kernel_table()[1][NoAdaptation.name]
-    ids = [loop.NO_ADAPTER if b.kernel_id == none else b.kernel_id for b in bounds]
-    return np.array(ids or [0], np.int64)
 
 
 def _bank(config: FilterConfig, names, init: InitialState, em: int):
@@ -398,20 +303,6 @@ def _bank(config: FilterConfig, names, init: InitialState, em: int):
                            qd=np.ascontiguousarray(config.q_diag()[None] / b[:, None]),
                            Pg=P0.copy(), xg=np.zeros(n))
     return loop.Bank(local, b.copy(), int(reset), period, ctl), state
-
-
-def _events(ev, tb) -> dict:
-    """The per-sensor :class:`EventLog` of the run's event arrays."""
-    events = {}
-    for i, (nm, mdl, bd) in enumerate(zip(tb.names, tb.models, tb.bounds)):
-        # an index array: take() gathers the rows several times faster than a boolean mask
-        sel = np.flatnonzero(tb.events.s == i)
-        events[nm] = EventLog(time_s=tb.events.t.take(sel), residual=ev["r"].take(sel, 0),
-                              S_diag=ev["S"].take(sel, 0), nis=ev["nis"].take(sel),
-                              flag=ev["flag"].take(sel),
-                              diag=ev["diag"][:, :len(bd.diag_names)].take(sel, 0),
-                              diag_names=bd.diag_names, channels=mdl.channels)
-    return events
 
 
 def _solution(out, config, state, beta) -> FilterResult:

@@ -135,12 +135,12 @@ def test_the_skipped_call_of_the_plain_ekf_is_a_policy_of_ones():
     the runs agree to the last bit here; 1e-12 allows for another compiler's scheduling)."""
     from fuzzynav.filters import loop
     from fuzzynav.filters.adaptation.classical import ConstantScale
-    from fuzzynav.filters.runner import _adapter_ids, _sensor_tables
+    from fuzzynav.filters.sensor_tables import adapter_ids, pack_sensors
 
     tr = trajectory(1)
     imu, gnss, init, _, _ = run_inputs(tr, 6)
-    tables = _sensor_tables({"gnss": gnss}, {}, {}, None)
-    assert _adapter_ids(tables.bounds).tolist() == [loop.NO_ADAPTER]
+    tables = pack_sensors({"gnss": gnss}, {}, {}, None)
+    assert adapter_ids(tables.bounds).tolist() == [loop.NO_ADAPTER]
     plain = run_filter(imu, {"gnss": gnss}, init, CONFIG)
     called = run_filter(imu, {"gnss": gnss}, init, CONFIG, {"gnss": ConstantScale()})
     for a, b in ((plain.lla, called.lla), (plain.sigma, called.sigma),
