@@ -85,7 +85,7 @@ def _record(log, filter_name, options, monkeypatch):
     fns, index = adaptation.kernel_table()
     k = index[adapter.name]
     table = fns[:k] + (_recorder(fns[k]),) + fns[k + 1:]
-    tables = runner._sensor_tables
+    tables = runner.pack_sensors
     kept = []
 
     def keep_tables(*args):  # the loop mutates the flat state array of these tables
@@ -94,7 +94,7 @@ def _record(log, filter_name, options, monkeypatch):
 
     monkeypatch.setattr(adapter, "arrays", arrays)
     monkeypatch.setattr(adaptation, "kernel_table", lambda used=None: (table, index))
-    monkeypatch.setattr(runner, "_sensor_tables", keep_tables)
+    monkeypatch.setattr(runner, "pack_sensors", keep_tables)
     setup = dataclasses.replace(setup, adapters={"gps": adapter}, use_sensors=("gps",))
     res = run_on_log(log, filter_name, setup=setup).result
     monkeypatch.undo()
