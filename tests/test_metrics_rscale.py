@@ -63,3 +63,23 @@ def test_retuned_controller_keeps_the_magnetometer(paper001_log):
     assert new["r_use_dev_calm"] < v1["r_use_dev_calm"]
     hand = run_on_log(paper001_log, "fuzzy-mag").metrics
     assert hand["r_use_median_zone"] > hand["r_use_median_calm"]
+
+
+BANK = "federated-fuzzy-beta@rules/paper001_beta_tuned_beta{k}.json+rules/paper001_beta_tuned_mag{k}.json"
+
+
+def test_first_bank_tuning_switched_the_magnetometer_off(paper001_log):
+    # the study's first tuning (no r_use term, kept as _v1) grew the local's R to the
+    # adapter's cap: the metric must see that as "off" on most calm epochs
+    m = run_on_log(paper001_log, BANK.format(k="_v1")).metrics
+    assert m["r_use_off_calm"] > 0.5 and m["r_use_median_calm"] > OFF_SCALE
+
+
+@pytest.mark.parametrize("k", ["", "_t1", "_t2"])
+def test_retuned_bank_keeps_the_magnetometer_on(paper001_log, k):
+    # every shipped tuning of studies/paper001_beta_tune*.toml (r_use weighed, an undisturbed
+    # training run): on calm epochs the local's R stays within a factor OFF_SCALE of nominal
+    # (the magnetometer weighed at more than a tenth of its information) on most epochs
+    m = run_on_log(paper001_log, BANK.format(k=k)).metrics
+    assert 1.0 / OFF_SCALE < m["r_use_median_calm"] < OFF_SCALE
+    assert m["r_use_off_calm"] < 0.25

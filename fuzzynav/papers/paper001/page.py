@@ -16,8 +16,8 @@ import numpy as np
 import pandas as pd
 
 from fuzzynav.papers.paper001.claims import PAPER001_COMBINED
-from fuzzynav.papers.paper001.page_tuned import TUNED_FILTERS, paired_table, tuned_lines, \
-    usage_table
+from fuzzynav.papers.paper001.page_tuned import TUNED_BANK, TUNED_FILTERS, paired_table, \
+    tuned_lines, usage_table
 from fuzzynav.experiment import run_on_log
 from fuzzynav.filters.named import parse_filter_spec
 from fuzzynav.metrics import errors_vs_trajectory
@@ -27,9 +27,6 @@ from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.sim.scenario import load_scenario
 
 TUNED = "rules/paper001_mag_tuned.json"
-#: the share controller and magnetometer R-scaling tuned together in the bank
-#: (studies/paper001_beta_tune.toml, exported with --out rules/paper001_beta_tuned.json)
-TUNED_BANK = ("rules/paper001_beta_tuned_beta.json", "rules/paper001_beta_tuned_mag.json")
 HAND_BANK = ("rules/paper001_beta.json", "rules/paper001_mag.json")
 FILTERS = {  # short label -> filter spec; the first is the reference of the ratio table
     "centralized EKF (every sensor)": "centralized",

@@ -21,16 +21,25 @@ __all__ = ["BASELINES", "TUNED_FILTERS", "PAIRS", "paired_table", "usage_table",
 BASELINES = "studies/paper001_baselines.json"
 TUNED = "rules/paper001_mag_tuned.json"
 TUNED_V1 = "rules/paper001_mag_tuned_v1.json"
+#: the share controller and magnetometer R-scaling tuned together in the bank
+#: (studies/paper001_beta_tune.toml, exported with --out rules/paper001_beta_tuned.json), and
+#: that study's first tuning (no r_use penalty: it switched the magnetometer off)
+TUNED_BANK = ("rules/paper001_beta_tuned_beta.json", "rules/paper001_beta_tuned_mag.json")
+TUNED_BANK_V1 = ("rules/paper001_beta_tuned_beta_v1.json",
+                 "rules/paper001_beta_tuned_mag_v1.json")
+BANK_DESIGN = "federated, tuned β + tuned R"
 REF = "centralized EKF (every sensor)"
 #: the tuned filters of this page (label -> spec), added after the hand-made ones
 TUNED_FILTERS = {
     "centralized, tuned fuzzy R, first tuning (no r_use penalty)": f"fuzzy@{TUNED_V1}",
+    "federated, tuned β + tuned R, first tuning (no r_use penalty)":
+        "federated-fuzzy-beta@" + "+".join(TUNED_BANK_V1),
     "EKF, tuned Q and R": f"ekf-tuned@{BASELINES}",
     "Sage–Husa, tuned": f"sage-husa-tuned@{BASELINES}",
     "VB, tuned": f"vb-tuned@{BASELINES}",
     "Huber, tuned": f"huber-tuned@{BASELINES}",
 }
-DESIGNS = ("centralized, tuned fuzzy R on the magnetometer",)
+DESIGNS = ("centralized, tuned fuzzy R on the magnetometer", BANK_DESIGN)
 POOL = ("EKF, tuned Q and R", "Sage–Husa, tuned", "VB, tuned", "Huber, tuned")
 #: (fuzzy filter, the same filter without its fuzzy layer)
 PAIRS = (
@@ -41,7 +50,10 @@ PAIRS = (
      "federated (paper 001: 3 locals, no reset, β = 1/3)"),
     ("federated, fuzzy β (shares from the locals' NIS)",
      "federated (paper 001: 3 locals, no reset, β = 1/3)"),
+    (BANK_DESIGN, "federated (paper 001: 3 locals, no reset, β = 1/3)"),
 )
+#: design -> the rule file whose provenance gives its training score
+DESIGN_FILES = {DESIGNS[0]: TUNED, BANK_DESIGN: TUNED_BANK[0]}
 #: the studies' objective (studies/paper001_tune.toml, paper001_baselines.toml)
 SCORE_METRICS = ("rms_pos_m", "rms_vel_mps", "rms_att_deg", "r_use_dev_calm")
 SCORE_WEIGHTS = (1.0, 1.0, 1.0, 0.1)
@@ -99,8 +111,10 @@ def tuned_lines(dfs, filters, run=None) -> list:
     -> runs on the page's seeds: the same over the further tunings."""
     if not all(k in filters for k in (*DESIGNS, *POOL, REF)):
         return []
-    return ["### The tuned fuzzy R against the best equally tuned classical filter", "",
-            "The tuned fuzzy R (`studies/paper001_tune.toml`) and the classical filters "
+    return ["### The tuned fuzzy designs against the best equally tuned classical filter", "",
+            "The tuned fuzzy R (`studies/paper001_tune.toml`), the bank's share controller and "
+            "magnetometer R-scaling tuned together (`studies/paper001_beta_tune.toml`) and "
+            "the classical filters "
             f"(`studies/paper001_baselines.toml`, parameters in `{BASELINES}`) were tuned "
             "alike: training runs `paper001-mild`, `-double`, `-strong` and `-cloudy`, seeds "
             "0–2; objective the mean of the position, velocity and attitude RMS ratios to "
@@ -117,7 +131,8 @@ def tuned_lines(dfs, filters, run=None) -> list:
                          labels={v: k for k, v in filters.items()},
                          score_text="the studies' objective (position, velocity, attitude "
                                     "RMS ratios to the centralized EKF and 0.1 × r_use)",
-                         design_train={filters[DESIGNS[0]]: provenance_score(TUNED)}),
+                         design_train={filters[d]: provenance_score(f)
+                                       for d, f in DESIGN_FILES.items()}),
             *([] if run is None else ["", "### The same over three tunings", "",
                                       *tunings_part(dfs, filters, run)])]
 
@@ -129,8 +144,9 @@ def tunings_part(dfs, filters, run) -> list:
     from fuzzynav.pages import scores as sr
     from fuzzynav.pages.best_classical import paper_tunings_lines
 
-    studies = ["studies/paper001_tune.toml", "studies/paper001_baselines.toml"]
+    studies = ["studies/paper001_tune.toml", "studies/paper001_beta_tune.toml",
+               "studies/paper001_baselines.toml"]
     return paper_tunings_lines(
         dfs, run, lambda df: sr.scores_to(df, REF, SCORE_METRICS, SCORE_WEIGHTS),
         filters=filters, designs=DESIGNS, pool=POOL, params=BASELINES,
-        design_files={DESIGNS[0]: TUNED}, studies=studies)
+        design_files=DESIGN_FILES, studies=studies)
