@@ -204,8 +204,8 @@ def auv_section(directory: Path, cache=None) -> tuple:
             "150 TPE trials) and classical filters (`studies/paper004_baselines.toml` / "
             "`_rev`, 150 TPE trials each, same pruner and objective) were tuned on four "
             "trajectories and are judged on the other four; `apso` is paper 004's PSO of the "
-            "Q/R multipliers on the same four (64 evaluations). Pairs are the held-out "
-            "trajectories: with four pairs a 95 % CI is wide (Student t with 3 degrees of "
+            "Q/R multipliers on the same four (150 evaluations, the same budget). Pairs are "
+            "the held-out trajectories: with four pairs a 95 % CI is wide (Student t with 3 degrees of "
             "freedom, 3.18 standard errors), so only a large, consistent difference is a win "
             "or a loss. Per trajectory: docs/paper004.md.", ""]
     if not directory.is_dir():

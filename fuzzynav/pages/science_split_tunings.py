@@ -203,12 +203,12 @@ def score_spread_lines(scores: pd.DataFrame, filters, labels=None,
 
 def split_of(split, k: int):
     """The :class:`~fuzzynav.pages.science_splits.Split` of tuning ``k``: its rule and
-    parameter files (and the supervisors') of that tuning; paper 004's APSO, tuned
-    once, only in the first."""
+    parameter files (and the supervisors' and paper 004's APSO) of that tuning."""
     if k == 0:
         return split
     return replace(split, rules=tuning_file(split.rules, k),
-                   params=tuning_file(split.params, k), apso=None,
+                   params=tuning_file(split.params, k),
+                   apso=tuning_file(split.apso, k) if split.apso else None,
                    supervisors=tuple((label, name, tuning_file(rules, k))
                                      for label, name, rules in split.supervisors))
 
@@ -264,9 +264,12 @@ def seeds_text(studies, tunings, root: Path = ROOT) -> str:
             + ", ".join(map(str, seeds[0])))
 
 
-def split_tunings_lines(splits, frames: dict, unit: str, root: Path = ROOT) -> list:
+def split_tunings_lines(splits, frames: dict, unit: str, root: Path = ROOT, designs=None,
+                        design_text: str = "Each fuzzy design") -> list:
     """Markdown of some splits over their tunings (``frames``: split label -> tuning ->
-    frame, :func:`split_frames`), or a note that the further tunings are absent."""
+    frame, :func:`split_frames`), or a note that the further tunings are absent.
+    ``designs``: the filters judged against the best equally tuned classical filter (by
+    default the splits' fuzzy designs; e.g. ``["apso"]``), named ``design_text``."""
     import json
 
     from fuzzynav.pages.science_splits import SPLIT_METRICS
@@ -284,7 +287,7 @@ def split_tunings_lines(splits, frames: dict, unit: str, root: Path = ROOT) -> l
 
     scores, plain = scored("ekf-tuned"), scored("ekf")
     pool = list(json.loads((Path(root) / splits[0].params).read_text())["filters"])
-    designs = list(dict.fromkeys(d for sp in splits for d in sp.designs()))
+    designs = list(designs or dict.fromkeys(d for sp in splits for d in sp.designs()))
     studies = "; ".join(seeds_text([sp.study], ks, root) for sp in splits)
     train = {}
     for sp in splits:  # filter -> training score per tuning (with the set's name if several)
@@ -295,7 +298,7 @@ def split_tunings_lines(splits, frames: dict, unit: str, root: Path = ROOT) -> l
              f"the sampler seed: {studies}; the further tunings' study files and outputs "
              "carry `_t1`, `_t2` (e.g. `" + tuning_file(splits[0].params, 1) + "`"
              + ("; each supervisor is warm-started at its parent of the same tuning"
-                if any(sp.supervisors for sp in splits) else "") + "). Each fuzzy design "
+                if any(sp.supervisors for sp in splits) else "") + f"). {design_text} "
              "against the best equally tuned classical filter of the same tuning (lowest "
              "mean score on these held-out runs, which favours it)")
     return tunings_section(scores, [sp.label for sp in splits], designs, intro=intro,
@@ -314,6 +317,9 @@ def _split_training(split, ks, root: Path) -> dict:
         out[label] = [provenance_score(Path(root) / sp.supervisors[i][2]) for sp in sps]
     docs = [json.loads((Path(root) / sp.params).read_text())["train_score"] for sp in sps]
     out.update({f: [d[f] for d in docs] for f in docs[0]})
+    if split.apso:  # paper 004's APSO: its own study and objective (position only)
+        out["apso"] = [json.loads((Path(root) / sp.apso).read_text())["train_score"]["apso"]
+                       for sp in sps]
     return out
 
 

@@ -132,7 +132,15 @@ def tunings_lines(folds=AKIT_FOLDS, cache=None) -> list:
     return ["### Over three tunings", "",
             "Scores here are the studies' objective (mean of the 3-D position and velocity "
             "RMS ratios), not the horizontal RMS above.", "",
-            *st.split_tunings_lines(list(folds), frames, "trajectories")]
+            *st.split_tunings_lines(list(folds), frames, "trajectories"),
+            "### APSO over three tunings", "",
+            "Paper 004's APSO of the Q/R multipliers, tuned three times per fold with the "
+            "fuzzy study's budget (150 evaluations: 10 particles × 15 iterations) and its own "
+            "fitness (position RMS ratio to the EKF; `studies/paper004_apso.toml` / `_rev` "
+            "and their `_t1`, `_t2`), scored like every filter above by the studies' "
+            "objective.", "",
+            *st.split_tunings_lines(list(folds), frames, "trajectories", designs=["apso"],
+                                    design_text="APSO")]
 
 
 def section(frame: tuple) -> list:
@@ -148,8 +156,8 @@ def section(frame: tuple) -> list:
             "each), the classical filters tuned with the same budget, pruner and objective "
             "on the same four (`studies/paper004_baselines.toml` / `_rev`: `ekf-tuned`, "
             "`sage-husa-tuned`, `vb-tuned`, `huber-tuned`, 150 TPE trials each) and the APSO "
-            "of the Q/R multipliers (`studies/paper004_apso.toml` / `_rev`: 8 particles × 8 "
-            "iterations, inertia 0.9 → 0.4) run with what they found on the trajectories "
+            "of the Q/R multipliers (`studies/paper004_apso.toml` / `_rev`: 10 particles × "
+            "15 iterations, inertia 0.9 → 0.4) run with what they found on the trajectories "
             f"they did not see. The best equally tuned classical filter per fold ({chosen}) "
             "is chosen on the held-out trajectories by the studies' objective (which favours "
             "it). Horizontal RMS (m) per held-out trajectory; pooled over the eight (each "
