@@ -13,7 +13,7 @@ import inspect
 import os
 import tempfile
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from fuzzynav.errors import FuzzynavError
@@ -41,6 +41,9 @@ class Page:
         Keyword arguments of ``build`` for the budgets ``full`` and ``small``.
     summary : str
         One line for ``fuzzynav docs list``.
+    parts : mapping
+        Part name -> what it is: subsections the generator module can rerun alone and
+        splice into the page (its ``regenerate_parts(parts, data_dir)``), at the full budget.
     """
 
     name: str
@@ -50,6 +53,7 @@ class Page:
     full: Mapping
     small: Mapping
     summary: str
+    parts: Mapping = field(default_factory=dict)
 
 
 _PAPERS = "fuzzynav.papers"
@@ -73,7 +77,9 @@ PAGES = {p.name: p for p in (
          {"trials": 300, "workers": 2, "tunings": 3, "curve_trials": 1000},
          {"trials": 2, "workers": 1, "seeds": 2, "mc_recordings": 1, "recordings": False,
           "tunings": 2, "curve_trials": 4, "budgets": (1, 2, 4)},
-         "the fuzzy designs against equally tuned baselines (the whole page)"),
+         "the fuzzy designs against equally tuned baselines (the whole page)",
+         {"split": "the car drive's held-out half, every filter tuned on its first half",
+          "auv": "the A-KIT trajectories held out, both folds"}),
 )}
 
 
@@ -143,3 +149,28 @@ def regenerate(page: Page, budget: str = "full", out: Path | None = None,
     write_section(target, page.marker, body, source=doc)
     return target
 
+
+
+def regenerate_parts(page: Page, parts, data_dir: Path | None = None) -> Path:
+    """Rerun only the named parts of ``page`` (:attr:`Page.parts`) at the full budget and
+    splice them into its docs page, the rest untouched.
+
+    Raises
+    ------
+    FuzzynavError
+        The page has no parts, or a name is not one of them (every name is checked before
+        anything runs).
+    """
+    if not page.parts:
+        raise FuzzynavError(f"page {page.name!r} has no parts to rerun alone (--only); "
+                            "pages with parts: " + ", ".join(
+                                p.name for p in PAGES.values() if p.parts))
+    unknown = [p for p in parts if p not in page.parts]
+    if unknown or not parts:
+        raise FuzzynavError(f"--only {','.join(parts)}: page {page.name!r} has the parts "
+                            + ", ".join(page.parts))
+    data = Path(data_dir or os.environ.get("FUZZYNAV_DATA",
+                                           REPO_ROOT.parent / "shared" / "datasets"))
+    with contextlib.chdir(REPO_ROOT):
+        importlib.import_module(page.module).regenerate_parts(tuple(parts), data)
+    return REPO_ROOT / page.doc

@@ -340,3 +340,12 @@ def _tuned_classical(df) -> list:
     names = list(dict.fromkeys(df["filter"]))
     return [n for n in names if n.endswith("-tuned") and not n.startswith("fuzzy")] + (
         ["als"] if "als" in names else [])
+
+
+def regenerate_parts(parts, data_dir) -> None:
+    """``fuzzynav docs regenerate science --only PART``: rerun the recordings parts
+    ``parts`` (``split``, ``auv``) and splice them in
+    (:func:`fuzzynav.pages.science_recordings.regenerate_held_out`)."""
+    from fuzzynav.pages.science_recordings import regenerate_held_out
+
+    regenerate_held_out(str(data_dir), parts=tuple(parts))

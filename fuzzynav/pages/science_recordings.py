@@ -191,7 +191,8 @@ def split_section(root: Path, seeds, cache=None) -> tuple:
     what = (f"noise seeds {seeds[0]}–{seeds[-1]} of the one held-out half: the spread of the "
             "noise added to its fixes, not of drives")
     tail = st.split_tunings_lines([sp], {sp.label: frames}, "noise seeds")
-    return head + note + ss.splits_lines([sp], {sp.label: df}, "noise seeds", what) + tail, df
+    return (head + note + ss.splits_lines([sp], {sp.label: df}, "noise seeds", what) + tail,
+            tuning_rows({sp.label: frames}))
 
 
 def auv_section(directory: Path, cache=None) -> tuple:
@@ -205,9 +206,9 @@ def auv_section(directory: Path, cache=None) -> tuple:
             "`_rev`, 150 TPE trials each, same pruner and objective) were tuned on four "
             "trajectories and are judged on the other four; `apso` is paper 004's PSO of the "
             "Q/R multipliers on the same four (150 evaluations, the same budget). Pairs are "
-            "the held-out trajectories: with four pairs a 95 % CI is wide (Student t with 3 degrees of "
-            "freedom, 3.18 standard errors), so only a large, consistent difference is a win "
-            "or a loss. Per trajectory: docs/paper004.md.", ""]
+            "the held-out trajectories: with four pairs a 95 % CI is wide (Student t with 3 "
+            "degrees of freedom, 3.18 standard errors), so only a large, consistent "
+            "difference is a win or a loss. Per trajectory: docs/paper004.md.", ""]
     if not directory.is_dir():
         return head + [f"*The AUV recordings are not here ({directory}): skipped.*", ""], None
     folds = [f for f in ss.AKIT_FOLDS if not f.missing()]
@@ -223,7 +224,30 @@ def auv_section(directory: Path, cache=None) -> tuple:
     lines = ss.splits_lines(folds, frames, "trajectories",
                             "the four held-out trajectories of each fold")
     lines += st.split_tunings_lines(folds, tuned, "trajectories")
-    return head + note + lines, pd.concat(frames.values(), ignore_index=True)
+    return head + note + lines, tuning_rows(tuned)
+
+
+def tuning_rows(frames: dict) -> pd.DataFrame:
+    """Every tuning's runs of some splits as one frame with a ``tuning`` column
+    (``frames``: split label -> tuning -> runs, :func:`~fuzzynav.pages.
+    science_split_tunings.split_frames`)."""
+    return pd.concat([df.assign(tuning=k) for per in frames.values() for k, df in per.items()],
+                     ignore_index=True)
+
+
+def splice_rows(path: Path, rows: pd.DataFrame) -> pd.DataFrame:
+    """The recordings CSV at ``path`` with the rows of ``rows``' scenarios replaced by
+    ``rows`` (the other scenarios' rows kept; older files without ``tuning`` are rows of
+    the first tuning), written atomically; returns what was written."""
+    from fuzzynav.fileio import write_atomic
+
+    old = pd.read_csv(path) if path.is_file() else pd.DataFrame()
+    if not old.empty and "tuning" not in old:
+        old = old.assign(tuning=0)
+    keep = old[~old["scenario"].isin(set(rows["scenario"]))] if not old.empty else old
+    out = pd.concat([keep, rows], ignore_index=True)
+    write_atomic(path, lambda tmp: out.to_csv(tmp, index=False), suffix=".csv")
+    return out
 
 
 def recordings_section(args, params: Path, systems: dict, supervisors=None) -> tuple:
@@ -240,6 +264,8 @@ def recordings_section(args, params: Path, systems: dict, supervisors=None) -> t
         if (root / "rtklib-drive").is_dir() else \
         ([f"*The car drive is not here ({root / 'rtklib-drive'}): section skipped. Set "
           "`FUZZYNAV_DATA` or pass `--data`.*", ""], None)
+    if car_df is not None:  # the simulated studies' first tuning
+        car_df = car_df.assign(tuning=0)
     split, split_df = split_section(root, [SPLIT_SEED0 + k for k in seeds],
                                     getattr(args, "cache", None))
     auv, auv_df = auv_section(root / "akit", getattr(args, "cache", None))
@@ -265,14 +291,14 @@ SPLIT_HEADING = "### The car drive's second half, every filter tuned on its firs
 def regenerate_held_out(data: str | None = None, root: Path = ROOT,
                         mc_recordings: int = 5, parts=("split", "auv")) -> None:
     """Rerun the car drive's split and/or the AUV subsection of docs/science.md (with their
-    tuning-variance tables) and splice them in, the rest of the page untouched (the split's
-    first-tuning rows are docs/science_recordings.csv's already)."""
+    tuning-variance tables) and splice them in, the rest of the page untouched; their rows
+    (every tuning) replace theirs in docs/science_recordings.csv (:func:`splice_rows`)."""
     from fuzzynav.fileio import write_atomic
 
     droot = data_root(data)
-    split = split_section(droot, [SPLIT_SEED0 + k for k in range(mc_recordings)])[0] \
-        if "split" in parts else None
-    auv = auv_section(droot / "akit")[0] if "auv" in parts else None
+    split, split_rows = split_section(droot, [SPLIT_SEED0 + k for k in range(mc_recordings)]) \
+        if "split" in parts else (None, None)
+    auv, auv_rows = auv_section(droot / "akit") if "auv" in parts else (None, None)
     # read the page only now: another splice may have rewritten it while these ran
     page = root / "docs" / "science.md"
     text = page.read_text()
@@ -283,3 +309,6 @@ def regenerate_held_out(data: str | None = None, root: Path = ROOT,
     if auv is not None:
         text = splice_auv(text, auv)
     write_atomic(page, lambda tmp: Path(tmp).write_text(text))
+    for rows in (split_rows, auv_rows):
+        if rows is not None:
+            splice_rows(root / "docs" / "science_recordings.csv", rows)

@@ -265,11 +265,12 @@ def seeds_text(studies, tunings, root: Path = ROOT) -> str:
 
 
 def split_tunings_lines(splits, frames: dict, unit: str, root: Path = ROOT, designs=None,
-                        design_text: str = "Each fuzzy design") -> list:
+                        design_text: str = "Each fuzzy design", studies=None) -> list:
     """Markdown of some splits over their tunings (``frames``: split label -> tuning ->
     frame, :func:`split_frames`), or a note that the further tunings are absent.
     ``designs``: the filters judged against the best equally tuned classical filter (by
-    default the splits' fuzzy designs; e.g. ``["apso"]``), named ``design_text``."""
+    default the splits' fuzzy designs; e.g. ``["apso"]``), named ``design_text``;
+    ``studies``: the study files whose sampler seeds are cited (default each split's)."""
     import json
 
     from fuzzynav.pages.science_splits import SPLIT_METRICS
@@ -288,7 +289,8 @@ def split_tunings_lines(splits, frames: dict, unit: str, root: Path = ROOT, desi
     scores, plain = scored("ekf-tuned"), scored("ekf")
     pool = list(json.loads((Path(root) / splits[0].params).read_text())["filters"])
     designs = list(designs or dict.fromkeys(d for sp in splits for d in sp.designs()))
-    studies = "; ".join(seeds_text([sp.study], ks, root) for sp in splits)
+    studies = "; ".join(seeds_text([f], ks, root)
+                        for f in (studies or [sp.study for sp in splits]))
     train = {}
     for sp in splits:  # filter -> training score per tuning (with the set's name if several)
         train.update({(f if len(splits) == 1 else f"{f} (`{sp.label}`)"): v
