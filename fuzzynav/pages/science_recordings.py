@@ -277,15 +277,32 @@ AUV_HEADING = "### The AUV trajectories held out"
 AUV_END = "Every run's metrics:"
 
 
-def splice_auv(page: str, auv_lines: list) -> str:
-    """``page`` (docs/science.md) with its AUV subsection replaced by ``auv_lines``: from its
-    heading up to the closing "Every run's metrics" line, the rest untouched."""
-    a = page.index(AUV_HEADING)
-    b = page.index(AUV_END, a)
-    return page[:a] + "\n".join(auv_lines) + "\n" + page[b:]
+def splice(page: str, part: str, lines: list) -> str:
+    """``page`` (docs/science.md) with its subsection ``part`` (a key of :data:`PARTS`)
+    replaced by ``lines``: from the part's heading up to the next mark (the next part's
+    heading, or the closing "Every run's metrics" line), the rest untouched.
+
+    Raises
+    ------
+    FuzzynavError
+        The page lacks the part's heading or the mark after it.
+    """
+    from fuzzynav.errors import FuzzynavError
+
+    heading, end = PARTS[part]
+    try:
+        a = page.index(heading)
+        b = page.index(end, a)
+    except ValueError:
+        raise FuzzynavError(f"docs/science.md: no {heading!r} followed by {end!r}: the "
+                            f"{part!r} part cannot be spliced in (regenerate the whole "
+                            "page)") from None
+    return page[:a] + "\n".join(lines) + "\n" + page[b:]
 
 
 SPLIT_HEADING = "### The car drive's second half, every filter tuned on its first half"
+#: part -> (its heading, the mark that ends it) on docs/science.md
+PARTS = {"split": (SPLIT_HEADING, AUV_HEADING), "auv": (AUV_HEADING, AUV_END)}
 
 
 def regenerate_held_out(data: str | None = None, root: Path = ROOT,
@@ -302,12 +319,9 @@ def regenerate_held_out(data: str | None = None, root: Path = ROOT,
     # read the page only now: another splice may have rewritten it while these ran
     page = root / "docs" / "science.md"
     text = page.read_text()
-    if split is not None:
-        a = text.index(SPLIT_HEADING)
-        b = text.index(AUV_HEADING, a)
-        text = text[:a] + "\n".join(split) + "\n" + text[b:]
-    if auv is not None:
-        text = splice_auv(text, auv)
+    for part, lines in (("split", split), ("auv", auv)):
+        if lines is not None:
+            text = splice(text, part, lines)
     write_atomic(page, lambda tmp: Path(tmp).write_text(text))
     for rows in (split_rows, auv_rows):
         if rows is not None:

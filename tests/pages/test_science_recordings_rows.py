@@ -31,3 +31,18 @@ def test_splice_rows_replaces_only_the_rerun_scenarios(tmp_path):
     assert back.loc[back["scenario"] == "car", "score"].tolist() == [5.0, 5.0]
     assert sorted(back.loc[back["scenario"] == "a", "score"]) == [1.0, 1.0, 2.0, 2.0]
     assert not list(tmp_path.glob("*.tmp*"))  # written through a temporary file
+
+
+def test_splice_replaces_one_part_and_refuses_a_page_without_it():
+    import pytest
+
+    from fuzzynav.errors import FuzzynavError
+
+    page = ("top\n" + sr.SPLIT_HEADING + "\nold split\n" + sr.AUV_HEADING + "\nold auv\n"
+            + sr.AUV_END + " tail\n")
+    once = sr.splice(page, "auv", [sr.AUV_HEADING, "new auv"])
+    assert once == page.replace("old auv", "new auv")
+    assert sr.splice(once, "auv", [sr.AUV_HEADING, "new auv"]) == once  # idempotent
+    assert sr.splice(page, "split", [sr.SPLIT_HEADING, "s"]) == page.replace("old split", "s")
+    with pytest.raises(FuzzynavError, match="'auv' part"):
+        sr.splice("top\n" + sr.AUV_HEADING + "\nno end mark\n", "auv", ["x"])
