@@ -16,6 +16,8 @@ which favours it).  Part of ``fuzzynav docs regenerate paper004`` (needs those f
 """
 from __future__ import annotations
 
+from pathlib import Path
+
 import pandas as pd
 
 from fuzzynav.metrics import mean_ci
@@ -139,8 +141,36 @@ def tunings_lines(folds=AKIT_FOLDS, cache=None) -> list:
             "fitness (position RMS ratio to the EKF; `studies/paper004_apso.toml` / `_rev` "
             "and their `_t1`, `_t2`), scored like every filter above by the studies' "
             "objective.", "",
+            *apso_bounds_lines(folds),
             *st.split_tunings_lines(list(folds), frames, "trajectories", designs=["apso"],
-                                    design_text="APSO")]
+                                    design_text="APSO", studies=[
+                                        Path(f.apso).with_suffix(".toml").as_posix()
+                                        for f in folds])]
+
+
+def apso_bounds_lines(folds=AKIT_FOLDS) -> list:
+    """A sentence per fold and tuning whose APSO multipliers sit at an end of their search
+    range (:func:`fuzzynav.tuning.baseline_config.bound_hits`), or nothing."""
+    import json
+
+    from fuzzynav.pages import science_split_tunings as st
+    from fuzzynav.tuning.baseline_config import bound_hits
+
+    out = []
+    for fold in folds:
+        for k in range(st.N_TUNINGS):
+            path = ROOT / st.tuning_file(fold.apso, k)
+            if not path.is_file():
+                continue
+            params = json.loads(path.read_text())["filters"]["apso"]
+            ends = bound_hits("apso", params)
+            if ends:
+                out.append(f"- `{fold.label}`, tuning {k}: " + ", ".join(
+                    f"{key} = {params[key]:.3g} at the {end} end" for key, end in ends.items()))
+    if not out:
+        return []
+    return ["Multipliers at an end of their search range (the optimum may lie outside "
+            "what was searched):", "", *out, ""]
 
 
 def section(frame: tuple) -> list:
