@@ -35,3 +35,38 @@ def test_constant_r_left_out_and_switched_off_named():
     assert "| const |" not in text
     assert "| off | 30.00 | 50.00 | 95% | 100% |" in text
     assert text.rstrip().endswith("switched the sensor off: off.")
+
+
+def _bank_runs(factor):
+    metrics = ("rms_pos_m", "rms_vel_mps", "rms_att_deg")
+    rows = []
+    for seed in range(6):
+        rows.append({"filter": pt.FEDERATED, "seed": seed, "r_use_dev_calm": 1.0,
+                     **{m: 2.0 + seed for m in metrics}})
+        rows.append({"filter": pt.BANK_DESIGN, "seed": seed, "r_use_dev_calm": 1.0,
+                     **{m: (2.0 + seed) * factor(seed) for m in metrics}})
+    return pd.DataFrame(rows)
+
+
+def test_bank_against_federated_pooled_over_tunings():
+    # the bank halves every RMS of federated-p001 (a little less on later seeds) in each
+    # tuning: score (3 x ~0.5 + 0.1 x 1) / 3.1 ~ 0.52 against 1, a win in every tuning
+    df = _bank_runs(lambda seed: 0.5 + 0.01 * seed)
+    dfs = {"s": df}
+    filters = {pt.BANK_DESIGN: "federated-fuzzy-beta@" + "+".join(pt.TUNED_BANK), pt.FEDERATED: "x"}
+
+    def run(specs):
+        assert list(specs) == [pt.BANK_DESIGN] and "_t" in specs[pt.BANK_DESIGN]  # a further tuning's files
+        return {"s": df[df["filter"] == pt.BANK_DESIGN]}
+
+    text = "\n".join(pt.bank_vs_federated(dfs, filters, run))
+    row = [line for line in text.splitlines() if line.startswith("| `s` |")]
+    assert len(row) == 1
+    assert row[0].count("**win**") == 3 and "**wins against**" in row[0]
+    assert "-0.4" in row[0]
+    assert "1 / 0 / 0" in text
+
+
+def test_bank_against_federated_needs_both():
+    df = _bank_runs(lambda seed: 1.0)
+    assert pt.bank_vs_federated({"s": df}, {pt.BANK_DESIGN: "x"}, None) == []

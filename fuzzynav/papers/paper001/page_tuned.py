@@ -9,6 +9,7 @@ magnetometer-use figures are :mod:`fuzzynav.metrics_rscale`'s (``r_use_*``).
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 
 from fuzzynav.metrics import mean_ci
 from fuzzynav.metrics_rscale import OFF_SCALE
@@ -16,7 +17,7 @@ from fuzzynav.pages.best_classical import paper_lines, provenance_score
 from fuzzynav.report import render
 
 __all__ = ["BASELINES", "TUNED_FILTERS", "PAIRS", "paired_table", "usage_table",
-           "tuned_lines"]
+           "tuned_lines", "bank_vs_federated"]
 
 BASELINES = "studies/paper001_baselines.json"
 TUNED = "rules/paper001_mag_tuned.json"
@@ -28,6 +29,8 @@ TUNED_BANK = ("rules/paper001_beta_tuned_beta.json", "rules/paper001_beta_tuned_
 TUNED_BANK_V1 = ("rules/paper001_beta_tuned_beta_v1.json",
                  "rules/paper001_beta_tuned_mag_v1.json")
 BANK_DESIGN = "federated, tuned β + tuned R"
+#: the paper's bank, the one the bank study's candidates are ratios to
+FEDERATED = "federated (paper 001: 3 locals, no reset, β = 1/3)"
 REF = "centralized EKF (every sensor)"
 #: the tuned filters of this page (label -> spec), added after the hand-made ones
 TUNED_FILTERS = {
@@ -134,7 +137,8 @@ def tuned_lines(dfs, filters, run=None) -> list:
                          design_train={filters[d]: provenance_score(f)
                                        for d, f in DESIGN_FILES.items()}),
             *([] if run is None else ["", "### The same over three tunings", "",
-                                      *tunings_part(dfs, filters, run)])]
+                                      *tunings_part(dfs, filters, run), "",
+                                      *bank_vs_federated(dfs, filters, run)])]
 
 
 def tunings_part(dfs, filters, run) -> list:
@@ -150,3 +154,35 @@ def tunings_part(dfs, filters, run) -> list:
         dfs, run, lambda df: sr.scores_to(df, REF, SCORE_METRICS, SCORE_WEIGHTS),
         filters=filters, designs=DESIGNS, pool=POOL, params=BASELINES,
         design_files=DESIGN_FILES, studies=studies)
+
+
+def bank_vs_federated(dfs, filters, run) -> list:
+    """The β + R bank of each tuning against ``federated-p001``, the bank it adapts (the
+    studies' objective against it, so a score is the ratio), per tuning and pooled with
+    tuning and seed as crossed random factors
+    (:func:`fuzzynav.pages.science_split_tunings.tunings_lines`); empty without both."""
+    from fuzzynav.pages import scores as sr
+    from fuzzynav.pages import science_split_tunings as st
+
+    if not all(k in filters for k in (BANK_DESIGN, FEDERATED)):
+        return []
+    parts = []
+    for k in st.tunings_present(TUNED_BANK, st.N_TUNINGS):
+        frames = dfs if k == 0 else run({BANK_DESIGN: st.tuning_spec(filters[BANK_DESIGN], k)})
+        for s, df in frames.items():
+            ref = dfs[s][dfs[s]["filter"] == FEDERATED]
+            one = df[df["filter"] == BANK_DESIGN]
+            runs = pd.concat([one, ref], ignore_index=True).assign(scenario=s)
+            parts.append(sr.scores_to(runs, FEDERATED, SCORE_METRICS, SCORE_WEIGHTS)
+                         .assign(tuning=k))
+    scores = pd.concat(parts, ignore_index=True)
+    rows, tally = st.tunings_lines(scores, list(dfs), [BANK_DESIGN],
+                                   best=dict.fromkeys(scores["tuning"].unique(), FEDERATED))
+    t = tally[BANK_DESIGN]
+    return ["**The bank against federated-p001**, the same bank with fixed equal shares and "
+            "constant R (the column 'best classical' names it here): the objective above "
+            "scored against `federated-p001` on each run (a score is then the ratio to it), "
+            "paired difference bank − federated-p001 per tuning and pooled over the tunings "
+            "and seeds as crossed random factors:", "", *rows, "",
+            f"- Pooled over the tunings (wins / draws / losses of the {len(dfs)} sets): "
+            f"{t['wins against']} / {t['draws with']} / {t['loses to']}.", ""]
