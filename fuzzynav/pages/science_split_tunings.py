@@ -133,14 +133,12 @@ def best_on_training(params_by_tuning: dict, pool: dict) -> dict:
             for t, path in params_by_tuning.items()}
 
 
-def _ci(est) -> str:
-    return f"{est.mean:+.3f} [{est.lo:+.3f}, {est.hi:+.3f}]"
-
-
 def tunings_lines(scores: pd.DataFrame, scenarios, designs, *, best=None, pool=None,
-                  labels=None, unit: str = "seeds") -> tuple:
+                  labels=None, unit: str = "seeds",
+                  ref_head: str = "best classical per tuning") -> tuple:
     """Markdown rows (scenario x design) and the tally design -> {verdict: count} of the
-    pooled verdicts.
+    pooled verdicts (``ref_head``: the heading of the column naming the filter compared
+    with).
 
     Each row: the classical filter compared with in each tuning, each tuning's paired
     difference (mean over test seeds, 95 % CI, verdict mark), the pooled difference over
@@ -152,10 +150,11 @@ def tunings_lines(scores: pd.DataFrame, scenarios, designs, *, best=None, pool=N
     from fuzzynav.metrics import crossed_ci, mean_ci
     from fuzzynav.pages import scores as sr
     from fuzzynav.pages.science_sections import MARKS
+    from fuzzynav.report import diff_cell as _ci
 
     labels = dict(labels or {})
     tunings = sorted(scores["tuning"].unique())
-    lines = ["| set | design | best classical per tuning | "
+    lines = [f"| set | design | {ref_head} | "
              + " | ".join(f"tuning {t}" for t in tunings)
              + f" | pooled (tuning × {ONE.get(unit, unit)}) | SD between tunings | "
              f"SD between {unit} |",

@@ -24,7 +24,7 @@ from fuzzynav.metrics import mean_ci
 from fuzzynav.pages.common import REPO_ROOT as ROOT
 from fuzzynav.pages.science_splits import AKIT_FOLDS, SPLIT_METRICS, split_frame
 from fuzzynav.realdata.dataspec import parse_recording_spec
-from fuzzynav.report import ci_cell, improvement_cell, render
+from fuzzynav.report import ci_cell, diff_cell, improvement_cell, render
 
 TUNED_LABEL = "fuzzy R-scaling (tuned on the other four)"
 APSO_LABEL = "APSO Q/R (tuned on the other four)"
@@ -116,8 +116,7 @@ def paired_best(df: pd.DataFrame, key: str = "rms_pos_h_m") -> list:
     for fold, sub in groups:
         piv = sub.pivot_table(index="trajectory", columns="filter", values=key)
         est = mean_ci((piv[TUNED_LABEL] - piv[BEST_LABEL]).to_numpy())
-        ci = f"{est.mean:+.3f} [{est.lo:+.3f}, {est.hi:+.3f}]" if est.n > 1 else \
-            f"{est.mean:+.3f}"
+        ci = diff_cell(est) if est.n > 1 else f"{est.mean:+.3f}"
         rows.append([fold, ",".join(map(str, piv.index)), ci,
                      _imp(piv[BEST_LABEL], piv[TUNED_LABEL]), str(est.n)])
     return rows
@@ -145,7 +144,34 @@ def tunings_lines(folds=AKIT_FOLDS, cache=None) -> list:
             *st.split_tunings_lines(list(folds), frames, "trajectories", designs=["apso"],
                                     design_text="APSO", studies=[
                                         Path(f.apso).with_suffix(".toml").as_posix()
-                                        for f in folds])]
+                                        for f in folds]),
+            *apso_vs_ekf_lines(folds, frames)]
+
+
+def apso_vs_ekf_lines(folds, frames: dict) -> list:
+    """APSO against the untuned ``ekf`` (the reference of its fitness) over the tunings
+    every fold has (``frames``: fold label -> tuning -> frame,
+    :func:`fuzzynav.pages.science_split_tunings.split_frames`), paired per trajectory and
+    pooled as the table against the best classical filter
+    (:func:`fuzzynav.pages.science_split_tunings.tunings_lines`), or nothing with fewer
+    than two tunings."""
+    from fuzzynav.pages import science_split_tunings as st
+
+    ks = sorted(set.intersection(*(set(v) for v in frames.values())))
+    if len(ks) < 2:
+        return []
+    scores = pd.concat([st.split_scores({k: frames[f.label][k] for k in ks}, "ekf-tuned",
+                                        SPLIT_METRICS) for f in folds], ignore_index=True)
+    rows, tally = st.tunings_lines(scores, [f.label for f in folds], ["apso"],
+                                   best=dict.fromkeys(ks, "ekf"), unit="trajectories",
+                                   ref_head="compared with")
+    t = tally["apso"]
+    return ["APSO against the untuned `ekf` (the reference of its fitness) on the same "
+            "held-out trajectories, in the same score and paired and pooled the same way "
+            "(negative favours APSO):", "", *rows, "",
+            f"- `apso` against `ekf` pooled over the tunings (wins / draws / losses of the "
+            f"{len(folds)} set(s)): {t['wins against']} / {t['draws with']} / "
+            f"{t['loses to']}.", ""]
 
 
 def apso_bounds_lines(folds=AKIT_FOLDS) -> list:
