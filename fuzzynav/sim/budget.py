@@ -31,7 +31,8 @@ __all__ = ["BYTES_PER_IMU_SAMPLE", "BYTES_PER_BLOCK_SAMPLE", "BYTES_PER_EPOCH_CO
            "DEFAULT_CACHE_FILE_MB", "CACHE_ENV_VAR", "cache_file_limit",
            "check_run_size", "BYTES_PER_CHUNK_SAMPLE", "BYTES_PER_STREAM_EPOCH",
            "BYTES_PER_OUTPUT_ROW", "DEFAULT_CHUNK_SAMPLES", "whole_estimate",
-           "streamed_estimate", "check_whole_run"]
+           "streamed_estimate", "check_whole_run", "BYTES_PER_TRUTH_SAMPLE",
+           "TRUTH_STORE_BYTES", "stored_truth_bytes"]
 
 #: bytes held per IMU sample of the whole run through simulation and filtering, beyond the
 #: generator's block (marginal tracemalloc peaks of runs longer than a block: paper003
@@ -53,6 +54,13 @@ BYTES_PER_STREAM_EPOCH = 48
 #: bytes per kept output row of a streamed run (time, navigation state, sensor states and
 #: sigmas of up to 21 states: 35 floats, rounded up for the locals' and the concatenation)
 BYTES_PER_OUTPUT_ROW = 1024
+#: bytes of one sample of a kept :class:`~fuzzynav.sim.trajectory.Trajectory`: time,
+#: lla, vel_n, att, omega_nb_b (3 each), q_bn (4), dtheta_b and dv_b (3 each), float64
+BYTES_PER_TRUTH_SAMPLE = 8 * (1 + 3 * 4 + 4 + 3 * 2)
+#: the most truth a streamed run keeps from its first pass instead of generating the
+#: trajectory again chunk by chunk (:class:`fuzzynav.sim.stream.SimulatedChunks`): 128 MB,
+#: 4 h at 50 Hz
+TRUTH_STORE_BYTES = 128 * 2**20
 #: IMU samples per chunk of a streamed run when none is given (5 min at 50 Hz)
 DEFAULT_CHUNK_SAMPLES = 15_000
 #: most outage or cloud windows a sensor may have in one run
@@ -130,15 +138,26 @@ def streamed_estimate(duration_s: float, imu_rate_hz: float, sensors: dict,
     (:func:`fuzzynav.streamrun.run_streamed`): one chunk of samples
     (:data:`BYTES_PER_CHUNK_SAMPLE`), the epoch indices of the streamed sensors
     (:data:`BYTES_PER_STREAM_EPOCH`), the sensors simulated whole (their epochs, as a
-    whole run holds them) and the kept outputs (:data:`BYTES_PER_OUTPUT_ROW` per row at
-    ``output_rate_hz``)."""
+    whole run holds them), the truth kept from the first pass when it fits
+    :data:`TRUTH_STORE_BYTES` and the kept outputs (:data:`BYTES_PER_OUTPUT_ROW` per row
+    at ``output_rate_hz``)."""
+    from fuzzynav.sim.trajectory import BLOCK_SAMPLES
+
     n_imu = duration_s * imu_rate_hz
     need = min(n_imu, chunk_samples) * BYTES_PER_CHUNK_SAMPLE
+    if (chunk_samples <= BLOCK_SAMPLES and stored_truth_bytes(n_imu) <= TRUTH_STORE_BYTES
+            and any(not hasattr(sp, "stream") for sp in sensors.values())):
+        need += stored_truth_bytes(n_imu)
     for sp in sensors.values():
         epochs = duration_s * sp.rate_hz
         need += epochs * (BYTES_PER_STREAM_EPOCH if hasattr(sp, "stream")
                           else _columns(sp) * BYTES_PER_EPOCH_COLUMN)
     return need + duration_s * output_rate_hz * BYTES_PER_OUTPUT_ROW
+
+
+def stored_truth_bytes(n_samples: float) -> float:
+    """Bytes of the truth of ``n_samples`` increments (``n_samples + 1`` samples)."""
+    return (n_samples + 1) * BYTES_PER_TRUTH_SAMPLE
 
 
 def _columns(spec) -> int:

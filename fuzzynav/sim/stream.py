@@ -14,7 +14,11 @@ mission (a ship's day at 200 Hz is 17 M IMU samples) does not fit that way.
   dropout spells span the run) whole, once, from the truth at its epochs only, gathered
   by one pass of the trajectory at the start (:class:`_RowsTruth`); its epochs are handed
   out chunk by chunk.  Such sensors run at a few hertz: their streams are what a
-  :class:`~fuzzynav.filters.runner.FilterRun` held anyway.
+  :class:`~fuzzynav.filters.runner.FilterRun` held anyway.  When the whole truth of the
+  run fits ``truth_store_bytes`` (:data:`~fuzzynav.sim.budget.TRUTH_STORE_BYTES`; 184 B
+  a sample), that pass keeps its blocks, cut as the chunks are, and the chunks take them
+  instead of generating the trajectory a second time (it is most of a short run's
+  simulation cost); a longer run regenerates each chunk's block, in bounded memory.
 
 Each component's generator is the one :func:`~fuzzynav.sim.sensor_log.simulate` seeds
 (:func:`~fuzzynav.sim.sensor_log.component_rng`), and numpy draws of ``n1`` then ``n2``
@@ -123,6 +127,10 @@ class SimulatedChunks:
     seed : int
     chunk_samples : int
         IMU increments per chunk (the last chunk may be shorter).
+    truth_store_bytes : float, optional
+        Keep the first pass's truth for the chunks when it needs no more than this
+        (default :data:`fuzzynav.sim.budget.TRUTH_STORE_BYTES`; 0 never keeps it).  The
+        chunks are the same to the last bit either way.
 
     Attributes
     ----------
@@ -137,7 +145,9 @@ class SimulatedChunks:
     Iterate (once) for the :class:`Chunk` s in order.
     """
 
-    def __init__(self, scenario: Scenario, seed: int, chunk_samples: int):
+    def __init__(self, scenario: Scenario, seed: int, chunk_samples: int,
+                 truth_store_bytes: float | None = None):
+        from fuzzynav.sim.budget import TRUTH_STORE_BYTES, stored_truth_bytes
         from fuzzynav.sim.sensor_log import check_seed, component_rng
 
         if int(chunk_samples) != chunk_samples or chunk_samples < 1:
@@ -159,6 +169,10 @@ class SimulatedChunks:
                 self._streams[name] = spec.stream(self.grid, rng, scenario.start_utc)
             else:
                 whole[name] = (spec, rng)
+        limit = TRUTH_STORE_BYTES if truth_store_bytes is None else truth_store_bytes
+        # the first pass is cut as the chunks only when a chunk fits one trajectory block
+        self._stored = ({} if whole and self.chunk_samples <= BLOCK_SAMPLES
+                        and stored_truth_bytes(n) <= limit else None)
         self._whole = self._simulate_whole(whole)
         self._first = self._header = None
         self._used = False
@@ -185,6 +199,8 @@ class SimulatedChunks:
         for k0 in range(0, self.n_samples, step):
             k1 = min(k0 + step, self.n_samples)
             blk = gen.block(k0, k1)
+            if self._stored is not None:
+                self._stored[k0] = blk
             a, b = np.searchsorted(rows, [k0, k1 + 1])
             for k in _ROW_ARRAYS:
                 arrays[k][a:b] = getattr(blk, k)[rows[a:b] - k0]
@@ -204,7 +220,7 @@ class SimulatedChunks:
         return self._header
 
     def _make(self, k0: int, k1: int) -> Chunk:
-        truth = self._blocks.block(k0, k1)
+        truth = self._stored.pop(k0) if self._stored else self._blocks.block(k0, k1)
         imu = self._imu.corrupt(truth)
         lo = k0 if k0 == 0 else k0 + 1
         whole = k0 == 0 and k1 == self.n_samples  # the run in one chunk: the whole log

@@ -85,6 +85,28 @@ def test_the_streamed_figures_bound_a_real_streamed_run(tmp_path):
         budget.BYTES_PER_STREAM_EPOCH + budget.BYTES_PER_OUTPUT_ROW / 50) + 2**20
 
 
+def test_a_streamed_run_counts_the_truth_it_keeps(tmp_path, monkeypatch):
+    # a GNSS-aided run short enough keeps its first pass's truth (184 B a sample): 1 000 s at
+    # 50 Hz is 15 000 x 4096 + 50 001 x 184 + 1 000 GNSS epochs x 6 x 128 + 1 000 rows x 1024
+    # = 61 440 000 + 9 200 184 + 768 000 + 1 024 000 B (by hand); at 20 000 s its 184 MB of
+    # truth is over the 128 MB kept, and each chunk generates its own again
+    short_run = load_scenario(_write(tmp_path / "a.toml", RUN.format(rate=50, duration=1000)))
+    assert budget.streamed_estimate(1000.0, 50.0, short_run.sensors) == 72_432_184
+    assert budget.streamed_estimate(20000.0, 50.0, short_run.sensors) == (
+        15_000 * 4096 + 20_000 * 6 * 128 + 20_000 * 1024)
+    # the traced peak grows by the kept truth, and that growth stays under its figure
+    paths = [_write(tmp_path / f"{d}.toml", RUN.format(rate=50, duration=d)) for d in (2, 40, 80)]
+    _traced_streamed(paths[0])
+    growth = {}
+    for kept in (budget.TRUTH_STORE_BYTES, 0):
+        monkeypatch.setattr(budget, "TRUTH_STORE_BYTES", kept)
+        growth[kept] = (_traced_streamed(paths[2]) - _traced_streamed(paths[1])) / (40 * 50)
+    stored = growth[max(growth)] - growth[0]
+    assert 0.5 * budget.BYTES_PER_TRUTH_SAMPLE < stored < 1.5 * budget.BYTES_PER_TRUTH_SAMPLE
+    assert growth[max(growth)] < budget.BYTES_PER_TRUTH_SAMPLE + (
+        6 * budget.BYTES_PER_EPOCH_COLUMN + budget.BYTES_PER_OUTPUT_ROW) / 50
+
+
 @pytest.mark.parametrize("value", ["0", "-1", "lots", "inf"])
 def test_a_bad_memory_limit_variable_is_named(tmp_path, monkeypatch, value):
     monkeypatch.setenv(budget.ENV_VAR, value)

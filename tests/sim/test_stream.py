@@ -111,3 +111,31 @@ def test_chunks_are_made_once_in_order():
         list(sc)
     with pytest.raises(ValueError, match="positive integer"):
         SimulatedChunks(short("paper000", 5.0), 0, 0)
+
+
+@pytest.mark.parametrize("name", ["paper000", "paper004"])
+def test_the_kept_truth_is_the_truth_generated_again(name, monkeypatch):
+    # a short run keeps its first pass's trajectory blocks for the chunks: one trajectory
+    # pass, not two; with no room to keep them each chunk generates its block again; the
+    # chunks are the same to the last bit either way
+    from fuzzynav.sim import trajectory
+
+    calls = []
+    block = trajectory.Blocks.block
+    monkeypatch.setattr(trajectory.Blocks, "block",
+                        lambda self, k0, k1, **kw: calls.append(k0) or block(self, k0, k1, **kw))
+    scn = short(name, 30.0)
+    chunk = int(round(7.0 * scn.imu.rate_hz))
+    kept = list(SimulatedChunks(scn, 5, chunk))
+    assert len(calls) == len(kept) >= 4
+    calls.clear()
+    again = list(SimulatedChunks(scn, 5, chunk, truth_store_bytes=0))
+    assert len(calls) == 2 * len(again) and len(again) == len(kept)
+    for a, b in zip(kept, again):
+        assert (a.k0, a.k1) == (b.k0, b.k1)
+        for f in _TRUTH + _IMU:
+            np.testing.assert_array_equal(getattr(a.truth, f), getattr(b.truth, f), err_msg=f)
+        for f in _IMU:
+            np.testing.assert_array_equal(getattr(a.imu, f), getattr(b.imu, f), err_msg=f)
+        for nm in a.sensors:
+            np.testing.assert_array_equal(a.sensors[nm].z, b.sensors[nm].z, err_msg=nm)
