@@ -161,7 +161,7 @@ def _navigation_runs(scn, options, cache_dir, t_start_s, outcomes, streaming):
             opts.update(options.get(name, {}) if isinstance(options.get(name), dict) else {})
             # NAME@FILE: resolved by the run
             if streaming:
-                out = _streamed(scn, seed, name, opts, t_start_s, streaming)
+                out = _streamed(scn, seed, name, opts, t_start_s, streaming, cache_dir)
             else:
                 out = run_on_log(log, name, opts, t_start_s)
             outcomes.append(out)
@@ -170,9 +170,10 @@ def _navigation_runs(scn, options, cache_dir, t_start_s, outcomes, streaming):
     return of_seed
 
 
-def _streamed(scn, seed, name, opts, t_start_s, streaming) -> RunOutcome:
+def _streamed(scn, seed, name, opts, t_start_s, streaming, cache_dir) -> RunOutcome:
     """One run of :func:`fuzzynav.streamrun.run_streamed` (``streaming``: its chunk, output
-    rate and output directory, one sub-directory per filter and seed)."""
+    rate and output directory, one sub-directory per filter and seed; ``cache_dir``: read,
+    never written)."""
     from fuzzynav.fileio import safe_stem
     from fuzzynav.streamrun import DEFAULT_CHUNK_SAMPLES, run_streamed
 
@@ -182,7 +183,7 @@ def _streamed(scn, seed, name, opts, t_start_s, streaming) -> RunOutcome:
         out_dir = f"{out_dir}/{safe_stem(name)}-seed{int(seed)}"
     return run_streamed(scn, seed, name, opts, chunk_samples=kw.pop(
         "chunk_samples", DEFAULT_CHUNK_SAMPLES), t_start_s=t_start_s, output_dir=out_dir,
-        **kw)
+        cache_dir=cache_dir, **kw)
 
 
 def _progress(total, enabled, desc):

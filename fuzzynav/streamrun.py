@@ -1,11 +1,13 @@
 """A filter run on a scenario simulated chunk by chunk: memory bounded by the chunk.
 
 :func:`run_streamed` simulates ``(scenario, seed)`` in chunks
-(:class:`fuzzynav.sim.stream.SimulatedChunks`) and feeds each to one
+(:class:`fuzzynav.sim.stream.SimulatedChunks`; or cuts its cached whole log alike,
+:class:`fuzzynav.sim.log_chunks.LogChunks`) and feeds each to one
 :class:`~fuzzynav.filters.runner.FilterRun` with that chunk's epochs
 (``events_per_chunk``), scoring each chunk's outputs against its truth as it goes
 (:class:`~fuzzynav.metrics.StreamingRms`).  Nothing of the run's length is held but the
-kept (decimated) outputs and the epoch indices of the streams simulated whole; the event
+kept (decimated) outputs, the epoch indices of the streams simulated whole and, in a short
+run (:data:`fuzzynav.sim.budget.TRUTH_STORE_BYTES`), its truth or cached log; the event
 logs of each chunk are written to ``output_dir`` (or dropped), as are its kept outputs.
 
 For the same seed the metrics are those of :func:`fuzzynav.experiment.run_on_log` on the
@@ -29,6 +31,7 @@ from fuzzynav.metrics_rscale import KIND as USAGE_KIND, usage_metrics
 from fuzzynav.runpath import RunOutcome, keep_every, make_setup, nonfinite
 from fuzzynav.sim import budget
 from fuzzynav.sim.sensors import SensorData
+from fuzzynav.sim.log_chunks import LogChunks, chunks_of
 from fuzzynav.sim.stream import SimulatedChunks
 from fuzzynav.simsource import OnSimulatedLog, perturbed_initial_state
 
@@ -42,7 +45,7 @@ class StreamedSource(OnSimulatedLog):
     """What named filters configure themselves from on a streamed simulation: the scenario's
     IMU figures and the first chunk's streams (their kinds and constant ``meta``)."""
 
-    def __init__(self, chunks: SimulatedChunks):
+    def __init__(self, chunks: SimulatedChunks | LogChunks):
         self.chunks = chunks
         self.log = SimpleNamespace(scenario=chunks.scenario, seed=chunks.seed,
                                    sensors=chunks.header)
@@ -91,7 +94,8 @@ class _Usage:
 
 def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None,
                  chunk_samples: int = DEFAULT_CHUNK_SAMPLES, output_rate_hz: float | None = None,
-                 t_start_s: float = 0.0, output_dir=None, keep_events: bool = False):
+                 t_start_s: float = 0.0, output_dir=None, keep_events: bool = False,
+                 cache_dir=None):
     """Simulate ``(scenario, seed)`` chunk by chunk and run one named filter on it.
 
     Parameters
@@ -115,6 +119,10 @@ def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None
         Write each chunk's kept outputs and event logs to ``chunk-NNNNNN.npz`` there.
     keep_events : bool
         Keep the event logs in the result (default: only written, or dropped).
+    cache_dir : path-like, optional
+        A simulation cache: the run's whole log is cut into the chunks when it is there
+        (and small: :func:`fuzzynav.sim.log_chunks.chunks_of`), the same data; a streamed
+        run never writes one.
 
     Returns
     -------
@@ -127,7 +135,7 @@ def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None
         A filter told per-epoch sigmas of the whole run (``ekf-true``), or an output rate
         that does not divide the filter's.
     """
-    chunks = SimulatedChunks(scenario, seed, chunk_samples)
+    chunks = chunks_of(scenario, seed, chunk_samples, cache_dir)
     source = StreamedSource(chunks)
     setup = setup or make_setup(source, filter_spec, options)
     if setup.sigma_override:

@@ -48,6 +48,25 @@ def test_streamed_run_is_the_whole_logs_run(name, filt):
                                           err_msg=f"{nm}.{f}")
 
 
+@pytest.mark.parametrize("name, filt", [("paper000", "fuzzy"), ("paper003", "fuzzy-ship")])
+def test_a_streamed_run_on_the_cached_log_is_the_simulated_one(tmp_path, name, filt):
+    scn = short(name, 60.0)
+    chunk = int(round(7.3 * scn.imu.rate_hz))
+    simulate(scn, 2, tmp_path)  # the whole path's cache file
+    made = run_streamed(scn, 2, filt, chunk_samples=chunk, output_rate_hz=1.0)
+    cut = run_streamed(scn, 2, filt, chunk_samples=chunk, output_rate_hz=1.0,
+                       cache_dir=tmp_path)
+    _same(cut.metrics, made.metrics)
+    for f in ("time_s", "lla", "vel_n", "q_bn", "sigma"):
+        np.testing.assert_array_equal(getattr(cut.result, f), getattr(made.result, f))
+    refused = []  # the oracle alike: the whole-run figure is left out of both
+    for cache in (None, tmp_path):
+        with pytest.raises(FuzzynavError, match="ekf-true") as exc:
+            run_streamed(scn, 2, "ekf-true", chunk_samples=chunk, cache_dir=cache)
+        refused.append(str(exc.value))
+    assert refused[0] == refused[1]
+
+
 def test_one_chunk_is_the_whole_run():
     scn = short("paper003", 60.0)
     whole = run_on_log(simulate(scn, 0), "ekf")

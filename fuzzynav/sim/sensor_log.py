@@ -33,7 +33,7 @@ from fuzzynav.sim.sensors import SensorData
 from fuzzynav.sim.trajectory import Trajectory, generate
 
 __all__ = ["DATA_VERSION", "SensorLog", "check_seed", "component_rng", "cache_key",
-           "cache_path", "simulate"]
+           "cache_path", "cached_log", "simulate"]
 
 #: bump when the simulation or the file layout changes (invalidates every cache file)
 DATA_VERSION = 3
@@ -173,6 +173,19 @@ def cache_path(cache_dir, scenario: Scenario, seed: int) -> Path:
     key = cache_key(scenario, seed)
     # the name only helps a human find the file (the key identifies it): cut long names
     return Path(cache_dir) / f"{safe_stem(scenario.name)}-{int(seed)}-{key[:16]}.npz"
+
+
+def cached_log(cache_dir, scenario: Scenario, seed: int, max_bytes: float):
+    """The log of ``(scenario, seed)`` in ``cache_dir`` when its file is there, intact and
+    no larger than ``max_bytes``; else ``None`` (nothing is simulated or written)."""
+    seed = check_seed(seed)
+    path = cache_path(cache_dir, scenario, seed)
+    try:
+        if path.stat().st_size > max_bytes:
+            return None
+    except OSError:
+        return None
+    return _read_cache(path, cache_key(scenario, seed), scenario, seed)
 
 
 def simulate(scenario: Scenario, seed: int, cache_dir=None) -> SensorLog:

@@ -54,6 +54,8 @@ class Spec:
     current_error: bool = True
 
     kind = "nhc"
+    #: ``meta`` of the whole run only (an RMS over it), left out of a chunk of a longer run
+    whole_run_meta = ("true_sigma",)
 
     def columns(self) -> int:
         """Measurement columns per epoch (memory budget)."""
