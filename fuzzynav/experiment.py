@@ -161,7 +161,7 @@ def _navigation_runs(scn, options, cache_dir, t_start_s, outcomes, streaming):
             opts.update(options.get(name, {}) if isinstance(options.get(name), dict) else {})
             # NAME@FILE: resolved by the run
             if streaming:
-                out = _streamed(scn, seed, name, opts, t_start_s, streaming, cache_dir)
+                out = streamed_run(scn, seed, name, opts, t_start_s, streaming, cache_dir)
             else:
                 out = run_on_log(log, name, opts, t_start_s)
             outcomes.append(out)
@@ -170,7 +170,7 @@ def _navigation_runs(scn, options, cache_dir, t_start_s, outcomes, streaming):
     return of_seed
 
 
-def _streamed(scn, seed, name, opts, t_start_s, streaming, cache_dir) -> RunOutcome:
+def streamed_run(scn, seed, name, opts, t_start_s, streaming, cache_dir) -> RunOutcome:
     """One run of :func:`fuzzynav.streamrun.run_streamed` (``streaming``: its chunk, output
     rate and output directory, one sub-directory per filter and seed; ``cache_dir``: read,
     never written)."""

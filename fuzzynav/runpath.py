@@ -121,6 +121,9 @@ class RunOutcome:
         The source's score and ``completed`` (1.0, or 0.0 when the filter stopped early).
     diverged : tuple
         Names of required metrics that are not finite (empty for a healthy run).
+    trace : Trace, optional
+        A streamed run's errors and thinned event logs for figures, when asked for
+        (:class:`fuzzynav.streamtrace.Trace`).
     """
 
     filter: str
@@ -129,6 +132,7 @@ class RunOutcome:
     result: object
     metrics: dict
     diverged: tuple = ()
+    trace: object = None
 
 
 def make_setup(source: Source, filter_spec: str, options=None) -> FilterSetup:

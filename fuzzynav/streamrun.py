@@ -34,6 +34,7 @@ from fuzzynav.sim.sensors import SensorData
 from fuzzynav.sim.log_chunks import LogChunks, chunks_of
 from fuzzynav.sim.stream import SimulatedChunks
 from fuzzynav.simsource import OnSimulatedLog, perturbed_initial_state
+from fuzzynav.streamtrace import StreamTrace
 
 __all__ = ["DEFAULT_CHUNK_SAMPLES", "StreamedSource", "run_streamed"]
 
@@ -95,7 +96,7 @@ class _Usage:
 def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None,
                  chunk_samples: int = DEFAULT_CHUNK_SAMPLES, output_rate_hz: float | None = None,
                  t_start_s: float = 0.0, output_dir=None, keep_events: bool = False,
-                 cache_dir=None):
+                 cache_dir=None, trace: bool = False):
     """Simulate ``(scenario, seed)`` chunk by chunk and run one named filter on it.
 
     Parameters
@@ -123,6 +124,9 @@ def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None
         A simulation cache: the run's whole log is cut into the chunks when it is there
         (and small: :func:`fuzzynav.sim.log_chunks.chunks_of`), the same data; a streamed
         run never writes one.
+    trace : bool
+        Keep the kept outputs' errors and the event logs thinned to the output rate
+        (:class:`fuzzynav.streamtrace.StreamTrace`) in the outcome's ``trace``, for figures.
 
     Returns
     -------
@@ -152,6 +156,7 @@ def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None
                     and "deflection_rad" in header[nm].meta][:1])
     out_dir = None if output_dir is None else Path(output_dir)
     pending = {}
+    tracer = StreamTrace(output_rate_hz) if trace else None
 
     def on_events(logs):
         usage.add_events(logs)
@@ -174,6 +179,8 @@ def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None
         usage.add_chunk(sensors)
         fr.feed_arrays(np.ascontiguousarray(ch.imu.time_s), np.ascontiguousarray(ch.imu.dtheta_b),
                        np.ascontiguousarray(ch.imu.dv_b), {nm: sensors[nm] for nm in names})
+        if tracer is not None:
+            tracer.add_chunk(fr.kept(), ch.truth, pending["logs"])
         if out_dir is not None:
             write_npz(out_dir / f"chunk-{i:06d}.npz", _output_arrays(fr.kept(), pending["logs"]),
                       "streamed run output (--output-dir)")
@@ -182,4 +189,4 @@ def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None
     metrics.update(usage.metrics())
     metrics["completed"] = float(res.ok)
     return RunOutcome(filter_spec, scenario.name, chunks.seed, res, metrics,
-                      nonfinite(source, metrics))
+                      nonfinite(source, metrics), None if tracer is None else tracer.trace())

@@ -32,7 +32,10 @@ ALLOWED = {
     # a simulated log as a run source (context, initial error): whole or streamed
     "simsource": {"filters", "sim", "nav"},
     # a run on a scenario simulated chunk by chunk (under experiment, which dispatches to it)
-    "streamrun": {"simsource", "runpath", "filters", "sim", "metrics", "metrics_rscale"},
+    "streamrun": {"simsource", "runpath", "filters", "sim", "metrics", "metrics_rscale",
+                  "streamtrace"},
+    # what a streamed run keeps for its figures (errors of the kept rows, thinned events)
+    "streamtrace": {"filters", "metrics"},
     "align": {"runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "metrics_rscale", "report", "nav"},
     "realdata": {"runpath", "filters", "sim", "metrics", "metrics_rscale", "report", "nav", "plots"},
     "tuning": {"runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "metrics_rscale", "report", "nav", "plots",

@@ -302,28 +302,53 @@ def _json_summary(df, scn, filters, seeds) -> dict:
 
 def _plot_first_seed(scn, filters, seed, args) -> None:
     from fuzzynav import plots
-    from fuzzynav.experiment import run_on_log
-    from fuzzynav.filters.named import parse_filter_spec
-    from fuzzynav.metrics import errors_vs_trajectory
-    from fuzzynav.sim.sensor_log import simulate
 
-    log = simulate(scn, seed, args.cache)
-    outs = {}
-    for f in filters:
-        name, own = parse_filter_spec(f)
-        outs[f] = run_on_log(log, name, {**filter_options(args), **own})
-    errs = {f: errors_vs_trajectory(o.result, log.truth) for f, o in outs.items()}
+    streaming = streaming_options(args, scn.imu.rate_hz)
+    traces = (_streamed_traces if streaming else _whole_traces)(scn, filters, seed, args,
+                                                                streaming)
     out_dir = Path(args.plot)
     stem = safe_stem(scn.name)
-    path = plots.save(plots.error_curves(errs, f"{scn.name}, seed {seed}"),
-                      out_dir / f"{stem}_errors.png")
+    errs = {f: errors for f, (errors, _) in traces.items()}
+    rate = streaming.get("output_rate_hz")
+    title = f"{scn.name}, seed {seed}" + (f" ({rate:g}-Hz output)" if rate else "")
+    path = plots.save(plots.error_curves(errs, title), out_dir / f"{stem}_errors.png")
     print(f"wrote {path}")
     series = {}
-    for f, o in outs.items():
-        for sensor, ev in o.result.events.items():
+    for f, (_, events) in traces.items():
+        for sensor, ev in events.items():
             for name in ev.diag_names:
                 series[f"{f} {sensor} {name}"] = (ev.time_s, ev.diagnostic(name))
     if series:
         path = plots.save(plots.adaptation_curves(series, "adaptation"),
                           out_dir / f"{stem}_adaptation.png")
         print(f"wrote {path}")
+
+
+def _whole_traces(scn, filters, seed, args, _streaming) -> dict:
+    """Filter -> (errors, event logs) of runs on the whole simulated log."""
+    from fuzzynav.experiment import run_on_log
+    from fuzzynav.filters.named import parse_filter_spec
+    from fuzzynav.metrics import errors_vs_trajectory
+    from fuzzynav.sim.sensor_log import simulate
+
+    log = simulate(scn, seed, args.cache)
+    out = {}
+    for f in filters:
+        name, own = parse_filter_spec(f)
+        res = run_on_log(log, name, {**filter_options(args), **own}).result
+        out[f] = (errors_vs_trajectory(res, log.truth), res.events)
+    return out
+
+
+def _streamed_traces(scn, filters, seed, args, streaming) -> dict:
+    """Filter -> (errors, event logs) of streamed runs, at their output rate
+    (:class:`fuzzynav.streamtrace.StreamTrace`): nothing of the run's length is held."""
+    from fuzzynav.experiment import streamed_run
+
+    kw = {k: v for k, v in streaming.items() if k != "output_dir"}  # written by the table's run
+    out = {}
+    for f in filters:
+        trace = streamed_run(scn, seed, f, filter_options(args), args.t_start,
+                          {**kw, "trace": True}, args.cache).trace
+        out[f] = (trace.errors, trace.events)
+    return out
