@@ -44,10 +44,28 @@ def ci_cell(values, fmt: str = ".4f", half_fmt: str | None = None) -> str:
     return f"{est.mean:{fmt}} ± {est.half_width:{half_fmt or fmt}}"
 
 
-def diff_cell(est, fmt: str = "+.3f") -> str:
-    """A paired difference ``est`` (:func:`~fuzzynav.metrics.mean_ci` of the per-run
-    differences) as ``"+m [lo, hi]"``, every number in the format spec ``fmt``."""
-    return f"{est.mean:{fmt}} [{est.lo:{fmt}}, {est.hi:{fmt}}]"
+def diff_cell(est, fmt: str = "+.3f", bound_fmt: str | None = None) -> str:
+    """A paired difference as ``"+m [lo, hi]"``: its mean and 95 % interval.
+
+    Parameters
+    ----------
+    est : Estimate
+        :func:`~fuzzynav.metrics.mean_ci` of the per-run differences (``mean``, ``lo``,
+        ``hi``).
+    fmt : str
+        Format spec of the mean (``"+.3f"``, ``"+.3g"``, ...); give the sign (``+``) so
+        that a gain and a loss read apart.
+    bound_fmt : str, optional
+        Format spec of the two bounds (default ``fmt``), e.g. fewer significant digits
+        than the mean: ``diff_cell(est, "+.3g", "+.2g")``.
+
+    Returns
+    -------
+    str
+        The cell, whatever ``est.n`` (callers that print one pair bare test it).
+    """
+    bound_fmt = bound_fmt or fmt
+    return f"{est.mean:{fmt}} [{est.lo:{bound_fmt}}, {est.hi:{bound_fmt}}]"
 
 
 def improvement_cell(base, cand) -> str:

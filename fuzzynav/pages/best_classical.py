@@ -18,6 +18,7 @@ from fuzzynav.pages import science_split_tunings as st
 from fuzzynav.pages.science_sections import MARKS, designs_lines
 # re-exported: the pages import it from here
 from fuzzynav.pages.science_split_tunings import provenance_score
+from fuzzynav.report import diff_cell
 
 __all__ = ["paper_lines", "provenance_score", "paired_terms_lines"]
 
@@ -107,8 +108,7 @@ def paired_terms_lines(df: pd.DataFrame, scenarios, design: str, best: str, term
         for _, col, fmt in terms:
             est = sr.paired(df.assign(score=df[col]), s, design, best)
             n = max(n, est.n)
-            cells.append(f"{est.mean:+{fmt}} [{est.lo:+{fmt}}, {est.hi:+{fmt}}] "
-                         f"{MARKS[sr.verdict(est)]}")
+            cells.append(f"{diff_cell(est, '+' + fmt)} {MARKS[sr.verdict(est)]}")
         note = f" ({notes[s]})" if s in notes else ""
         lines.append(f"| `{s}`{note} | {n} | " + " | ".join(cells) + " |")
     return lines
