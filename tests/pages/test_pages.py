@@ -4,6 +4,7 @@ import importlib
 import math
 
 import numpy as np
+import pandas as pd
 import pytest
 from scipy import stats
 
@@ -11,7 +12,7 @@ from fuzzynav.cli import main
 from fuzzynav.pages.common import markers, replace_section
 from fuzzynav.pages.page_registry import PAGES
 from fuzzynav.metrics import Estimate, mean_ci
-from fuzzynav.report import ci_cell, diff_cell, improvement_cell
+from fuzzynav.report import ci_cell, diff_cell, improvement_cell, pooled_rows
 
 from ..conftest import ROOT
 
@@ -52,6 +53,24 @@ def test_diff_cell_in_the_formats_of_its_callers(est, fmts, expected):
     assert diff_cell(est, *fmts) == expected
     if len(fmts) == 1:  # no bound format: the bounds take the mean's
         assert diff_cell(est, fmts[0], fmts[0]) == expected
+
+
+def test_pooled_rows_by_hand_on_three_trajectories():
+    # the fuzzy filter halves the EKF's error on 1 and 2 and equals it on 6: over all three
+    # 100 (1 - 9/12) = +25 %; without 6 the ratio is 1/2 on every run, so every bootstrap
+    # resample gives +50 % too.  Half widths t(0.975, n-1) sd / sqrt(n): EKF (2, 4, 6)
+    # 4.3027 * 2 / sqrt(3) = 4.97, (2, 4) 12.706 * sqrt(2) / sqrt(2) = 12.71; fuzzy (1, 2, 6)
+    # 4.3027 * sqrt(7) / sqrt(3) = 6.57, (1, 2) 12.706 * sqrt(0.5) / sqrt(2) = 6.35
+    piv = pd.DataFrame({"ekf": [2.0, 4.0, 6.0], "fuzzy": [1.0, 2.0, 6.0]},
+                       index=pd.Index([1, 2, 6], name="trajectory"))
+    ekf, fuzzy = pooled_rows(piv, ["ekf", "fuzzy"], "ekf", piv.index != 6, label=str.upper)
+    assert ekf == ["EKF", "2.00", "4.00", "6.00", "4.00 ± 4.97", "", "3.00 ± 12.71", ""]
+    assert fuzzy[:5] == ["FUZZY", "1.00", "2.00", "6.00", "3.00 ± 6.57"]
+    assert fuzzy[5].startswith("+25.0 % [")
+    assert fuzzy[6:] == ["1.50 ± 6.35", "+50.0 % [+50.0, +50.0]"]
+    # no subset: the pooled cells over all runs only, in the format asked for
+    assert pooled_rows(piv, ["fuzzy"], "ekf", fmt=".1f") == [
+        ["fuzzy", "1.0", "2.0", "6.0", "3.0 ± 6.6", fuzzy[5]]]
 
 def test_improvement_cell_from_one_pair_is_the_bare_change():
     assert improvement_cell([2.0], [1.5]) == "+25.0 %"

@@ -23,7 +23,7 @@ from fuzzynav.errors import FuzzynavError
 from fuzzynav.experiment import monte_carlo, run_on_log
 from fuzzynav.metrics import errors_vs_trajectory
 from fuzzynav.pages.common import machine
-from fuzzynav.report import ci_cell, improvement_cell, render
+from fuzzynav.report import ci_cell, improvement_cell, pooled_rows, render
 from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.sim.scenario import load_scenario
 
@@ -120,14 +120,8 @@ def real_table(df, key="rms_pos_h_m") -> str:
     piv = df.pivot_table(index="trajectory", columns="spec", values=key)
     head = ["filter"] + [f"{t}" for t in piv.index] + ["all 8", "vs EKF (all 8)",
                                                        "1-5, 7, 8", "vs EKF (without 6)"]
-    keep = piv.index != 6
-    rows = []
-    for spec in REAL_FILTERS:
-        col = piv[spec]
-        rows.append([spec.split("@")[0]] + [f"{v:.2f}" for v in col]
-                    + [_cell(col), "" if spec == "ekf" else _imp(piv["ekf"], col),
-                       _cell(col[keep]), "" if spec == "ekf" else
-                       _imp(piv["ekf"][keep], col[keep])])
+    rows = pooled_rows(piv, REAL_FILTERS, "ekf", piv.index != 6,
+                       label=lambda spec: spec.split("@")[0])
     return render(head, rows, markdown=True)
 
 
