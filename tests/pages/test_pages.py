@@ -9,7 +9,7 @@ import pytest
 from scipy import stats
 
 from fuzzynav.cli import main
-from fuzzynav.pages.common import markers, replace_section
+from fuzzynav.pages.common import markers, replace_section, stopped_early
 from fuzzynav.pages.page_registry import PAGES
 from fuzzynav.metrics import Estimate, mean_ci
 from fuzzynav.report import ci_cell, diff_cell, improvement_cell, pooled_rows
@@ -71,6 +71,12 @@ def test_pooled_rows_by_hand_on_three_trajectories():
     # no subset: the pooled cells over all runs only, in the format asked for
     assert pooled_rows(piv, ["fuzzy"], "ekf", fmt=".1f") == [
         ["fuzzy", "1.0", "2.0", "6.0", "3.0 ± 6.6", fuzzy[5]]]
+
+
+def test_stopped_early_counts_per_scenario_zeros_included():
+    dfs = {"a": pd.DataFrame({"completed": [1.0, 0.4, 0.99, 1.0]}),
+           "b": pd.DataFrame({"completed": [1.0, 1.0]})}
+    assert stopped_early(dfs) == "a 2, b 0"
 
 def test_improvement_cell_from_one_pair_is_the_bare_change():
     assert improvement_cell([2.0], [1.5]) == "+25.0 %"
