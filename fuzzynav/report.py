@@ -7,7 +7,7 @@ import pandas as pd
 from fuzzynav.metrics import improvement_ci, mean_ci
 
 __all__ = ["NAV_ROWS", "ci_cell", "diff_cell", "improvement_cell", "comparison_rows",
-           "scenario_rows", "render"]
+           "pooled_rows", "scenario_rows", "render"]
 
 #: (row label, metric key) in the order of the papers' tables
 NAV_ROWS = (
@@ -44,10 +44,28 @@ def ci_cell(values, fmt: str = ".4f", half_fmt: str | None = None) -> str:
     return f"{est.mean:{fmt}} ± {est.half_width:{half_fmt or fmt}}"
 
 
-def diff_cell(est, fmt: str = "+.3f") -> str:
-    """A paired difference ``est`` (:func:`~fuzzynav.metrics.mean_ci` of the per-run
-    differences) as ``"+m [lo, hi]"``, every number in the format spec ``fmt``."""
-    return f"{est.mean:{fmt}} [{est.lo:{fmt}}, {est.hi:{fmt}}]"
+def diff_cell(est, fmt: str = "+.3f", bound_fmt: str | None = None) -> str:
+    """A paired difference as ``"+m [lo, hi]"``: its mean and 95 % interval.
+
+    Parameters
+    ----------
+    est : Estimate
+        :func:`~fuzzynav.metrics.mean_ci` of the per-run differences (``mean``, ``lo``,
+        ``hi``).
+    fmt : str
+        Format spec of the mean (``"+.3f"``, ``"+.3g"``, ...); give the sign (``+``) so
+        that a gain and a loss read apart.
+    bound_fmt : str, optional
+        Format spec of the two bounds (default ``fmt``), e.g. fewer significant digits
+        than the mean: ``diff_cell(est, "+.3g", "+.2g")``.
+
+    Returns
+    -------
+    str
+        The cell, whatever ``est.n`` (callers that print one pair bare test it).
+    """
+    bound_fmt = bound_fmt or fmt
+    return f"{est.mean:{fmt}} [{est.lo:{bound_fmt}}, {est.hi:{bound_fmt}}]"
 
 
 def improvement_cell(base, cand) -> str:
@@ -59,6 +77,43 @@ def improvement_cell(base, cand) -> str:
         return f"{imp.mean:+.1f} %"
     return f"{imp.mean:+.1f} % [{imp.lo:+.1f}, {imp.hi:+.1f}]"
 
+
+
+def pooled_rows(piv: pd.DataFrame, filters, baseline: str, subset=None, *,
+                fmt: str = ".2f", label=str) -> list:
+    """Rows of a table of per-run values, pooled, with the paired change against a baseline.
+
+    Parameters
+    ----------
+    piv : DataFrame
+        One row per run (trajectory, seed), one column per filter.
+    filters : sequence of str
+        The columns of ``piv`` given a row, in order.
+    baseline : str
+        The column the changes are against (its own change cells are empty).
+    subset : array_like of bool, optional
+        A mask over ``piv``'s rows (e.g. all but an outlier run): the pooled value and the
+        change again on those runs alone.
+    fmt : str
+        Format spec of the per-run values and of the pooled ``mean ± half width``.
+    label : callable
+        Filter column -> the name printed first in its row.
+
+    Returns
+    -------
+    list of list
+        Per filter: its label, one value per row of ``piv``, then :func:`ci_cell` and
+        :func:`improvement_cell` over all runs, and over ``subset`` if given.
+    """
+    rows = []
+    for f in filters:
+        col = piv[f]
+        cells = [f"{v:{fmt}}" for v in col]
+        for runs in ([slice(None)] if subset is None else [slice(None), subset]):
+            cells += [ci_cell(col[runs], fmt),
+                      "" if f == baseline else improvement_cell(piv[baseline][runs], col[runs])]
+        rows.append([label(f), *cells])
+    return rows
 
 def comparison_rows(df: pd.DataFrame, filters, baseline=None, rows=NAV_ROWS, claims=None):
     """Rows of a comparison table: label, one cell per filter, improvements, claims.

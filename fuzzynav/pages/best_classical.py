@@ -18,8 +18,10 @@ from fuzzynav.pages import science_split_tunings as st
 from fuzzynav.pages.science_sections import MARKS, designs_lines
 # re-exported: the pages import it from here
 from fuzzynav.pages.science_split_tunings import provenance_score
+from fuzzynav.report import diff_cell
 
-__all__ = ["paper_lines", "provenance_score", "paired_terms_lines"]
+__all__ = ["paper_lines", "provenance_score", "paired_terms_lines", "labelled",
+           "further_runs"]
 
 
 def paper_lines(dfs: dict, *, designs, pool, params, metrics, weights=None,
@@ -107,8 +109,7 @@ def paired_terms_lines(df: pd.DataFrame, scenarios, design: str, best: str, term
         for _, col, fmt in terms:
             est = sr.paired(df.assign(score=df[col]), s, design, best)
             n = max(n, est.n)
-            cells.append(f"{est.mean:+{fmt}} [{est.lo:+{fmt}}, {est.hi:+{fmt}}] "
-                         f"{MARKS[sr.verdict(est)]}")
+            cells.append(f"{diff_cell(est, '+' + fmt)} {MARKS[sr.verdict(est)]}")
         note = f" ({notes[s]})" if s in notes else ""
         lines.append(f"| `{s}`{note} | {n} | " + " | ".join(cells) + " |")
     return lines
@@ -187,3 +188,46 @@ def paper_tunings_lines(dfs: dict, run, score, *, filters: dict, designs, pool, 
     return st.tunings_section(scores, list(dfs), list(designs), intro=intro, unit=unit,
                               best=best, plain=scores, plain_ref=plain_ref,
                               spread_filters=tuned, labels=labels, train=train)
+
+
+def labelled(df: pd.DataFrame, specs: dict) -> pd.DataFrame:
+    """``df`` with the specs of its ``filter`` column replaced by their labels.
+
+    Parameters
+    ----------
+    df : DataFrame
+        Runs (:func:`fuzzynav.experiment.monte_carlo`), ``filter`` the specs.
+    specs : dict
+        Label -> spec; a filter that is no spec of it keeps its name.
+
+    Returns
+    -------
+    DataFrame
+        A copy of ``df``.
+    """
+    back = {v: k for k, v in specs.items()}
+    return df.assign(filter=df["filter"].map(lambda f: back.get(f, f)))
+
+
+def further_runs(seeds: dict, cache):
+    """The ``run`` of :func:`paper_tunings_lines` for a page of simulated scenarios.
+
+    Parameters
+    ----------
+    seeds : dict
+        Scenario -> the page's seeds on it (the keys in the page's order).
+    cache : Path
+        Simulation cache directory.
+
+    Returns
+    -------
+    callable
+        ``run(specs)`` (label -> spec) -> scenario -> :func:`fuzzynav.experiment.
+        monte_carlo` of those specs on its seeds, ``filter`` the labels (:func:`labelled`).
+    """
+    from fuzzynav.experiment import monte_carlo
+
+    def run(specs):
+        return {s: labelled(monte_carlo(s, list(specs.values()), seeds[s], cache_dir=cache),
+                            specs) for s in seeds}
+    return run

@@ -1,4 +1,5 @@
-"""What every docs page generator shares: the machine line and the atomic section rewrite."""
+"""What every docs page generator shares: the machine line, the count of runs that
+stopped early and the atomic section rewrite."""
 from __future__ import annotations
 
 import datetime as _dt
@@ -56,6 +57,12 @@ def machine() -> str:
             f"numpy {numpy.__version__}, numba {numba.__version__}; "
             f"{_dt.date.today().isoformat()}")
 
+
+
+def stopped_early(dfs: dict) -> str:
+    """``"name n, ..."``: per scenario (``dfs``: name -> runs with ``completed``), how many
+    runs stopped before the end (``completed`` < 1), zeros included."""
+    return ", ".join(f"{k} {int((df['completed'] < 1).sum())}" for k, df in dfs.items())
 
 def markers(marker: str) -> tuple[str, str]:
     """The begin and end comment lines of the marked section ``marker``."""

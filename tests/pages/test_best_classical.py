@@ -9,7 +9,7 @@ from scipy import stats
 
 from fuzzynav.errors import InputFileError
 from fuzzynav.pages import scores as sr
-from fuzzynav.pages.best_classical import paper_lines, provenance_score
+from fuzzynav.pages.best_classical import further_runs, labelled, paper_lines, provenance_score
 from fuzzynav.pages.science_sections import designs_lines
 
 
@@ -95,3 +95,28 @@ def test_paper_lines_compare_each_design_with_the_training_choice(tmp_path):
     assert f"| `s1` | b-tuned | {m:+.3f} [{lo:+.3f}, {hi:+.3f}] loss |" in lines
     with pytest.raises(InputFileError, match="provenance"):
         provenance_score(params)
+
+
+def test_labelled_names_the_specs_and_keeps_other_filters():
+    df = pd.DataFrame({"filter": ["ekf", "fakf@r.json", "vb"], "seed": [0, 0, 0]})
+    out = labelled(df, {"EKF": "ekf", "FAKF, tuned": "fakf@r.json"})
+    assert list(out["filter"]) == ["EKF", "FAKF, tuned", "vb"]
+    assert list(df["filter"]) == ["ekf", "fakf@r.json", "vb"]  # a copy
+
+
+def test_further_runs_runs_each_scenario_on_its_seeds_under_the_labels(monkeypatch):
+    import fuzzynav.experiment as ex
+
+    calls = []
+
+    def fake(scenario, filters, seeds, cache_dir=None):
+        calls.append((scenario, list(filters), list(seeds), cache_dir))
+        return pd.DataFrame([{"filter": f, "seed": s} for f in filters for s in seeds])
+
+    monkeypatch.setattr(ex, "monte_carlo", fake)
+    run = further_runs({"b": [3, 4], "a": range(7, 8)}, "CACHE")
+    out = run({"tuned k": "ekf-tuned@p_t1.json"})
+    assert list(out) == ["b", "a"]  # the page's order
+    assert calls == [("b", ["ekf-tuned@p_t1.json"], [3, 4], "CACHE"),
+                     ("a", ["ekf-tuned@p_t1.json"], [7], "CACHE")]
+    assert list(out["b"]["filter"]) == ["tuned k", "tuned k"]

@@ -4,14 +4,15 @@ import importlib
 import math
 
 import numpy as np
+import pandas as pd
 import pytest
 from scipy import stats
 
 from fuzzynav.cli import main
-from fuzzynav.pages.common import markers, replace_section
+from fuzzynav.pages.common import markers, replace_section, stopped_early
 from fuzzynav.pages.page_registry import PAGES
-from fuzzynav.metrics import mean_ci
-from fuzzynav.report import ci_cell, diff_cell, improvement_cell
+from fuzzynav.metrics import Estimate, mean_ci
+from fuzzynav.report import ci_cell, diff_cell, improvement_cell, pooled_rows
 
 from ..conftest import ROOT
 
@@ -33,6 +34,49 @@ def test_diff_cell_is_the_signed_mean_and_interval_by_hand():
     assert diff_cell(mean_ci(np.array(d))) == f"+1.000 [{1 - half:+.3f}, {1 + half:+.3f}]"
     assert diff_cell(mean_ci(np.array(d)), "+.1f") == "+1.0 [-2.4, +4.4]"
 
+
+
+@pytest.mark.parametrize("est, fmts, expected", [
+    # paper001's paired table: three significant digits in the mean, two in the bounds
+    # (0.0297 -> 0.030 -> "0.03": the g format drops trailing zeros)
+    (Estimate(0.01234, -0.0051, 0.0297, 5), ("+.3g", "+.2g"), "+0.0123 [-0.0051, +0.03]"),
+    (Estimate(-0.857, -17.7, 16.0, 2), ("+.3g", "+.2g"), "-0.857 [-18, +16]"),
+    (Estimate(1234.5, 5.0, 2500.0, 3), ("+.3g", "+.2g"), "+1.23e+03 [+5, +2.5e+03]"),
+    # paper002's terms and the best-classical table: one format, "+" and the term's own
+    (Estimate(-0.42, -2.6494, 1.8091, 5), ("+.3f",), "-0.420 [-2.649, +1.809]"),
+    (Estimate(0.04, -0.83, 0.91, 12), ("+.1f",), "+0.0 [-0.8, +0.9]"),
+    (Estimate(-0.4519, -1.2871, 0.4333, 12), ("+.2f",), "-0.45 [-1.29, +0.43]"),
+    # the default (science pages, paper004): a bound that rounds to zero keeps its sign
+    (Estimate(0.0, -0.0004, 0.0004, 4), (), "+0.000 [-0.000, +0.000]"),
+])
+def test_diff_cell_in_the_formats_of_its_callers(est, fmts, expected):
+    assert diff_cell(est, *fmts) == expected
+    if len(fmts) == 1:  # no bound format: the bounds take the mean's
+        assert diff_cell(est, fmts[0], fmts[0]) == expected
+
+
+def test_pooled_rows_by_hand_on_three_trajectories():
+    # the fuzzy filter halves the EKF's error on 1 and 2 and equals it on 6: over all three
+    # 100 (1 - 9/12) = +25 %; without 6 the ratio is 1/2 on every run, so every bootstrap
+    # resample gives +50 % too.  Half widths t(0.975, n-1) sd / sqrt(n): EKF (2, 4, 6)
+    # 4.3027 * 2 / sqrt(3) = 4.97, (2, 4) 12.706 * sqrt(2) / sqrt(2) = 12.71; fuzzy (1, 2, 6)
+    # 4.3027 * sqrt(7) / sqrt(3) = 6.57, (1, 2) 12.706 * sqrt(0.5) / sqrt(2) = 6.35
+    piv = pd.DataFrame({"ekf": [2.0, 4.0, 6.0], "fuzzy": [1.0, 2.0, 6.0]},
+                       index=pd.Index([1, 2, 6], name="trajectory"))
+    ekf, fuzzy = pooled_rows(piv, ["ekf", "fuzzy"], "ekf", piv.index != 6, label=str.upper)
+    assert ekf == ["EKF", "2.00", "4.00", "6.00", "4.00 ± 4.97", "", "3.00 ± 12.71", ""]
+    assert fuzzy[:5] == ["FUZZY", "1.00", "2.00", "6.00", "3.00 ± 6.57"]
+    assert fuzzy[5].startswith("+25.0 % [")
+    assert fuzzy[6:] == ["1.50 ± 6.35", "+50.0 % [+50.0, +50.0]"]
+    # no subset: the pooled cells over all runs only, in the format asked for
+    assert pooled_rows(piv, ["fuzzy"], "ekf", fmt=".1f") == [
+        ["fuzzy", "1.0", "2.0", "6.0", "3.0 ± 6.6", fuzzy[5]]]
+
+
+def test_stopped_early_counts_per_scenario_zeros_included():
+    dfs = {"a": pd.DataFrame({"completed": [1.0, 0.4, 0.99, 1.0]}),
+           "b": pd.DataFrame({"completed": [1.0, 1.0]})}
+    assert stopped_early(dfs) == "a 2, b 0"
 
 def test_improvement_cell_from_one_pair_is_the_bare_change():
     assert improvement_cell([2.0], [1.5]) == "+25.0 %"

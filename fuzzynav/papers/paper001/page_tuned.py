@@ -14,7 +14,7 @@ import pandas as pd
 from fuzzynav.metrics import mean_ci
 from fuzzynav.metrics_rscale import OFF_SCALE
 from fuzzynav.pages.best_classical import paper_lines, provenance_score
-from fuzzynav.report import render
+from fuzzynav.report import diff_cell, render
 
 __all__ = ["BASELINES", "TUNED_FILTERS", "PAIRS", "paired_table", "usage_table",
            "tuned_lines", "bank_vs_federated"]
@@ -67,7 +67,7 @@ USAGE = (("median_calm", "{:.2f}"), ("median_zone", "{:.2f}"), ("off_calm", "{:.
 def _paired(df, a, b, key) -> str:
     piv = df.pivot_table(index="seed", columns="filter", values=key)
     est = mean_ci((piv[a] - piv[b]).to_numpy())
-    return f"{est.mean:+.3g} [{est.lo:+.2g}, {est.hi:+.2g}]"
+    return diff_cell(est, "+.3g", "+.2g")
 
 
 def paired_table(dfs, filters) -> str:

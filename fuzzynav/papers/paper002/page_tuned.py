@@ -14,6 +14,7 @@ from fuzzynav.align.tune import objective
 from fuzzynav.pages import scores as sr
 from fuzzynav.pages.best_classical import paired_terms_lines
 from fuzzynav.pages.common import REPO_ROOT
+from fuzzynav.report import diff_cell
 
 __all__ = ["FUZZY", "CLASSICAL", "TUNED", "BASELINES", "FUZZY_STUDY", "HELD_OUT", "TERMS", "frame",
            "verdicts", "section", "finding"]
@@ -187,4 +188,4 @@ def finding(runs: dict) -> str:
 
 def _diff(df, scenario, column, fmt) -> str:
     est = sr.paired(df.assign(score=df[column]), scenario, FUZZY, CLASSICAL)
-    return f"{est.mean:+{fmt}} [{est.lo:+{fmt}}, {est.hi:+{fmt}}]"
+    return diff_cell(est, "+" + fmt)

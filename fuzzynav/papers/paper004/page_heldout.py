@@ -24,7 +24,7 @@ from fuzzynav.metrics import mean_ci
 from fuzzynav.pages.common import REPO_ROOT as ROOT
 from fuzzynav.pages.science_splits import AKIT_FOLDS, SPLIT_METRICS, split_frame
 from fuzzynav.realdata.dataspec import parse_recording_spec
-from fuzzynav.report import ci_cell, diff_cell, improvement_cell, render
+from fuzzynav.report import diff_cell, improvement_cell, pooled_rows, render
 
 TUNED_LABEL = "fuzzy R-scaling (tuned on the other four)"
 APSO_LABEL = "APSO Q/R (tuned on the other four)"
@@ -66,28 +66,14 @@ def with_best(df: pd.DataFrame) -> tuple:
     return pd.concat([df, *rows], ignore_index=True), best
 
 
-def _cell(values) -> str:
-    return ci_cell(values, ".2f")
-
-
-_imp = improvement_cell
-
-
 def heldout_table(df: pd.DataFrame, key: str = "rms_pos_h_m", filters=None) -> str:
     """Per held-out trajectory, pooled over the eight (mean ± CI) and without 6, with the
     paired change against the EKF on the same trajectories (positive = smaller error)."""
     piv = df.pivot_table(index="trajectory", columns="filter", values=key)
     filters = filters or list(dict.fromkeys(df["filter"]))
-    keep = piv.index != 6
     head = ["filter"] + [str(t) for t in piv.index] + [
         f"all {len(piv)}", "vs EKF (all)", "without 6", "vs EKF (without 6)"]
-    rows = []
-    for f in filters:
-        col = piv[f]
-        rows.append([f] + [f"{v:.2f}" for v in col] + [
-            _cell(col), "" if f == "ekf" else _imp(piv["ekf"], col),
-            _cell(col[keep]), "" if f == "ekf" else _imp(piv["ekf"][keep], col[keep])])
-    return render(head, rows, markdown=True)
+    return render(head, pooled_rows(piv, filters, "ekf", piv.index != 6), markdown=True)
 
 
 def fold_table(df: pd.DataFrame, key: str = "rms_pos_h_m") -> str:
@@ -97,7 +83,8 @@ def fold_table(df: pd.DataFrame, key: str = "rms_pos_h_m") -> str:
         piv = sub.pivot_table(index="trajectory", columns="filter", values=key)
         for f in piv.columns:
             if f != "ekf":
-                rows.append([fold, ",".join(map(str, piv.index)), f, _imp(piv["ekf"], piv[f])])
+                rows.append([fold, ",".join(map(str, piv.index)), f,
+                             improvement_cell(piv["ekf"], piv[f])])
     return render(["fold", "held out", "filter", "vs EKF"], rows, markdown=True)
 
 
@@ -118,7 +105,7 @@ def paired_best(df: pd.DataFrame, key: str = "rms_pos_h_m") -> list:
         est = mean_ci((piv[TUNED_LABEL] - piv[BEST_LABEL]).to_numpy())
         ci = diff_cell(est) if est.n > 1 else f"{est.mean:+.3f}"
         rows.append([fold, ",".join(map(str, piv.index)), ci,
-                     _imp(piv[BEST_LABEL], piv[TUNED_LABEL]), str(est.n)])
+                     improvement_cell(piv[BEST_LABEL], piv[TUNED_LABEL]), str(est.n)])
     return rows
 
 
