@@ -58,11 +58,11 @@ def machine() -> str:
             f"{_dt.date.today().isoformat()}")
 
 
-
 def stopped_early(dfs: dict) -> str:
     """``"name n, ..."``: per scenario (``dfs``: name -> runs with ``completed``), how many
     runs stopped before the end (``completed`` < 1), zeros included."""
     return ", ".join(f"{k} {int((df['completed'] < 1).sum())}" for k, df in dfs.items())
+
 
 def markers(marker: str) -> tuple[str, str]:
     """The begin and end comment lines of the marked section ``marker``."""
