@@ -1,7 +1,7 @@
 """The figures' data of a streamed run (``fuzzynav run --output-rate HZ --plot DIR``).
 
 :class:`fuzzynav.streamtrace.StreamTrace` against the whole log's run: at the full output
-rate its errors are the whole solution's against the whole truth to the last bit; at a
+rate its errors are the whole solution's against the whole truth (1e-12); at a
 lower rate they are the kept rows', and each sensor's event log is the first epoch of each
 output period of the whole run's event log.  The CLI draws the streamed figures without
 simulating the whole log.
@@ -29,8 +29,12 @@ def test_the_trace_is_the_whole_runs_errors_and_thinned_events(rate):
     got = run_streamed(scn, 1, "fuzzy", chunk_samples=chunk, output_rate_hz=rate,
                        trace=True).trace
     want = errors_vs_trajectory(whole, log.truth)
-    for f in _ERR:
-        np.testing.assert_array_equal(getattr(got.errors, f), getattr(want, f), err_msg=f)
+    # the times are copied; the errors are the same arithmetic on row slices of the truth
+    # (vectorised ufuncs may round a slice's tail differently on another CPU): 1e-12
+    np.testing.assert_array_equal(got.errors.time_s, want.time_s)
+    for f in _ERR[1:]:
+        np.testing.assert_allclose(getattr(got.errors, f), getattr(want, f), rtol=1e-12,
+                                   atol=1e-15, err_msg=f)
     assert got.errors.time_s.size == whole.time_s.size > 10
     assert got.events.keys() == whole.events.keys() == {"gps", "pol"}
     for nm, ev in whole.events.items():
