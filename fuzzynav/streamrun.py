@@ -179,10 +179,11 @@ def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None
         usage.add_chunk(sensors)
         fr.feed_arrays(np.ascontiguousarray(ch.imu.time_s), np.ascontiguousarray(ch.imu.dtheta_b),
                        np.ascontiguousarray(ch.imu.dv_b), {nm: sensors[nm] for nm in names})
+        kept = fr.kept() if tracer is not None or out_dir is not None else None
         if tracer is not None:
-            tracer.add_chunk(fr.kept(), ch.truth, pending["logs"])
+            tracer.add_chunk(kept, ch.truth, pending["logs"])
         if out_dir is not None:
-            write_npz(out_dir / f"chunk-{i:06d}.npz", _output_arrays(fr.kept(), pending["logs"]),
+            write_npz(out_dir / f"chunk-{i:06d}.npz", _output_arrays(kept, pending["logs"]),
                       "streamed run output (--output-dir)")
     res = fr.result()
     metrics = scorer.metrics()

@@ -32,7 +32,7 @@ __all__ = ["BYTES_PER_IMU_SAMPLE", "BYTES_PER_BLOCK_SAMPLE", "BYTES_PER_EPOCH_CO
            "check_run_size", "BYTES_PER_CHUNK_SAMPLE", "BYTES_PER_STREAM_EPOCH",
            "BYTES_PER_OUTPUT_ROW", "DEFAULT_CHUNK_SAMPLES", "whole_estimate",
            "streamed_estimate", "check_whole_run", "BYTES_PER_TRUTH_SAMPLE",
-           "TRUTH_STORE_BYTES", "stored_truth_bytes"]
+           "TRUTH_STORE_BYTES", "stored_truth_bytes", "keeps_truth"]
 
 #: bytes held per IMU sample of the whole run through simulation and filtering, beyond the
 #: generator's block (marginal tracemalloc peaks of runs longer than a block: paper003
@@ -141,12 +141,9 @@ def streamed_estimate(duration_s: float, imu_rate_hz: float, sensors: dict,
     whole run holds them), the truth kept from the first pass when it fits
     :data:`TRUTH_STORE_BYTES` and the kept outputs (:data:`BYTES_PER_OUTPUT_ROW` per row
     at ``output_rate_hz``)."""
-    from fuzzynav.sim.trajectory import BLOCK_SAMPLES
-
     n_imu = duration_s * imu_rate_hz
     need = min(n_imu, chunk_samples) * BYTES_PER_CHUNK_SAMPLE
-    if (chunk_samples <= BLOCK_SAMPLES and stored_truth_bytes(n_imu) <= TRUTH_STORE_BYTES
-            and any(not hasattr(sp, "stream") for sp in sensors.values())):
+    if keeps_truth(n_imu, chunk_samples, sensors):
         need += stored_truth_bytes(n_imu)
     for sp in sensors.values():
         epochs = duration_s * sp.rate_hz
@@ -158,6 +155,20 @@ def streamed_estimate(duration_s: float, imu_rate_hz: float, sensors: dict,
 def stored_truth_bytes(n_samples: float) -> float:
     """Bytes of the truth of ``n_samples`` increments (``n_samples + 1`` samples)."""
     return (n_samples + 1) * BYTES_PER_TRUTH_SAMPLE
+
+
+def keeps_truth(n_samples: float, chunk_samples: float, sensors: dict,
+                limit: float | None = None) -> bool:
+    """Whether a streamed run keeps its first trajectory pass for its chunks
+    (:class:`fuzzynav.sim.stream.SimulatedChunks`): there is such a pass (a sensor without
+    a ``stream`` method is simulated whole from it), its blocks are the chunks (a chunk
+    fits one trajectory block) and its truth fits ``limit`` (default
+    :data:`TRUTH_STORE_BYTES`)."""
+    from fuzzynav.sim.trajectory import BLOCK_SAMPLES
+
+    limit = TRUTH_STORE_BYTES if limit is None else limit
+    return (any(not hasattr(sp, "stream") for sp in sensors.values())
+            and chunk_samples <= BLOCK_SAMPLES and stored_truth_bytes(n_samples) <= limit)
 
 
 def _columns(spec) -> int:

@@ -147,7 +147,7 @@ class SimulatedChunks:
 
     def __init__(self, scenario: Scenario, seed: int, chunk_samples: int,
                  truth_store_bytes: float | None = None):
-        from fuzzynav.sim.budget import TRUTH_STORE_BYTES, stored_truth_bytes
+        from fuzzynav.sim.budget import keeps_truth
         from fuzzynav.sim.sensor_log import check_seed, component_rng
 
         if int(chunk_samples) != chunk_samples or chunk_samples < 1:
@@ -169,10 +169,8 @@ class SimulatedChunks:
                 self._streams[name] = spec.stream(self.grid, rng, scenario.start_utc)
             else:
                 whole[name] = (spec, rng)
-        limit = TRUTH_STORE_BYTES if truth_store_bytes is None else truth_store_bytes
-        # the first pass is cut as the chunks only when a chunk fits one trajectory block
-        self._stored = ({} if whole and self.chunk_samples <= BLOCK_SAMPLES
-                        and stored_truth_bytes(n) <= limit else None)
+        keep = keeps_truth(n, self.chunk_samples, scenario.sensors, truth_store_bytes)
+        self._stored = {} if keep else None
         self._whole = self._simulate_whole(whole)
         self._first = self._header = None
         self._used = False
