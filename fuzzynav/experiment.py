@@ -170,10 +170,12 @@ def _navigation_runs(scn, options, cache_dir, t_start_s, outcomes, streaming):
     return of_seed
 
 
-def streamed_run(scn, seed, name, opts, t_start_s, streaming, cache_dir) -> RunOutcome:
+def streamed_run(scn, seed, name, opts, t_start_s, streaming, cache_dir,
+                 setup: FilterSetup | None = None) -> RunOutcome:
     """One run of :func:`fuzzynav.streamrun.run_streamed` (``streaming``: its chunk, output
     rate and output directory, one sub-directory per filter and seed; ``cache_dir``: read,
-    never written)."""
+    never written; ``setup``: a configuration made elsewhere, e.g. on
+    :func:`streamed_source`)."""
     from fuzzynav.fileio import safe_stem
     from fuzzynav.streamrun import DEFAULT_CHUNK_SAMPLES, run_streamed
 
@@ -183,7 +185,18 @@ def streamed_run(scn, seed, name, opts, t_start_s, streaming, cache_dir) -> RunO
         out_dir = f"{out_dir}/{safe_stem(name)}-seed{int(seed)}"
     return run_streamed(scn, seed, name, opts, chunk_samples=kw.pop(
         "chunk_samples", DEFAULT_CHUNK_SAMPLES), t_start_s=t_start_s, output_dir=out_dir,
-        cache_dir=cache_dir, **kw)
+        cache_dir=cache_dir, setup=setup, **kw)
+
+
+def streamed_source(scn, seed: int, chunk_samples: int):
+    """The run source of ``(scn, seed)`` streamed in chunks of ``chunk_samples``
+    (:class:`fuzzynav.streamrun.StreamedSource`): what filters configure themselves from
+    (``sensors``: the first chunk's streams and those simulated whole) without the run's
+    length held; run on by :func:`streamed_run`, which simulates the chunks again."""
+    from fuzzynav.sim.stream import SimulatedChunks
+    from fuzzynav.streamrun import StreamedSource
+
+    return StreamedSource(SimulatedChunks(scn, seed, chunk_samples, truth_store_bytes=0))
 
 
 def _progress(total, enabled, desc):

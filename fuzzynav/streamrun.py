@@ -51,6 +51,11 @@ class StreamedSource(OnSimulatedLog):
         self.log = SimpleNamespace(scenario=chunks.scenario, seed=chunks.seed,
                                    sensors=chunks.header)
 
+    @property
+    def sensors(self) -> dict:
+        """The streams filters configure themselves from (their kinds and ``meta``)."""
+        return self.log.sensors
+
 
 def _output_arrays(result, logs: dict) -> dict:
     """A chunk's kept outputs and event logs as flat ``npz`` arrays."""

@@ -32,7 +32,8 @@ __all__ = ["BYTES_PER_IMU_SAMPLE", "BYTES_PER_BLOCK_SAMPLE", "BYTES_PER_EPOCH_CO
            "check_run_size", "BYTES_PER_CHUNK_SAMPLE", "BYTES_PER_STREAM_EPOCH",
            "BYTES_PER_OUTPUT_ROW", "DEFAULT_CHUNK_SAMPLES", "whole_estimate",
            "streamed_estimate", "check_whole_run", "BYTES_PER_TRUTH_SAMPLE",
-           "TRUTH_STORE_BYTES", "stored_truth_bytes", "keeps_truth"]
+           "TRUTH_STORE_BYTES", "stored_truth_bytes", "keeps_truth",
+           "BYTES_PER_LOGGED_IMU_SAMPLE", "held_log_bytes"]
 
 #: bytes held per IMU sample of the whole run through simulation and filtering, beyond the
 #: generator's block (marginal tracemalloc peaks of runs longer than a block: paper003
@@ -61,6 +62,9 @@ BYTES_PER_TRUTH_SAMPLE = 8 * (1 + 3 * 4 + 4 + 3 * 2)
 #: trajectory again chunk by chunk (:class:`fuzzynav.sim.stream.SimulatedChunks`): 128 MB,
 #: 4 h at 50 Hz
 TRUTH_STORE_BYTES = 128 * 2**20
+#: bytes of one sample of a simulated :class:`~fuzzynav.sim.imu.ImuData`: time, dtheta_b,
+#: dv_b and the applied gyro and accelerometer biases (3 each), float64
+BYTES_PER_LOGGED_IMU_SAMPLE = 8 * (1 + 3 * 4)
 #: IMU samples per chunk of a streamed run when none is given (5 min at 50 Hz)
 DEFAULT_CHUNK_SAMPLES = 15_000
 #: most outage or cloud windows a sensor may have in one run
@@ -171,6 +175,17 @@ def keeps_truth(n_samples: float, chunk_samples: float, sensors: dict,
             and chunk_samples <= BLOCK_SAMPLES and stored_truth_bytes(n_samples) <= limit)
 
 
+def held_log_bytes(duration_s: float, imu_rate_hz: float, sensors: dict) -> float:
+    """Bytes a simulated :class:`~fuzzynav.sim.sensor_log.SensorLog` holds once made: its
+    truth and IMU per sample and its sensors' epochs (:data:`BYTES_PER_EPOCH_COLUMN` per
+    measurement column, an upper bound); what a study holds of each run it keeps in memory
+    (:mod:`fuzzynav.tuning.study_streaming`)."""
+    n_imu = duration_s * imu_rate_hz
+    need = (n_imu + 1) * (BYTES_PER_TRUTH_SAMPLE + BYTES_PER_LOGGED_IMU_SAMPLE)
+    return need + sum(duration_s * sp.rate_hz * _columns(sp) * BYTES_PER_EPOCH_COLUMN
+                      for sp in sensors.values())
+
+
 def _columns(spec) -> int:
     return spec.columns() if hasattr(spec, "columns") else 6
 
@@ -215,10 +230,14 @@ def check_run_size(duration_s: float, imu_rate_hz: float, sensors: dict) -> None
                                      "supported (use longer periods or spells)")
 
 
+#: how to ask for a streamed run, on the command line
+STREAM_HOW = "run it with --output-rate HZ (or --chunk S, --output-dir DIR)"
+
+
 def check_whole_run(duration_s: float, imu_rate_hz: float, sensors: dict,
-                    what: str = "the scenario") -> None:
+                    what: str = "the scenario", how: str = STREAM_HOW) -> None:
     """Refuse to simulate a run whole when :func:`whole_estimate` exceeds
-    :func:`memory_limit`; the message gives the streamed estimate and how to ask for it.
+    :func:`memory_limit`; the message gives the streamed estimate and ``how`` to ask for it.
 
     Raises
     ------
@@ -234,5 +253,4 @@ def check_whole_run(duration_s: float, imu_rate_hz: float, sensors: dict,
                              f"{duration_s * imu_rate_hz:.3g} samples needs "
                              f"~{human_bytes(need)} simulated whole; the limit is "
                              f"{human_bytes(limit)} ({source}). Simulated and filtered in "
-                             f"chunks it needs ~{human_bytes(streamed)}: run it with "
-                             "--output-rate HZ (or --chunk S, --output-dir DIR)")
+                             f"chunks it needs ~{human_bytes(streamed)}: {how}")

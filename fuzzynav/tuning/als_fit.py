@@ -18,11 +18,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from fuzzynav.errors import FuzzynavError
 from fuzzynav.experiment import SimulatedSource, setup_for
 from fuzzynav.filters.als import als_estimate, innovations, steady_gain
 from fuzzynav.filters.named import FilterSetup
 from fuzzynav.runpath import run
 from fuzzynav.nav import earth
+from fuzzynav.sim.sensor_log import SensorLog
 
 __all__ = ["INS_RATE_HZ", "ins_minus_gnss", "axis_r", "run_scales", "als_params"]
 
@@ -75,7 +77,13 @@ def run_scales(log) -> dict:
 
 def als_params(evaluator, runs) -> dict:
     """The ``als`` filter's ``r_<channel>``: geometric mean over the runs of :func:`run_scales`."""
-    per_run = [run_scales(evaluator.log(sc, sd)) for sc, sd in runs]
+    logs = [evaluator.log(sc, sd) for sc, sd in runs]
+    for (sc, sd), log in zip(runs, logs):
+        if not isinstance(log, SensorLog):  # a long run of a [streaming] study
+            raise FuzzynavError(f"als: fits its noise on each training run's whole log; run "
+                                f"({sc}, seed {sd}) is streamed chunk by chunk by the "
+                                "study's [streaming] table (raise its hold_log_mb to hold it)")
+    per_run = [run_scales(log) for log in logs]
     chans = sorted({c for p in per_run for c in p})
     return {f"r_{c}": float(np.exp(np.mean([np.log(max(p[c], 1e-6)) for p in per_run if c in p])))
             for c in chans}

@@ -28,7 +28,7 @@ import numpy as np
 from optuna.trial import TrialState
 
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.experiment import filter_context, run_on_log
+from fuzzynav.experiment import filter_context
 from fuzzynav.fileio import study_output, write_atomic
 from fuzzynav.filters import measurements
 from fuzzynav.filters.baselines import Q_FIELDS, TUNED
@@ -139,12 +139,10 @@ def suggest(trial, space: dict) -> dict:
 # -- scoring ------------------------------------------------------------------------------------
 def run_params(evaluator, name: str, params: dict, scenario: str, seed: int) -> dict:
     """Metrics of tuned filter ``name`` with ``params`` on one run."""
-    log = evaluator.log(scenario, seed)
-    t0 = evaluator.config.t_start_s
     if name not in TUNED:  # a named filter that takes its parameters as options (apso)
-        return run_on_log(log, name, options=params, t_start_s=t0).metrics
-    setup = TUNED[name][1](filter_context(log), params)
-    return run_on_log(log, name, setup=setup, t_start_s=t0).metrics
+        return evaluator.run(scenario, seed, name, options=params).metrics
+    setup = TUNED[name][1](filter_context(evaluator.log(scenario, seed)), params)
+    return evaluator.run(scenario, seed, name, setup=setup).metrics
 
 
 class BaselineObjective(TrialObjective):

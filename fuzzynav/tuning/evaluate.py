@@ -11,7 +11,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from fuzzynav.experiment import run_on_log
 from fuzzynav.filters.named import parse_filter_spec
 from fuzzynav.metrics import mean_ci
 from fuzzynav.runpath import RunOutcome, check_outcomes, nonfinite
@@ -39,7 +38,6 @@ def run_table(evaluator, systems: dict, runs, compare=()) -> pd.DataFrame:
     """
     rows, checked = [], []
     for scenario, seed in runs:
-        log = evaluator.log(scenario, seed)
         base = evaluator.baseline(scenario, seed)
         outcomes = {}
         if systems:
@@ -48,8 +46,7 @@ def run_table(evaluator, systems: dict, runs, compare=()) -> pd.DataFrame:
             try:
                 base_name, own = parse_filter_spec(name)  # NAME@FILE: tuned parameters
                 kw = {"options": own} if own else {}
-                outcomes[name] = run_on_log(log, base_name, t_start_s=evaluator.config.t_start_s,
-                                            **kw).metrics
+                outcomes[name] = evaluator.run(scenario, seed, base_name, **kw).metrics
             except Exception as exc:  # a baseline that cannot run here is reported, not fatal
                 outcomes[name] = {"error": str(exc)}
         source = evaluator.source(scenario, seed)

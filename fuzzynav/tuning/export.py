@@ -127,11 +127,14 @@ def _finite(ratios):
 def _write_expected(cfg, paths: dict, ev: Evaluator) -> None:
     """Run the study's filter (``fakf`` unless ``[objective] filter``) with the files as
     written and record what it gives on the first simulated test run (else training run):
-    the regression test then needs no recording.  A study on recordings alone writes no
+    the regression test then needs no recording.  A study on recordings alone, or whose
+    simulated runs are all too long to hold whole (its ``[streaming]`` table), writes no
     ``expected`` block."""
     from fuzzynav.realdata.dataspec import is_recording_name
+    from fuzzynav.sim.scenario import load_scenario
 
-    simulated = [r for r in cfg.test + cfg.train if not is_recording_name(r[0])]
+    simulated = [r for r in cfg.test + cfg.train if not is_recording_name(r[0])
+                 and (cfg.streaming is None or cfg.streaming.holds(load_scenario(r[0])))]
     if not simulated:
         return
     scenario, seed = simulated[0]

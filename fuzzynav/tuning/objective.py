@@ -24,6 +24,7 @@ from fuzzynav.filters.catalog import bind_systems
 from fuzzynav.filters.named import FilterSetup
 from fuzzynav.realdata.dataspec import is_recording_name
 from fuzzynav.realdata.studyruns import recording_run
+from fuzzynav.runpath import RunOutcome
 from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.sim.scenario import load_scenario
 from fuzzynav.tuning.study_config import EXTRA_GROUP_METRICS, GROUP_METRICS
@@ -158,15 +159,27 @@ class Evaluator:
         if key not in self._logs:
             if scenario not in self._scenarios:
                 self._scenarios[scenario] = load_scenario(scenario)
-            self._logs[key] = simulate(self._scenarios[scenario], seed, self.cache_dir)
+            scn, st = self._scenarios[scenario], self.config.streaming
+            self._logs[key] = (simulate(scn, seed, self.cache_dir) if st is None
+                               else st.log(scn, seed, self.cache_dir))
         return self._logs[key]
+
+    def run(self, scenario: str, seed: int, filter_spec: str, options=None,
+            setup=None) -> RunOutcome:
+        """One run of the study: a named filter (or an explicit ``setup``) on a run's log,
+        whole or, with the study's ``[streaming]`` table, chunk by chunk
+        (:mod:`~fuzzynav.tuning.study_streaming`), scored from ``t_start_s``."""
+        log, st = self.log(scenario, seed), self.config.streaming
+        t0 = self.config.t_start_s
+        if st is None:
+            return run_on_log(log, filter_spec, options=options, t_start_s=t0, setup=setup)
+        return st.run(log, filter_spec, options, setup, t0)
 
     def baseline(self, scenario: str, seed: int) -> dict:
         """Metrics of the baseline filter on a run."""
         key = (scenario, seed)
         if key not in self._baseline:
-            self._baseline[key] = run_on_log(self.log(scenario, seed), self.config.baseline,
-                                             t_start_s=self.config.t_start_s).metrics
+            self._baseline[key] = self.run(scenario, seed, self.config.baseline).metrics
         return self._baseline[key]
 
     def prepare(self, runs, known=None) -> "Evaluator":
@@ -192,9 +205,8 @@ class Evaluator:
         log = self.log(scenario, seed)
         if (scenario, seed) not in self._ekf:
             self._ekf[(scenario, seed)] = setup_for(log, "ekf")
-        return run_on_log(log, CANDIDATE, t_start_s=self.config.t_start_s,
-                          setup=setup_with_systems(log, systems, self.config.filter,
-                                                   self._ekf[(scenario, seed)]))
+        return self.run(scenario, seed, CANDIDATE, setup=setup_with_systems(
+            log, systems, self.config.filter, self._ekf[(scenario, seed)]))
 
     def judge(self, metrics: dict, scenario: str, seed: int) -> RunScore:
         """Score a filter's metrics on a run against the baseline on that run."""

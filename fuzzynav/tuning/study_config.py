@@ -14,6 +14,8 @@ Layout (every key in ``docs/studies.md``)::
                      ["KIND:DIR[:SESSION][@A-B[%]]", ...], recording_seeds = [0]
                      (:mod:`fuzzynav.realdata.dataspec`)
     [test]           the same, and compare = [filters shown beside the tuned rules]
+    [streaming]      chunk_s, output_rate_hz, hold_log_mb: runs filtered chunk by chunk
+                     (:mod:`fuzzynav.tuning.study_streaming`)
     [[controllers]]  name, template (rule file), tune, partitions, free_triangles,
                      rule_weights, window = [lo, hi] (epochs), output_range = [lo, hi]
                      (bounds of the output's upper end), output_low = [lo, hi] (bounds of
@@ -36,6 +38,7 @@ from fuzzynav.tuning.controller_config import parse_controller, user_file
 from fuzzynav.tuning.recording_config import (check_no_attitude, check_no_t_start,
                                               check_recordings_held_out, recording_runs)
 from fuzzynav.tuning.samplers import get_optimiser, optimiser_names
+from fuzzynav.tuning.study_streaming import StudyStreaming, read_streaming
 
 __all__ = ["PRUNERS", "GROUP_METRICS", "EXTRA_GROUP_METRICS", "PsoConfig", "StudyConfig",
            "load_study_config", "study_config_from_dict"]
@@ -97,6 +100,8 @@ class StudyConfig:
     #: ``"log"``, ``"linear"`` or ``"int"`` (:mod:`fuzzynav.tuning.baseline_config`); a PSO swarm
     #: moves over these when there are no controllers
     space: tuple = ()
+    #: ``[streaming]``: the runs filtered chunk by chunk (``None``: each whole)
+    streaming: StudyStreaming | None = None
 
     @property
     def storage_url(self) -> str:
@@ -303,6 +308,7 @@ def study_config_from_dict(doc: dict, path: Path | None = None,
         raise ob.error("t_start_s", f"{t_start:g} s is at or after the end of the shortest "
                                     f"run ({min(shortest, shortest_test):g} s): nothing "
                                     "would be scored")
+    streaming = read_streaming(top, train + test)
     ctrls = tuple(parse_controller(c, here) for c in top.tables("controllers", need_controllers))
     if not ctrls and need_controllers:
         raise top.error("controllers", "a study needs at least one [[controllers]] table")
@@ -318,4 +324,5 @@ def study_config_from_dict(doc: dict, path: Path | None = None,
         raise InputFileError(None, "study.sampler", why_not)
     return StudyConfig(name=name, description=desc, path=path, pso=pso, weights=weights,
                        baseline=baseline, t_start_s=t_start, train=train, test=test,
-                       compare=compare, controllers=ctrls, filter=candidate, **study)
+                       compare=compare, controllers=ctrls, filter=candidate,
+                       streaming=streaming, **study)

@@ -52,12 +52,12 @@ class FakeEvaluator:
 
 @pytest.fixture
 def compared(monkeypatch):
-    """``run_on_log`` of the compared filters: fakf NaN on seed 2, 'broken' cannot run."""
-    def run_on_log(seed, name, t_start_s=0.0):
+    """``Evaluator.run`` of the compared filters: fakf NaN on seed 2, 'broken' cannot run."""
+    def run(self, scenario, seed, name, options=None, setup=None):
         if name == "broken":
             raise RuntimeError("needs a magnetometer")
         return SimpleNamespace(metrics=FakeEvaluator({("fakf", 2)})._metrics(name, seed))
-    monkeypatch.setattr(evaluate, "run_on_log", run_on_log)
+    monkeypatch.setattr(FakeEvaluator, "run", run, raising=False)
 
 
 RUNS = [("s", 1), ("s", 2)]

@@ -1,0 +1,119 @@
+"""A study's ``[streaming]`` table: its runs filtered chunk by chunk, long ones never held.
+
+Without the table a study simulates each training and test run whole, holds its log and
+filters it in one piece (a run too long for that is refused, with the estimate).  With it::
+
+    [streaming]
+    chunk_s = 300.0        # IMU seconds per chunk (default: 15 000 samples)
+    output_rate_hz = 1.0   # the kept outputs' rate; the metrics accumulate at the filter's
+    hold_log_mb = 128.0    # a run whose log needs no more is simulated once and held
+
+every run of the study -- the baseline's, each trial's candidate, the compared filters of
+the test table -- is filtered over chunks with its metrics accumulated chunk by chunk
+(:func:`fuzzynav.runpath.run`'s ``chunk_samples`` and ``output_rate_hz``), so no run's
+outputs are held whole.  A run whose log fits ``hold_log_mb``
+(:func:`fuzzynav.sim.budget.held_log_bytes`) is simulated once, cached and held, and its
+chunks are cut from it, which costs a trial what a whole run costs; a longer one is held
+as its first chunk only (:func:`fuzzynav.experiment.streamed_source`) and simulated again
+chunk by chunk for each of its runs (:func:`fuzzynav.experiment.streamed_run`): memory
+bounded by the chunk, at the price of a simulation per trial.  Both give the metrics of
+the other to the last bit (the same data, the same filter arithmetic, the same streamed
+sums: tests/tuning/test_study_streaming.py); against a whole-run study they differ only
+in the order of the RMS sums.
+
+Recordings are read whole, so a study with recordings refuses the table.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from fuzzynav.errors import InputFileError
+from fuzzynav.experiment import run_on_log, streamed_run, streamed_source
+from fuzzynav.sim import budget
+from fuzzynav.sim.sensor_log import SensorLog, simulate
+
+__all__ = ["StudyStreaming", "read_streaming", "HOW"]
+
+#: how a study asks for its runs streamed (the hint of a run too long to hold whole)
+HOW = "give the study file a [streaming] table (docs/studies.md)"
+
+
+@dataclass(frozen=True)
+class StudyStreaming:
+    """How a study filters its simulated runs chunk by chunk (module docstring)."""
+
+    #: IMU seconds per chunk; ``None``: :data:`fuzzynav.sim.budget.DEFAULT_CHUNK_SAMPLES`
+    chunk_s: float | None = None
+    #: rate of the kept outputs [Hz]; it must divide the filter's output rate
+    output_rate_hz: float = 1.0
+    #: the largest log a study holds [bytes]; a longer run is simulated again per run
+    hold_log_bytes: float = float(budget.TRUTH_STORE_BYTES)
+
+    def chunk_samples(self, scenario) -> int:
+        """IMU samples per chunk of ``scenario``'s runs (at least one)."""
+        if self.chunk_s is None:
+            return budget.DEFAULT_CHUNK_SAMPLES
+        return max(1, round(self.chunk_s * scenario.imu.rate_hz))
+
+    def holds(self, scenario) -> bool:
+        """Whether ``scenario``'s runs are simulated once and held (their log fits
+        :attr:`hold_log_bytes`)."""
+        return budget.held_log_bytes(scenario.duration_s, scenario.imu.rate_hz,
+                                     scenario.sensors) <= self.hold_log_bytes
+
+    def log(self, scenario, seed: int, cache_dir=None):
+        """The log of a run: simulated whole (and cached) when held, else its
+        :func:`~fuzzynav.experiment.streamed_source` (what filters configure themselves
+        from, a chunk of it held)."""
+        if self.holds(scenario):
+            return simulate(scenario, seed, cache_dir)
+        return streamed_source(scenario, seed, self.chunk_samples(scenario))
+
+    def run(self, log, filter_spec: str, options=None, setup=None, t_start_s: float = 0.0):
+        """One run on ``log`` (:meth:`log`'s), filtered over chunks with streamed metrics."""
+        scenario = log.scenario if isinstance(log, SensorLog) else log.log.scenario
+        chunk = self.chunk_samples(scenario)
+        if isinstance(log, SensorLog):
+            return run_on_log(log, filter_spec, options, t_start_s, setup,
+                              chunk_samples=chunk, output_rate_hz=self.output_rate_hz)
+        return streamed_run(scenario, log.seed, filter_spec, options, t_start_s,
+                            {"chunk_samples": chunk, "output_rate_hz": self.output_rate_hz},
+                            None, setup=setup)
+
+
+def read_streaming(top, runs: tuple) -> StudyStreaming | None:
+    """The ``[streaming]`` table of a study file (``top``: its :class:`~fuzzynav.sim.
+    tomltable.Table`; ``runs``: its training and test runs), or ``None`` without one.
+
+    Raises
+    ------
+    InputFileError
+        A bad key; the table in a study with recordings; without it, a simulated run too
+        long to hold whole (the estimate, and how to stream it).
+    """
+    from fuzzynav.realdata.dataspec import is_recording_name
+    from fuzzynav.sim.scenario import load_scenario
+
+    st = top.table("streaming", required=False)
+    scenarios = dict.fromkeys(name for name, _ in runs if not is_recording_name(name))
+    if st is None:
+        for name in scenarios:
+            scn = load_scenario(name)
+            try:
+                budget.check_whole_run(scn.duration_s, scn.imu.rate_hz, scn.sensors,
+                                       f"scenario {name}", HOW)
+            except InputFileError as exc:
+                raise top.error("streaming", exc.what) from None
+        return None
+    recordings = [name for name, _ in runs if is_recording_name(name)]
+    if recordings:
+        raise st.error("", f"recordings are read and filtered whole ({recordings[0]}); "
+                           "[streaming] applies to a study on simulated scenarios only")
+    chunk_s = st.number("chunk_s", 0.0, lo=0.0, lo_open=True) if "chunk_s" in st.data \
+        else None
+    out = StudyStreaming(chunk_s=chunk_s,
+                         output_rate_hz=st.number("output_rate_hz", 1.0, lo=0.0, lo_open=True),
+                         hold_log_bytes=st.number("hold_log_mb", budget.TRUTH_STORE_BYTES
+                                                  / 2**20, lo=0.0) * 2**20)
+    st.finish()
+    return out
