@@ -165,9 +165,10 @@ def read_table(path: Path, kind: str, chunk_rows=DEFAULT_CHUNK_ROWS) -> np.ndarr
     chunk_rows = chunked.check_chunk_rows(chunk_rows)
     ncol = COLUMNS[kind]
     errors = chunked.FirstErrors(_ERROR_ORDER)
-    parts, n_lines, last = [], 0, None  # last: the previous block's last (time, line)
+    n_lines, last = 0, None  # last: the previous block's last (time, line)
     try:
-        checks.file_size(path)
+        held = chunked.counted_lines(path, checks.held_bytes_per_row(ncol), universal=True)
+        rows = chunked.Rows(path, held, ncol)
         with open(path) as f:
             for _, block in chunked.line_blocks(f, chunk_rows):
                 lines = _split_lines(block)
@@ -187,13 +188,13 @@ def read_table(path: Path, kind: str, chunk_rows=DEFAULT_CHUNK_ROWS) -> np.ndarr
                 if bad is not None:
                     errors.note("time", bad)
                 last = (a[-1, 0], lineno + a.shape[0] - 1)
-                parts.append(a)
+                rows.add(a)
     except (OSError, UnicodeDecodeError) as exc:
         raise InputFileError(path, "", f"cannot be read ({exc.__class__.__name__})") from None
     if n_lines < 3:
         raise InputFileError(path, "line 2", "no data rows (a header and at least 2 rows)")
     errors.raise_first()
-    a = parts[0] if len(parts) == 1 else np.concatenate(parts)
+    a = rows.array()
     checks.timing_of(path, a[:, 0], kind)
     return a
 

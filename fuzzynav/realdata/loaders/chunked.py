@@ -22,14 +22,19 @@ from itertools import islice
 import numpy as np
 
 from fuzzynav.errors import InputFileError
+from fuzzynav.sim import budget
 
-__all__ = ["DEFAULT_CHUNK_ROWS", "line_blocks", "FirstErrors", "check_chunk_rows",
-           "count_lines", "Rows"]
+__all__ = ["DEFAULT_CHUNK_ROWS", "MAX_MEAN_LINE_BYTES", "line_blocks", "FirstErrors",
+           "check_chunk_rows", "count_lines", "counted_lines", "Rows"]
 
 #: lines parsed at a time by default: 65 536 lines of the car's IMU CSV are ~3 MB of text
 #: (11 minutes at 100 Hz), a block small next to a recording of hours yet large enough that
 #: numpy's parser, not the Python loop around it, sets the speed
 DEFAULT_CHUNK_ROWS = 1 << 16
+#: largest mean line length of a recording's text file [bytes]: their rows are 50-200
+#: bytes; a file of megabytes in a few lines (binary, or padded with NULs) would be held
+#: whole as one line before its first row is checked
+MAX_MEAN_LINE_BYTES = 4096
 
 
 def check_chunk_rows(chunk_rows):
@@ -57,15 +62,43 @@ def line_blocks(stream, chunk_rows):
             return
 
 
-def count_lines(path) -> int:
+def count_lines(path, universal: bool = False) -> int:
     """How many lines :func:`line_blocks` will yield for ``path`` (the last may lack its
-    newline), counted in blocks of 1 MB."""
+    newline), counted in blocks of 1 MB: of the file opened in binary (lines end at
+    ``\\n``) or, ``universal``, in text mode (``\\r\\n``, ``\\r`` and ``\\n`` end a line)."""
     n, tail = 0, b""
     with open(path, "rb") as f:
         for block in iter(lambda: f.read(1 << 20), b""):
             n += block.count(b"\n")
+            if universal:  # a lone \r ends a line too; \r\n (even across blocks) is one end
+                n += block.count(b"\r") - block.count(b"\r\n") \
+                    - (tail == b"\r" and block[:1] == b"\n")
             tail = block[-1:]
-    return n + (tail not in (b"", b"\n"))
+    ends = (b"", b"\n", b"\r") if universal else (b"", b"\n")
+    return n + (tail not in ends)
+
+
+def counted_lines(path, bytes_per_line: float, universal: bool = False) -> int:
+    """:func:`count_lines` of ``path``, refusing, before a line is parsed, a file that is not
+    text lines (a mean line over :data:`MAX_MEAN_LINE_BYTES`) or whose lines, held at
+    ``bytes_per_line`` each once read, need more memory than one run may use
+    (:func:`fuzzynav.sim.budget.memory_limit`).
+
+    Memory, not the file's size, is what limits a recording: it is read a block of lines
+    at a time and only its parsed rows are held.
+    """
+    n = count_lines(path, universal)
+    size = path.stat().st_size
+    if size > MAX_MEAN_LINE_BYTES * max(n, 1):
+        raise InputFileError(path, "", f"is {budget.human_bytes(size)} in {n} lines: not a "
+                                       f"text table (lines of at most {MAX_MEAN_LINE_BYTES} "
+                                       "bytes on average, MAX_MEAN_LINE_BYTES)")
+    need, (limit, source) = n * bytes_per_line, budget.memory_limit()
+    if need > limit:
+        raise InputFileError(path, "", f"has {n} lines: read and held they need "
+                                       f"~{budget.human_bytes(need)}; the limit is "
+                                       f"{budget.human_bytes(limit)} ({source})")
+    return n
 
 
 class Rows:
