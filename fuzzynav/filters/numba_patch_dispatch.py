@@ -24,6 +24,7 @@ keeps those per function and signature.
 from __future__ import annotations
 
 import numba
+import numpy as np
 import numba.experimental.function_type as _function_type
 from numba.core.dispatcher import Dispatcher
 
@@ -43,16 +44,44 @@ def numba_checked(version: str | None = None) -> bool:
 MAX_TABLES = 64
 
 
-def _is_table(val) -> bool:
-    return type(val) is tuple and len(val) > 0 and all(isinstance(v, Dispatcher) for v in val)
+_INT64 = (-(1 << 63), 1 << 63)
+
+
+def _type_key(val):
+    """What numba's type of ``val`` depends on, as a hashable key, or ``None`` for a value
+    this module does not know how numba types (left to numba every time).
+
+    A tuple (a named one by its class) is the key of its items; an array its class, dtype,
+    dimensions, layout, whether it is read-only or unaligned (what numba's
+    ``typeof`` reads of it); a compiled function its identity and overload count; a Python
+    number its class (an int whether it fits int64, numba typing a larger one otherwise).
+    """
+    if isinstance(val, tuple):
+        items = tuple(_type_key(v) for v in val)
+        return None if None in items else (type(val), items)
+    if isinstance(val, Dispatcher):
+        return (Dispatcher, id(val), len(val.overloads))
+    if isinstance(val, np.ndarray):
+        f = val.flags
+        return (type(val), val.dtype.str, val.ndim, f.c_contiguous, f.f_contiguous,
+                f.writeable, f.aligned)
+    if type(val) is int:
+        return (int, _INT64[0] <= val < _INT64[1])
+    if type(val) in (float, bool):
+        return type(val)
+    return None
 
 
 def memoise_table_types(dispatcher: Dispatcher) -> Dispatcher:
-    """Make ``dispatcher`` type a tuple of compiled functions once per distinct tuple.
+    """Make ``dispatcher`` type a tuple holding compiled functions once per distinct type.
 
-    The key is the tuple's functions (by identity) and how many overloads each has, so a
-    kernel compiled for a new signature later is typed afresh.  Returns ``dispatcher``
-    (unchanged on a numba release outside :data:`CHECKED_NUMBA`).
+    numba asks :meth:`typeof_pyval` only for an argument it could not fingerprint: a tuple
+    of compiled functions (the measurement models, the adaptation policies) or a named
+    tuple holding one (the bank, whose share controller holds its weighing kernel).  The
+    key is :func:`_type_key` -- the functions by identity and overload count, so a kernel
+    compiled for a new signature later is typed afresh -- and the value numba's own answer
+    for the first tuple of that key.  Returns ``dispatcher`` (unchanged on a numba release
+    outside :data:`CHECKED_NUMBA`).
     """
     if not numba_checked():
         return dispatcher
@@ -60,9 +89,9 @@ def memoise_table_types(dispatcher: Dispatcher) -> Dispatcher:
     memo = {}
 
     def typeof_pyval(val):
-        if not _is_table(val):
+        key = _type_key(val) if isinstance(val, tuple) else None
+        if key is None:
             return plain(val)
-        key = (tuple(map(id, val)), tuple(len(v.overloads) for v in val))
         hit = memo.get(key)
         if hit is None:
             if len(memo) >= MAX_TABLES:

@@ -73,3 +73,66 @@ def test_a_run_without_the_patches_gives_the_same_bits():
     for a, b in ((patched.lla, plain.lla), (patched.sigma, plain.sigma),
                  (patched.events["gnss"].nis, plain.events["gnss"].nis)):
         np.testing.assert_array_equal(a, b)
+
+
+class _Holder(tuple):
+    """A tuple subclass standing for the loop's named tuples (the bank, its controller)."""
+
+
+@nb.njit
+def _first_row(h):
+    return h[0][0] + h[1][0](1.0)
+
+
+@pytest.fixture
+def typed(monkeypatch):
+    """A dispatcher with the memoised typing whose numba answers are counted."""
+    from numba.core.registry import CPUDispatcher
+
+    d = CPUDispatcher(_first_row.py_func)
+    calls = []
+    plain = d.typeof_pyval
+    monkeypatch.setattr(d, "typeof_pyval", lambda v: calls.append(v) or plain(v))
+    patch.memoise_table_types(d)
+    return d, plain, calls
+
+
+def test_a_tuple_holding_kernels_is_typed_once_per_type(typed):
+    d, plain, calls = typed
+    a = (np.zeros(3), (_plus_two,), 1, 2.0)
+    b = (np.ones(3), (_plus_two,), 7, 5.0)  # other values, the same types
+    assert d.typeof_pyval(a) == plain(a)
+    assert d.typeof_pyval(b) == plain(b) and len(calls) == 1
+    assert d(b[:2]) == 1.0 + 3.0
+
+
+@pytest.mark.parametrize("other", [
+    (np.zeros(3, np.float32), (_plus_two,), 1, 2.0),                  # dtype
+    (np.zeros((3, 1)), (_plus_two,), 1, 2.0),                          # dimensions
+    (np.zeros((3, 3))[:, 0], (_plus_two,), 1, 2.0),                    # layout
+    (np.zeros(3), (_plus_two,), 1 << 63, 2.0),                         # past int64
+    (np.zeros(3), (_plus_two,), 1.0, 2.0),                             # int -> float
+    _Holder((np.zeros(3), (_plus_two,), 1, 2.0)),                      # the tuple's class
+])
+def test_any_change_of_type_is_typed_afresh(typed, other):
+    d, plain, calls = typed
+    base = (np.zeros(3), (_plus_two,), 1, 2.0)
+    d.typeof_pyval(base)
+    assert d.typeof_pyval(other) == plain(other) and len(calls) == 2
+    assert plain(other) != plain(base)
+
+
+def test_a_read_only_array_is_typed_afresh(typed):
+    d, plain, calls = typed
+    ro = np.zeros(3)
+    ro.flags.writeable = False
+    d.typeof_pyval((np.zeros(3), (_plus_two,)))
+    assert d.typeof_pyval((ro, (_plus_two,))) == plain((ro, (_plus_two,))) and len(calls) == 2
+
+
+def test_a_value_of_unknown_type_goes_to_numba_every_time(typed):
+    d, _, calls = typed
+    val = (np.zeros(3), (_plus_two,), 1j)
+    d.typeof_pyval(val)
+    d.typeof_pyval(val)
+    assert len(calls) == 2
