@@ -7,7 +7,8 @@ a TOML key) and what was wrong.  The CLI prints that one line and exits with cod
 from __future__ import annotations
 
 __all__ = ["MAX_MESSAGE", "MAX_QUOTE", "brief", "bounded", "FuzzynavError", "InputFileError",
-           "UnknownNameError", "DataMissingError", "OutputError", "RunDivergedError"]
+           "UnknownNameError", "DataMissingError", "OutputError", "RunDivergedError",
+           "OutputRateError"]
 
 
 #: longest message a fuzzynav error carries (characters); a longer one is cut and says by
@@ -121,6 +122,25 @@ class OutputError(FuzzynavError):
 
     def __str__(self) -> str:
         return self.args[0]
+
+
+class OutputRateError(FuzzynavError):
+    """A requested output rate a run cannot keep, worded for the command line
+    (``--output-rate``); a study re-words it for its ``[streaming]`` key.
+
+    Parameters
+    ----------
+    reason : str
+        Why it cannot be kept.
+    rate_hz : float, optional
+        The requested rate [Hz], when the message should name it.
+    """
+
+    def __init__(self, reason: str, rate_hz: float | None = None):
+        self.reason = reason
+        self.rate_hz = None if rate_hz is None else float(rate_hz)
+        rate = "" if rate_hz is None else f" {self.rate_hz:g} Hz"
+        super().__init__(f"--output-rate{rate}: {reason}")
 
 
 class RunDivergedError(FuzzynavError):

@@ -34,7 +34,7 @@ from typing import Protocol
 
 import numpy as np
 
-from fuzzynav.errors import FuzzynavError, RunDivergedError
+from fuzzynav.errors import FuzzynavError, OutputRateError, RunDivergedError
 from fuzzynav.filters.named import FilterContext, FilterSetup, get_filter, parse_filter_spec
 from fuzzynav.filters.runner import InitialState, run_filter
 from fuzzynav.filters.sensor_states import with_sensor_states
@@ -203,8 +203,8 @@ def run(source: Source, filter_spec: str, options=None,
     if output_rate_hz is not None:
         keep = keep_every(config.out_rate_hz, output_rate_hz)
         if not hasattr(source, "streaming_scorer"):
-            raise FuzzynavError(f"--output-rate: {source.KIND} score their whole result, "
-                                "so their output cannot be decimated")
+            raise OutputRateError(f"{source.KIND} score their whole result, so their "
+                                  "output cannot be decimated")
         scorer = source.streaming_scorer()
     res = run_filter(inp.imu, sensors, inp.init, config, setup.adapters,
                      _merged(setup.sensor_options, inp.sensor_options),
@@ -222,10 +222,10 @@ def keep_every(filter_rate_hz: float, output_rate_hz: float) -> int:
     ratio = float(filter_rate_hz) / float(output_rate_hz) if output_rate_hz > 0 else math.nan
     keep = round(ratio) if math.isfinite(ratio) else 0
     if keep < 1 or abs(ratio - keep) > 1e-9 * ratio:
-        raise FuzzynavError(f"--output-rate {output_rate_hz:g} Hz: must be the filter's "
-                            f"output rate {filter_rate_hz:g} Hz divided by a whole number "
-                            f"(e.g. {filter_rate_hz:g}, {filter_rate_hz / 2:g}, "
-                            f"{filter_rate_hz / 10:g} Hz)")
+        raise OutputRateError(f"must be the filter's output rate {filter_rate_hz:g} Hz "
+                              f"divided by a whole number (e.g. {filter_rate_hz:g}, "
+                              f"{filter_rate_hz / 2:g}, {filter_rate_hz / 10:g} Hz)",
+                              output_rate_hz)
     return int(keep)
 
 

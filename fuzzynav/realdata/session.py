@@ -15,7 +15,7 @@ from typing import Callable
 
 import numpy as np
 
-from fuzzynav.errors import FuzzynavError, InputFileError
+from fuzzynav.errors import InputFileError, OutputRateError
 from fuzzynav.filters.named import FilterContext
 from fuzzynav.filters.runner import InitialState
 from fuzzynav.nav import attitude, earth
@@ -140,12 +140,12 @@ class GnssSource:
 
         Raises
         ------
-        FuzzynavError
+        OutputRateError
             When :attr:`scorer` is a plain function (it scores whole results only).
         """
         if not isinstance(self.scorer, ReferenceScoring):
-            raise FuzzynavError(f"--output-rate: {self.name} is scored on its whole result, so "
-                                "its output cannot be decimated")
+            raise OutputRateError(f"{self.name} is scored on its whole result, so its "
+                                  "output cannot be decimated")
         return self.scorer.streaming()
 
     def score_streamed(self, result, scorer) -> dict:

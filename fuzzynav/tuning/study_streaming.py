@@ -27,7 +27,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from fuzzynav.errors import InputFileError
+from fuzzynav.errors import FuzzynavError, InputFileError, OutputRateError
 from fuzzynav.experiment import run_on_log, streamed_run, streamed_source
 from fuzzynav.sim import budget
 from fuzzynav.sim.sensor_log import SensorLog, simulate
@@ -70,15 +70,26 @@ class StudyStreaming:
         return streamed_source(scenario, seed, self.chunk_samples(scenario))
 
     def run(self, log, filter_spec: str, options=None, setup=None, t_start_s: float = 0.0):
-        """One run on ``log`` (:meth:`log`'s), filtered over chunks with streamed metrics."""
+        """One run on ``log`` (:meth:`log`'s), filtered over chunks with streamed metrics.
+
+        Raises
+        ------
+        FuzzynavError
+            :attr:`output_rate_hz` cannot be kept by this filter (named as the study
+            file's key, not the command line's option).
+        """
         scenario = log.scenario if isinstance(log, SensorLog) else log.log.scenario
         chunk = self.chunk_samples(scenario)
-        if isinstance(log, SensorLog):
-            return run_on_log(log, filter_spec, options, t_start_s, setup,
-                              chunk_samples=chunk, output_rate_hz=self.output_rate_hz)
-        return streamed_run(scenario, log.seed, filter_spec, options, t_start_s,
-                            {"chunk_samples": chunk, "output_rate_hz": self.output_rate_hz},
-                            None, setup=setup)
+        try:
+            if isinstance(log, SensorLog):
+                return run_on_log(log, filter_spec, options, t_start_s, setup,
+                                  chunk_samples=chunk, output_rate_hz=self.output_rate_hz)
+            return streamed_run(scenario, log.seed, filter_spec, options, t_start_s,
+                                {"chunk_samples": chunk, "output_rate_hz": self.output_rate_hz},
+                                None, setup=setup)
+        except OutputRateError as exc:
+            raise FuzzynavError(f"[streaming] output_rate_hz = {self.output_rate_hz:g} Hz "
+                                f"(filter {filter_spec}): {exc.reason}") from None
 
 
 def read_streaming(top, runs: tuple) -> StudyStreaming | None:

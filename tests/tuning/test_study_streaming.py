@@ -145,8 +145,10 @@ def test_defaults_are_the_command_lines(tmp_path):
 
 def test_an_output_rate_that_does_not_divide_the_filters_is_one_error(tmp_path):
     ev = _evaluator(tmp_path, "odd", streaming={"output_rate_hz": 0.3})
-    with pytest.raises(FuzzynavError, match="must be the filter's output rate"):
+    with pytest.raises(FuzzynavError, match="must be the filter's output rate") as exc:
         ev.baseline(*ev.config.train[0])
+    msg = str(exc.value)  # the study file's key, not the command line's option
+    assert msg.startswith("[streaming] output_rate_hz = 0.3 Hz") and "--" not in msg, msg
 
 
 def test_the_held_log_estimate_bounds_a_real_log():
