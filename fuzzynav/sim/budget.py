@@ -254,3 +254,33 @@ def check_whole_run(duration_s: float, imu_rate_hz: float, sensors: dict,
                              f"~{human_bytes(need)} simulated whole; the limit is "
                              f"{human_bytes(limit)} ({source}). Simulated and filtered in "
                              f"chunks it needs ~{human_bytes(streamed)}: {how}")
+
+
+def check_held_logs(held: dict, working_bytes: float, what: str, how: str) -> None:
+    """Refuse a set of runs whose logs, held at once, and the run filtered meanwhile need
+    more than :func:`memory_limit` (a study keeps every run's log it simulated).
+
+    Parameters
+    ----------
+    held : Mapping[str, float]
+        Bytes held per run (label -> :func:`held_log_bytes`).
+    working_bytes : float
+        What the largest run needs while it is filtered (:func:`whole_estimate` or
+        :func:`streamed_estimate`).
+    what, how : str
+        What holds the runs; how to hold fewer.
+
+    Raises
+    ------
+    InputFileError
+        Without a file or a key: the caller names them.
+    """
+    total = sum(held.values())
+    limit, source = memory_limit()
+    if held and total + working_bytes > limit:
+        big = max(held, key=held.get)
+        raise InputFileError(None, "", f"{what}: the logs of its {len(held)} simulated runs, "
+                             f"held at once, need ~{human_bytes(total)} (the largest, {big}, "
+                             f"~{human_bytes(held[big])}) and a run filtered meanwhile "
+                             f"~{human_bytes(working_bytes)}; the limit is "
+                             f"{human_bytes(limit)} ({source}): {how}")

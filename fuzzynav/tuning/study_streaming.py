@@ -100,21 +100,25 @@ def read_streaming(top, runs: tuple) -> StudyStreaming | None:
     ------
     InputFileError
         A bad key; the table in a study with recordings; without it, a simulated run too
-        long to hold whole (the estimate, and how to stream it).
+        long to hold whole (the estimate, and how to stream it); with it or without, runs
+        whose logs held at once (every run a study simulates stays in memory) and a run
+        filtered meanwhile need more than :func:`fuzzynav.sim.budget.memory_limit`.
     """
     from fuzzynav.realdata.dataspec import is_recording_name
     from fuzzynav.sim.scenario import load_scenario
 
     st = top.table("streaming", required=False)
-    scenarios = dict.fromkeys(name for name, _ in runs if not is_recording_name(name))
+    simulated = [run for run in dict.fromkeys(runs) if not is_recording_name(run[0])]
+    scenarios = {name: load_scenario(name) for name, _ in simulated}
     if st is None:
-        for name in scenarios:
-            scn = load_scenario(name)
+        for name, scn in scenarios.items():
             try:
                 budget.check_whole_run(scn.duration_s, scn.imu.rate_hz, scn.sensors,
                                        f"scenario {name}", HOW)
             except InputFileError as exc:
                 raise top.error("streaming", exc.what) from None
+        _check_held(top, "streaming", simulated, scenarios, lambda scn: True,
+                    budget.whole_estimate, HOW)
         return None
     recordings = [name for name, _ in runs if is_recording_name(name)]
     if recordings:
@@ -127,4 +131,23 @@ def read_streaming(top, runs: tuple) -> StudyStreaming | None:
                          hold_log_bytes=st.number("hold_log_mb", budget.TRUTH_STORE_BYTES
                                                   / 2**20, lo=0.0) * 2**20)
     st.finish()
+    _check_held(st, "hold_log_mb", simulated, scenarios, out.holds,
+                budget.streamed_estimate, "lower [streaming] hold_log_mb: the longest runs "
+                "are then simulated again for each of their runs instead of held")
     return out
+
+
+def _check_held(table, key, runs, scenarios, holds, working, how) -> None:
+    """:func:`fuzzynav.sim.budget.check_held_logs` of the study's runs that ``holds``, as an
+    error of the study file's ``table`` at ``key``; ``working``: the estimate of a run
+    filtered meanwhile."""
+    def size(scn, estimate):
+        return estimate(scn.duration_s, scn.imu.rate_hz, scn.sensors)
+
+    held = {f"{name} seed {seed}": size(scenarios[name], budget.held_log_bytes)
+            for name, seed in runs if holds(scenarios[name])}
+    work = max((size(scn, working) for scn in scenarios.values()), default=0.0)
+    try:
+        budget.check_held_logs(held, work, "the study", how)
+    except InputFileError as exc:
+        raise table.error(key, exc.what) from None

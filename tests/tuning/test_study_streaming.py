@@ -168,3 +168,31 @@ def _nbytes(obj) -> int:
     values = [getattr(obj, f.name) for f in fields(obj)]
     values += list(getattr(obj, "meta", {}).values())
     return sum(v.nbytes for v in values if isinstance(v, np.ndarray))
+
+
+def test_the_logs_a_study_holds_at_once_are_counted_together(tmp_path, monkeypatch):
+    """Each tiny run fits an 80-MB limit (12 MB filtered whole, 1.2 MB held; its base
+    paper000, checked when tiny is read, 78 MB in chunks), sixty held at once do not; with
+    ``hold_log_mb = 0`` none is held and the study is accepted."""
+    scn = load_scenario(str(TINY))
+    one = budget.held_log_bytes(scn.duration_s, scn.imu.rate_hz, scn.sensors)
+    work = budget.whole_estimate(scn.duration_s, scn.imu.rate_hz, scn.sensors)
+    limit, n = 80 * 2**20, 60
+    assert work + one < limit < work + n * one  # the premise: one fits, sixty do not
+    monkeypatch.setenv(budget.ENV_VAR, str(limit / 2**30))
+    many = {"scenarios": [str(TINY)], "seeds": list(range(n - 2))}
+    test = {"scenarios": [str(TINY)], "seeds": [100, 101]}
+    path = write_study(tmp_path, file_name="held.toml", train=many, test=test)
+    with pytest.raises(InputFileError) as exc:
+        load_study_config(path)
+    msg = exc.value.what
+    assert exc.value.where == "streaming" and f"its {n} simulated runs" in msg, msg
+    assert f"~{budget.human_bytes(n * one)}" in msg and "[streaming] table" in msg, msg
+    path = write_study(tmp_path, file_name="all.toml", train=many, test=test,
+                       streaming=CHUNKS)
+    with pytest.raises(InputFileError) as exc:
+        load_study_config(path)
+    assert exc.value.where == "streaming.hold_log_mb" and "lower" in exc.value.what
+    path = write_study(tmp_path, file_name="none.toml", train=many, test=test,
+                       streaming=LONG)
+    assert not load_study_config(path).streaming.holds(scn)
