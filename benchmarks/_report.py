@@ -1,12 +1,16 @@
 """Shared helpers of the speed benchmarks: their sections of docs/benchmarks.md."""
 from __future__ import annotations
 
+import os
+import shutil
+import tempfile
+import time
 from pathlib import Path
 
 from fuzzynav.fileio import write_text_atomic
 from fuzzynav.pages.common import machine, markers, replace_section
 
-__all__ = ["machine", "write_section"]
+__all__ = ["machine", "write_section", "measured_section"]
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "benchmarks.md"
 HEADER = """# Benchmarks
@@ -25,3 +29,20 @@ def write_section(name: str, body: str) -> None:
     if begin not in text or end not in text:
         text = text.rstrip() + f"\n\n{begin}\n{end}\n"
     write_text_atomic(DOC, replace_section(text, f"bench:{name}", body.rstrip()))
+
+
+def measured_section(name: str, args, measure_all, report) -> str:
+    """Run ``measure_all(tmp)`` in a fresh temporary directory (removed after), then
+    ``report(args, rounds, (load at start, load at end), seconds)``; print the text and,
+    unless ``args.no_write``, write it as section ``name``.  Returns the text."""
+    t0, load0 = time.monotonic(), os.getloadavg()[0]
+    tmp = Path(tempfile.mkdtemp(prefix=f"bench-{name}-"))
+    try:
+        rounds = measure_all(tmp)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    text = report(args, rounds, (load0, os.getloadavg()[0]), time.monotonic() - t0)
+    print(text)
+    if not args.no_write:
+        write_section(name, text)
+    return text

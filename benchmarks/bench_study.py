@@ -19,18 +19,15 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import shutil
 import statistics
 import subprocess
 import sys
-import tempfile
-import time
 from pathlib import Path
 
 import optuna
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _report import machine, write_section  # noqa: E402
+from _report import machine, measured_section  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 STUDY = "paper000_tune.toml"
@@ -156,19 +153,14 @@ def main(argv=None):
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--no-write", action="store_true", help="print, leave docs/ alone")
     args = ap.parse_args(argv)
-    t0, load0 = time.monotonic(), os.getloadavg()[0]
-    tmp = Path(tempfile.mkdtemp(prefix="bench-study-"))
-    try:
+
+    def measure_all(tmp):
         trees = {"base": base_tree(args.base, tmp), "new": ROOT}
         for label, tree in trees.items():  # simulate the logs, load or compile the kernels
             measure(tree, tmp, f"warm_{label}", 3, 1)
-        rounds = run_rounds(trees, tmp, args.trials, args.rounds)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
-    text = report(args, rounds, (load0, os.getloadavg()[0]), time.monotonic() - t0)
-    print(text)
-    if not args.no_write:
-        write_section("study", text)
+        return run_rounds(trees, tmp, args.trials, args.rounds)
+
+    measured_section("study", args, measure_all, report)
 
 
 if __name__ == "__main__":

@@ -19,16 +19,13 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import shutil
 import statistics
 import subprocess
 import sys
-import tempfile
-import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _report import machine, write_section  # noqa: E402
+from _report import machine, measured_section  # noqa: E402
 from bench_study import config_copy  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -128,21 +125,15 @@ def main(argv=None):
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--no-write", action="store_true", help="print, leave docs/ alone")
     args = ap.parse_args(argv)
-    t0, load0 = time.monotonic(), os.getloadavg()[0]
-    tmp = Path(tempfile.mkdtemp(prefix="bench-study-stream-"))
     trials = {"whole": args.trials, "streamed, held": args.trials,
               "streamed, long": args.long_trials}
-    try:
+
+    def measure_all(tmp):
         for i, way in enumerate(WAYS):  # simulate the logs, load or compile the kernels
             measure(tmp, f"warm_{i}", way, 1)
-        rounds = run_rounds(tmp, trials, args.rounds)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
-    text = report(args, rounds, (load0, os.getloadavg()[0]), time.monotonic() - t0)
-    print(text)
-    if not args.no_write:
-        write_section("study-stream", text)
+        return run_rounds(tmp, trials, args.rounds)
 
+    measured_section("study-stream", args, measure_all, report)
 
 if __name__ == "__main__":
     main()
