@@ -144,16 +144,20 @@ def streamed_estimate(duration_s: float, imu_rate_hz: float, sensors: dict,
     (:data:`BYTES_PER_STREAM_EPOCH`), the sensors simulated whole (their epochs, as a
     whole run holds them), the truth kept from the first pass when it fits
     :data:`TRUTH_STORE_BYTES` and the kept outputs (:data:`BYTES_PER_OUTPUT_ROW` per row
-    at ``output_rate_hz``)."""
+    at ``output_rate_hz``).  A run whose whole log fits :data:`TRUTH_STORE_BYTES` may
+    instead be cut from its cached log, which it then holds
+    (:func:`fuzzynav.sim.log_chunks.chunks_of`): the larger of the two is counted."""
     n_imu = duration_s * imu_rate_hz
-    need = min(n_imu, chunk_samples) * BYTES_PER_CHUNK_SAMPLE
-    if keeps_truth(n_imu, chunk_samples, sensors):
-        need += stored_truth_bytes(n_imu)
+    simulated = stored_truth_bytes(n_imu) if keeps_truth(n_imu, chunk_samples, sensors) \
+        else 0.0
     for sp in sensors.values():
         epochs = duration_s * sp.rate_hz
-        need += epochs * (BYTES_PER_STREAM_EPOCH if hasattr(sp, "stream")
-                          else _columns(sp) * BYTES_PER_EPOCH_COLUMN)
-    return need + duration_s * output_rate_hz * BYTES_PER_OUTPUT_ROW
+        simulated += epochs * (BYTES_PER_STREAM_EPOCH if hasattr(sp, "stream")
+                               else _columns(sp) * BYTES_PER_EPOCH_COLUMN)
+    cached = held_log_bytes(duration_s, imu_rate_hz, sensors)
+    held = max(simulated, cached if cached <= TRUTH_STORE_BYTES else 0.0)
+    return (min(n_imu, chunk_samples) * BYTES_PER_CHUNK_SAMPLE + held
+            + duration_s * output_rate_hz * BYTES_PER_OUTPUT_ROW)
 
 
 def stored_truth_bytes(n_samples: float) -> float:

@@ -88,10 +88,13 @@ def test_the_streamed_figures_bound_a_real_streamed_run(tmp_path):
 def test_a_streamed_run_counts_the_truth_it_keeps(tmp_path, monkeypatch):
     # a GNSS-aided run short enough keeps its first pass's truth (184 B a sample): 1 000 s at
     # 50 Hz is 15 000 x 4096 + 50 001 x 184 + 1 000 GNSS epochs x 6 x 128 + 1 000 rows x 1024
-    # = 61 440 000 + 9 200 184 + 768 000 + 1 024 000 B (by hand); at 20 000 s its 184 MB of
-    # truth is over the 128 MB kept, and each chunk generates its own again
+    # = 61 440 000 + 9 200 184 + 768 000 + 1 024 000 B (by hand) simulated; its log (50 001 x
+    # 288 + 768 000 = 15 168 288 B, under 128 MB) may be cached, and the chunks are then cut
+    # from it held whole: that is the larger, 61 440 000 + 15 168 288 + 1 024 000 B. At
+    # 20 000 s its 184 MB of truth is over the 128 MB kept, its log too large to be cut from,
+    # and each chunk generates its own again
     short_run = load_scenario(_write(tmp_path / "a.toml", RUN.format(rate=50, duration=1000)))
-    assert budget.streamed_estimate(1000.0, 50.0, short_run.sensors) == 72_432_184
+    assert budget.streamed_estimate(1000.0, 50.0, short_run.sensors) == 77_632_288
     assert budget.streamed_estimate(20000.0, 50.0, short_run.sensors) == (
         15_000 * 4096 + 20_000 * 6 * 128 + 20_000 * 1024)
     # the traced peak grows by the kept truth, and that growth stays under its figure
