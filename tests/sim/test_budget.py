@@ -193,3 +193,27 @@ def test_safe_stem():
     assert safe_stem("../a b/c") == "_a_b_c"
     long_a, long_b = safe_stem("x" * 300), safe_stem("x" * 299 + "y")
     assert len(long_a) == 64 and long_a != long_b
+
+
+def test_a_run_cut_from_its_cached_log_stays_within_the_streamed_estimate(tmp_path):
+    """The chunks of a short run are cut from its cached whole log when there is one, which
+    the run then holds (288 B a sample, more than the 184 B of truth a simulated run keeps):
+    the traced peak of such a run is over the log's size and under
+    :func:`streamed_estimate`, which counts that log."""
+    from fuzzynav.streamrun import run_streamed
+
+    path = _write(tmp_path / "c.toml", RUN.format(rate=50, duration=2000))
+    scn, cache = load_scenario(path), tmp_path / "cache"
+    simulate(scn, 0, cache)  # the cache the chunks are cut from
+    run_streamed(scn, 0, "ekf", chunk_samples=500, output_rate_hz=1.0, cache_dir=cache)
+    tracemalloc.start()
+    try:
+        run_streamed(scn, 0, "ekf", chunk_samples=500, output_rate_hz=1.0, cache_dir=cache)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    log = budget.held_log_bytes(2000.0, 50.0, scn.sensors)
+    simulated_path = (500 * budget.BYTES_PER_CHUNK_SAMPLE + budget.stored_truth_bytes(1e5)
+                      + 2000 * (6 * budget.BYTES_PER_EPOCH_COLUMN + budget.BYTES_PER_OUTPUT_ROW))
+    assert simulated_path < log < peak  # the figure of the simulated path alone is short
+    assert peak < budget.streamed_estimate(2000.0, 50.0, scn.sensors, chunk_samples=500)
