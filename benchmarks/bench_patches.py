@@ -4,7 +4,8 @@ One study run is ``run_filter`` and ``errors_vs_trajectory`` of the ``fakf`` fil
 ``paper000`` log (755 s at 100 Hz, 1-Hz GPS, 5-Hz imaging polarization), warm kernels,
 every run on the same log as a study's runs are.  Each variant turns one shortcut off:
 
-* numba typing a kernel table from scratch (``numba_patch_dispatch.memoise_table_types``);
+* numba typing a tuple holding kernels (a kernel table, the bank) from scratch
+  (``numba_patch_dispatch.memoise_table_types``);
 * numba's own kernel-address lookups (``numba_patch_dispatch.memoise_kernel_addresses``);
 * the truth at the result's epochs and the polarization extra columns recomputed every
   run (the two :class:`~fuzzynav.live_cache.LiveCache` memos).
@@ -87,7 +88,7 @@ def _variants():
 
     return {
         "shipped (every shortcut)": _Off(),
-        "kernel tables typed by numba each run": _Off(typing_off, typing_on),
+        "tuples holding kernels typed by numba each run": _Off(typing_off, typing_on),
         "numba's own kernel-address lookups": _Off(patch.restore_kernel_addresses,
                                                    patch.memoise_kernel_addresses),
         "truth at the epochs recomputed": _Off(metrics._TRUTH_AT.clear),
@@ -141,14 +142,15 @@ def _cpu_ms(f, clear=lambda: None, n=30):
 
 
 def _seen_in_a_run(run):
-    """The kernel tables the loop typed and the (function, signature) pairs whose
-    addresses numba looked up during ``run()``, with the patches on."""
+    """The tuples holding kernels the loop typed (its kernel tables, its bank) and the
+    (function, signature) pairs whose addresses numba looked up during ``run()``, with the
+    patches on."""
     import numba.experimental.function_type as ft
 
     tables, pairs, saved = [], [], {}
     for d in _loop_dispatchers():
         memo = saved[d] = vars(d)["typeof_pyval"]
-        d.typeof_pyval = lambda v, memo=memo: (tables.append(v) if type(v) is tuple
+        d.typeof_pyval = lambda v, memo=memo: (tables.append(v) if isinstance(v, tuple)
                                                else None, memo(v))[1]
     names = ("_get_wrapper_address", "_get_jit_address")
     looked = {n: getattr(ft, n) for n in names}
@@ -182,7 +184,7 @@ def time_components(log, setup, init, sensors) -> dict:
 
     pol = next(d for d in sensors.values() if d.kind == "polarization")
     return {
-        f"kernel tables typed ({len(tables)} per run)":
+        f"tuples holding kernels typed ({len(tables)} per run)":
             (_cpu_ms(typing(vars(disp)["typeof_pyval"])),
              _cpu_ms(typing(lambda t: plain_type(disp, t)))),
         f"kernel addresses looked up ({len(pairs)} per run)":
@@ -265,10 +267,11 @@ def report(times, n_imu, parts, prune, n_params, args) -> str:
               "| per run | CPU ms with the shortcut | without | spared |", "|---|---|---|---|"]
     for name, (on, off) in parts.items():
         lines.append(f"| {name} | {on:.3f} | {off:.3f} | {off - on:.3f} |")
-    lines += ["", "Kept: the kernel-table typing and address memos "
+    lines += ["", "Kept: the typing memo of tuples holding kernels, the address memo "
               "(`fuzzynav/filters/numba_patch_dispatch.py`) and the two `LiveCache` memos. "
-              "Removed in this measurement's change: the memo of the IMU clock's interval "
-              "(~0.2 ms of a run) and the pruner reading the best trial uncopied (below).",
+              "Removed on 2026-12-03, after this benchmark measured them: the memo of the IMU "
+              "clock's interval (~0.2 ms of a run) and the pruner reading the best trial "
+              "uncopied (below).",
               "", f"Wilcoxon pruner, one decision against a study of 60 complete trials of "
               f"{n_params} parameters and 9 steps each (a `paper000_tune` trial's size), "
               f"{args.rounds} interleaved rounds of 200 decisions:", "",
