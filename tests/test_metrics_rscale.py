@@ -78,20 +78,23 @@ def test_first_bank_tuning_switched_the_magnetometer_off(paper001_log):
 @pytest.mark.parametrize("k", ["", "_t1", "_t2"])
 def test_retuned_bank_keeps_the_magnetometer_on(paper001_log, k):
     # every shipped tuning of studies/paper001_beta_tune*.toml (r_use weighed, an undisturbed
-    # training run): on calm epochs the local's R stays within a factor OFF_SCALE of nominal
-    # (the magnetometer weighed at more than a tenth of its information) on most epochs
+    # training run): judged from the run's own event log -- the magnetometer's logged R
+    # factor on the epochs the simulator left undisturbed -- the factor does adapt, yet its
+    # median stays within OFF_SCALE of nominal and it exceeds OFF_SCALE (the sensor weighed
+    # at less than a tenth of its information) on under a quarter of those epochs
     out = run_on_log(paper001_log, BANK.format(k=k))
-    m = out.metrics
-    assert 1.0 / OFF_SCALE < m["r_use_median_calm"] < OFF_SCALE
-    assert m["r_use_off_calm"] < 0.25
-    # the figure is the median of the magnetometer's logged R factor over the epochs the
-    # simulator left undisturbed, recomputed here from the run's own event log
     name = next(nm for nm, d in paper001_log.sensors.items() if d.kind == "magnetometer")
-    ev = out.result.events[name]
-    scale = ev.diagnostic("r_scale")
+    scale = out.result.events[name].diagnostic("r_scale")
     calm = paper001_log.sensors[name].meta["deflection_rad"][:scale.size] == 0.0
-    assert calm.sum() > 100
-    assert m["r_use_median_calm"] == pytest.approx(float(np.median(scale[calm])), rel=1e-12)
+    x = scale[calm & np.isfinite(scale) & (scale > 0.0)]
+    assert x.size > 100
+    assert x.max() > 2.0 * x.min()  # not a constant-noise run: the band below means something
+    median, off = float(np.median(x)), float(np.mean(x > OFF_SCALE))
+    assert 1.0 / OFF_SCALE < median < OFF_SCALE and off < 0.25
+    # the run's metrics are those figures
+    m = out.metrics
+    assert m["r_use_median_calm"] == pytest.approx(median, rel=1e-12)
+    assert m["r_use_off_calm"] == pytest.approx(off, abs=1e-12)
     # and far below the first tuning's, which held the sensor off on calm epochs
     v1 = run_on_log(paper001_log, BANK.format(k="_v1")).metrics
     assert m["r_use_median_calm"] < v1["r_use_median_calm"] / 2
