@@ -140,7 +140,7 @@ def _looks_like_path(name: str) -> bool:
 def _scenario(t: Table, i: int, name: str, here: Path) -> tuple:
     """A scenario name, or a file path resolved against the config's directory; checked.
 
-    Returns the name (or path) and the run's duration [s].
+    Returns the name (or path) and the loaded :class:`~fuzzynav.sim.scenario.Scenario`.
     """
     from fuzzynav.sim.scenario import load_scenario
 
@@ -148,7 +148,7 @@ def _scenario(t: Table, i: int, name: str, here: Path) -> tuple:
         path = Path(name) if Path(name).is_absolute() else here / name
         name = str(user_file(t, f"scenarios[{i}]", path, (".toml",), "scenario file"))
     try:
-        return name, load_scenario(name).duration_s
+        return name, load_scenario(name)
     except FuzzynavError as exc:
         raise t.error(f"scenarios[{i}]", str(exc)) from None
 
@@ -162,10 +162,10 @@ def _seed_list(t: Table, key: str, default=None) -> list:
     return seeds
 
 
-def _runs(t: Table, here: Path) -> tuple:
+def _runs(t: Table, here: Path, loaded_scenarios: dict) -> tuple:
     """The runs of ``[train]`` / ``[test]`` (scenarios x seeds, recordings x recording
     seeds) and the shortest simulated run's duration (inf without one: a recording is
-    scored in its own window)."""
+    scored in its own window); each scenario read goes into ``loaded_scenarios``."""
     scenarios = t.data.get("scenarios")
     t._used.add("scenarios")
     has_recordings = "recordings" in t.data
@@ -177,8 +177,9 @@ def _runs(t: Table, here: Path) -> tuple:
                                        " (or give recordings)")
         seeds = _seed_list(t, "seeds")
         loaded = [_scenario(t, i, sc, here) for i, sc in enumerate(scenarios)]
+        loaded_scenarios.update(loaded)
         runs += [(sc, int(sd)) for sc, _ in loaded for sd in seeds]
-        shortest = min(d for _, d in loaded)
+        shortest = min(scn.duration_s for _, scn in loaded)
     if has_recordings:
         runs += recording_runs(t, _seed_list(t, "recording_seeds", [0]))
     return tuple(runs), shortest
@@ -295,10 +296,11 @@ def study_config_from_dict(doc: dict, path: Path | None = None,
     candidate = _candidate_filter(ob)
     ob.finish()
     tr = top.table("train")
-    train, shortest = _runs(tr, here)
+    scenarios = {}  # name -> Scenario, read once for every check below
+    train, shortest = _runs(tr, here, scenarios)
     tr.finish()
     tt = top.table("test")
-    test, shortest_test = _runs(tt, here)
+    test, shortest_test = _runs(tt, here, scenarios)
     compare = _compare(tt)
     tt.finish()
     _check_held_out(tt, train, test)
@@ -308,7 +310,7 @@ def study_config_from_dict(doc: dict, path: Path | None = None,
         raise ob.error("t_start_s", f"{t_start:g} s is at or after the end of the shortest "
                                     f"run ({min(shortest, shortest_test):g} s): nothing "
                                     "would be scored")
-    streaming = read_streaming(top, train + test)
+    streaming = read_streaming(top, train + test, scenarios)
     ctrls = tuple(parse_controller(c, here) for c in top.tables("controllers", need_controllers))
     if not ctrls and need_controllers:
         raise top.error("controllers", "a study needs at least one [[controllers]] table")

@@ -92,9 +92,10 @@ class StudyStreaming:
                                 f"(filter {filter_spec}): {exc.reason}") from None
 
 
-def read_streaming(top, runs: tuple) -> StudyStreaming | None:
+def read_streaming(top, runs: tuple, scenarios: dict) -> StudyStreaming | None:
     """The ``[streaming]`` table of a study file (``top``: its :class:`~fuzzynav.sim.
-    tomltable.Table`; ``runs``: its training and test runs), or ``None`` without one.
+    tomltable.Table`; ``runs``: its training and test runs; ``scenarios``: the simulated
+    runs' scenarios by name, as read), or ``None`` without one.
 
     Raises
     ------
@@ -104,12 +105,8 @@ def read_streaming(top, runs: tuple) -> StudyStreaming | None:
         whose logs held at once (every run a study simulates stays in memory) and a run
         filtered meanwhile need more than :func:`fuzzynav.sim.budget.memory_limit`.
     """
-    from fuzzynav.realdata.dataspec import is_recording_name
-    from fuzzynav.sim.scenario import load_scenario
-
     st = top.table("streaming", required=False)
-    simulated = [run for run in dict.fromkeys(runs) if not is_recording_name(run[0])]
-    scenarios = {name: load_scenario(name) for name, _ in simulated}
+    simulated = [run for run in dict.fromkeys(runs) if run[0] in scenarios]
     if st is None:
         for name, scn in scenarios.items():
             try:
@@ -120,7 +117,7 @@ def read_streaming(top, runs: tuple) -> StudyStreaming | None:
         _check_held(top, "streaming", simulated, scenarios, lambda scn: True,
                     budget.whole_estimate, HOW)
         return None
-    recordings = [name for name, _ in runs if is_recording_name(name)]
+    recordings = [name for name, _ in runs if name not in scenarios]
     if recordings:
         raise st.error("", f"recordings are read and filtered whole ({recordings[0]}); "
                            "[streaming] applies to a study on simulated scenarios only")
