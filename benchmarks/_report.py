@@ -1,6 +1,7 @@
 """Shared helpers of the speed benchmarks: their sections of docs/benchmarks.md."""
 from __future__ import annotations
 
+import argparse
 import os
 import shutil
 import tempfile
@@ -10,7 +11,7 @@ from pathlib import Path
 from fuzzynav.fileio import write_text_atomic
 from fuzzynav.pages.common import machine, markers, replace_section
 
-__all__ = ["machine", "write_section", "measured_section"]
+__all__ = ["machine", "write_section", "measured_section", "bench_parser"]
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "benchmarks.md"
 HEADER = """# Benchmarks
@@ -46,3 +47,14 @@ def measured_section(name: str, args, measure_all, report) -> str:
     if not args.no_write:
         write_section(name, text)
     return text
+
+
+def bench_parser(doc: str, **counts: int) -> argparse.ArgumentParser:
+    """The command line of a benchmark: ``--no-write`` and one integer option per entry of
+    ``counts`` (``long_trials=3`` is ``--long-trials``, default 3); described by the first
+    line of ``doc``."""
+    ap = argparse.ArgumentParser(description=doc.split("\n")[0])
+    for name, default in counts.items():
+        ap.add_argument("--" + name.replace("_", "-"), type=int, default=default)
+    ap.add_argument("--no-write", action="store_true", help="print, leave docs/ alone")
+    return ap

@@ -16,7 +16,6 @@ kernel cache adds about a minute and a half per tree).
 """
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import statistics
@@ -27,7 +26,7 @@ from pathlib import Path
 import optuna
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _report import machine, measured_section  # noqa: E402
+from _report import bench_parser, machine, measured_section  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 STUDY = "paper000_tune.toml"
@@ -147,11 +146,8 @@ def report(args, rounds: list, load: tuple, secs: float) -> str:
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = bench_parser(__doc__, trials=60, rounds=3)
     ap.add_argument("--base", default="98740c8", help="git revision to compare against")
-    ap.add_argument("--trials", type=int, default=60)
-    ap.add_argument("--rounds", type=int, default=3)
-    ap.add_argument("--no-write", action="store_true", help="print, leave docs/ alone")
     args = ap.parse_args(argv)
 
     def measure_all(tmp):

@@ -16,7 +16,6 @@ Usage: ``python benchmarks/bench_study_stream.py [--trials 40] [--long-trials 3]
 """
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import statistics
@@ -25,7 +24,7 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _report import machine, measured_section  # noqa: E402
+from _report import bench_parser, machine, measured_section  # noqa: E402
 from bench_study import config_copy  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -119,12 +118,7 @@ def report(args, rounds: list, load: tuple, secs: float) -> str:
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--trials", type=int, default=40)
-    ap.add_argument("--long-trials", type=int, default=3)
-    ap.add_argument("--rounds", type=int, default=3)
-    ap.add_argument("--no-write", action="store_true", help="print, leave docs/ alone")
-    args = ap.parse_args(argv)
+    args = bench_parser(__doc__, trials=40, long_trials=3, rounds=3).parse_args(argv)
     trials = {"whole": args.trials, "streamed, held": args.trials,
               "streamed, long": args.long_trials}
 
