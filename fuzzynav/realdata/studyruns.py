@@ -30,6 +30,7 @@ from fuzzynav.realdata.score import check_scored, errors_against, outage_scoring
 from fuzzynav.realdata.session import GnssSource, context_for
 from fuzzynav.realdata.sources import SOURCES, data_options
 from fuzzynav.realdata.validate import fed_sigma, prepare_feeds, required_names
+from fuzzynav.runpath import STREAMING_SETTINGS
 
 __all__ = ["STUDY_FEED", "UNSCORED", "RecordingRun", "MIN_SCORED_S", "recording_run"]
 
@@ -58,6 +59,9 @@ class RecordingRun:
         Length of the scored run [s].
     inner : Source
         The recording's run source.
+    imu_rate_hz : float
+        The rate of the IMU increments the filter is fed [Hz] (a study's ``[streaming]``
+        ``chunk_s`` is a whole number of them).
     """
 
     name: str
@@ -65,9 +69,10 @@ class RecordingRun:
     sensors: dict
     duration_s: float
     inner: object
+    imu_rate_hz: float
 
     # the study's window sets start and length; the kind's protocol defaults the rest
-    SETTINGS = frozenset({"mc"})
+    SETTINGS = frozenset({"mc"}) | STREAMING_SETTINGS
     KIND = "study runs on recordings"
     SETTINGS_NOTE = ("a run's start and length are its recording window "
                      "(akit:DIR:N@START-END), scored from the window's start")
@@ -80,10 +85,29 @@ class RecordingRun:
         return self.inner.inputs(setup)
 
     def score(self, result) -> dict:
-        return {k: v for k, v in self.inner.score(result).items() if k not in UNSCORED}
+        return _scored(self.inner.score(result))
+
+    def streaming_scorer(self):
+        """The recording source's streaming scorer (fed each chunk of the solution)."""
+        return self.inner.streaming_scorer()
+
+    def score_streamed(self, result, scorer) -> dict:
+        """:meth:`score` of a run fed chunk by chunk to ``scorer``: the same metrics."""
+        return _scored(self.inner.score_streamed(result, scorer))
 
     def required(self, metrics: dict) -> tuple:
         return self.inner.required(metrics)
+
+
+def _scored(metrics: dict) -> dict:
+    """``metrics`` without those a recording cannot give (:data:`UNSCORED`)."""
+    return {k: v for k, v in metrics.items() if k not in UNSCORED}
+
+
+def _rate_hz(imu) -> float:
+    """The mean rate of an IMU's increments [Hz]."""
+    t = imu.time_s
+    return (t.size - 1) / float(t[-1] - t[0])
 
 
 @lru_cache(maxsize=16)
@@ -130,7 +154,7 @@ def _dvl_run(name, seed, rec, lo, hi) -> RecordingRun:
     cut = replace(rec, imu=until(rec.imu, hi), dvl=until(rec.dvl, hi))
     ref = within(rec.reference, lo, hi)
     return RecordingRun(name, int(seed), {"dvl": cut.dvl}, hi - lo,
-                        akit.AkitSource(cut, ref, name))
+                        akit.AkitSource(cut, ref, name), _rate_hz(cut.imu))
 
 
 def _gnss_run(name, seed, rec, lo, hi,
@@ -157,4 +181,4 @@ def _gnss_run(name, seed, rec, lo, hi,
             lambda res: errors_against(res, cut.reference, lever, settings.velocity_lag_s),
             windows, t0),
         lambda m: required_names(m, vel_scored), settings.use_velocity)
-    return RecordingRun(name, int(seed), {"gnss": fixes}, hi - t0, source)
+    return RecordingRun(name, int(seed), {"gnss": fixes}, hi - t0, source, _rate_hz(cut.imu))

@@ -21,7 +21,11 @@ the other to the last bit (the same data, the same filter arithmetic, the same s
 sums: tests/tuning/test_study_streaming.py); against a whole-run study they differ only
 in the order of the RMS sums.
 
-Recordings are read whole, so a study with recordings refuses the table.
+A recording (``[train] recordings``) is loaded once and held, as without the table; its
+runs are filtered over chunks of ``chunk_s`` alike, their outputs kept at
+``output_rate_hz``, and scored chunk by chunk against the reference
+(:mod:`fuzzynav.realdata.reference_scoring`): the metrics of the whole run to the last bit.
+``hold_log_mb`` applies to simulated runs only.
 """
 from __future__ import annotations
 
@@ -29,6 +33,8 @@ from dataclasses import dataclass
 
 from fuzzynav.errors import FuzzynavError, InputFileError, OutputRateError
 from fuzzynav.experiment import run_on_log, streamed_run, streamed_source
+from fuzzynav.realdata.studyruns import RecordingRun
+from fuzzynav.runpath import run
 from fuzzynav.sim import budget
 from fuzzynav.sim.sensor_log import SensorLog, simulate
 
@@ -49,11 +55,11 @@ class StudyStreaming:
     #: the largest log a study holds [bytes]; a longer run is simulated again per run
     hold_log_bytes: float = float(budget.TRUTH_STORE_BYTES)
 
-    def chunk_samples(self, scenario) -> int:
-        """IMU samples per chunk of ``scenario``'s runs (at least one)."""
+    def chunk_samples(self, imu_rate_hz: float) -> int:
+        """IMU samples per chunk of runs whose IMU runs at ``imu_rate_hz`` (at least one)."""
         if self.chunk_s is None:
             return budget.DEFAULT_CHUNK_SAMPLES
-        return max(1, round(self.chunk_s * scenario.imu.rate_hz))
+        return max(1, round(self.chunk_s * imu_rate_hz))
 
     def holds(self, scenario) -> bool:
         """Whether ``scenario``'s runs are simulated once and held (their log fits
@@ -67,10 +73,12 @@ class StudyStreaming:
         from, a chunk of it held)."""
         if self.holds(scenario):
             return simulate(scenario, seed, cache_dir)
-        return streamed_source(scenario, seed, self.chunk_samples(scenario))
+        return streamed_source(scenario, seed, self.chunk_samples(scenario.imu.rate_hz))
 
     def run(self, log, filter_spec: str, options=None, setup=None, t_start_s: float = 0.0):
-        """One run on ``log`` (:meth:`log`'s), filtered over chunks with streamed metrics.
+        """One run on ``log`` (:meth:`log`'s, or a recording's
+        :class:`~fuzzynav.realdata.studyruns.RecordingRun`), filtered over chunks with
+        streamed metrics.
 
         Raises
         ------
@@ -78,14 +86,18 @@ class StudyStreaming:
             :attr:`output_rate_hz` cannot be kept by this filter (named as the study
             file's key, not the command line's option).
         """
-        scenario = log.scenario if isinstance(log, SensorLog) else log.log.scenario
-        chunk = self.chunk_samples(scenario)
+        rate = self.output_rate_hz
         try:
+            if isinstance(log, RecordingRun):  # held, scored in its own window
+                return run(log, filter_spec, options, setup, output_rate_hz=rate,
+                           chunk_samples=self.chunk_samples(log.imu_rate_hz))
+            scenario = log.scenario if isinstance(log, SensorLog) else log.log.scenario
+            chunk = self.chunk_samples(scenario.imu.rate_hz)
             if isinstance(log, SensorLog):
                 return run_on_log(log, filter_spec, options, t_start_s, setup,
-                                  chunk_samples=chunk, output_rate_hz=self.output_rate_hz)
+                                  chunk_samples=chunk, output_rate_hz=rate)
             return streamed_run(scenario, log.seed, filter_spec, options, t_start_s,
-                                {"chunk_samples": chunk, "output_rate_hz": self.output_rate_hz},
+                                {"chunk_samples": chunk, "output_rate_hz": rate},
                                 None, setup=setup)
         except OutputRateError as exc:
             raise FuzzynavError(f"[streaming] output_rate_hz = {self.output_rate_hz:g} Hz "
@@ -117,10 +129,6 @@ def read_streaming(top, runs: tuple, scenarios: dict) -> StudyStreaming | None:
         _check_held(top, "streaming", simulated, scenarios, lambda scn: True,
                     budget.whole_estimate, HOW)
         return None
-    recordings = [name for name, _ in runs if name not in scenarios]
-    if recordings:
-        raise st.error("", f"recordings are read and filtered whole ({recordings[0]}); "
-                           "[streaming] applies to a study on simulated scenarios only")
     chunk_s = st.number("chunk_s", 0.0, lo=0.0, lo_open=True) if "chunk_s" in st.data \
         else None
     out = StudyStreaming(chunk_s=chunk_s,

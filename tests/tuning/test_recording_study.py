@@ -14,6 +14,7 @@ from fuzzynav.tuning.study_config import load_study_config
 from fuzzynav.tuning.evaluate import run_table
 from fuzzynav.tuning.objective import Evaluator, score_metrics
 from tests.realdata.akit_files import auv_trajectory, write_akit
+from tests.realdata.test_streamed_recordings import _same_metrics as same_metrics
 from tests.tuning.studies import RULES, study_doc, write_study
 
 DVL_CTRL = {"name": "dvl", "template": str(RULES / "paper004_ror_dvl.json"),
@@ -180,3 +181,75 @@ def test_t_start_is_refused_in_a_study_with_recordings(tmp_path, with_data, t_st
     with pytest.raises(InputFileError, match=r"objective\.t_start_s: .*applies to simulated "
                                              r"runs only"):
         load_study_config(write_study(tmp_path, doc))
+
+
+def test_a_streamed_study_on_recordings_scores_their_whole_runs_to_the_bit(tmp_path,
+                                                                          with_data):
+    """With ``[streaming]`` a recording is filtered over chunks of ``chunk_s`` with its
+    output kept at ``output_rate_hz`` and scored chunk by chunk against its reference: each
+    reference epoch is interpolated from the same two rows as in the whole run, so the
+    baseline's, a candidate's and the test table's metrics are the whole study's exactly."""
+    from fuzzynav.fuzzy import load_fis
+
+    runs = ["akit:auv:1", "akit:auv:2@20-100%"]
+    whole = Evaluator(load_study_config(write_study(tmp_path, _doc(runs[:1], runs[1:]),
+                                                    file_name="whole.toml")))
+    doc = _doc(runs[:1], runs[1:])
+    doc["streaming"] = {"chunk_s": 7.3, "output_rate_hz": 1.0}
+    cfg = load_study_config(write_study(tmp_path, doc, file_name="streamed.toml"))
+    assert cfg.streaming is not None and cfg.streaming.chunk_s == 7.3
+    streamed = Evaluator(cfg)
+    systems = {"dvl": load_fis(DVL_CTRL["template"])}
+    for run in [(runs[0], 0), (runs[1], 0)]:
+        assert streamed.baseline(*run) == whole.baseline(*run)
+        got = streamed.run_systems(systems, *run)
+        assert got.metrics == whole.run_systems(systems, *run).metrics
+        # the kept solution is 1 Hz (the filter records at the IMU's 100 Hz)
+        step = np.diff(got.result.time_s)
+        assert np.allclose(step, 1.0, atol=1e-9) and got.result.time_s.size < 200
+    tables = [run_table(ev, systems, cfg.test, cfg.compare) for ev in (streamed, whole)]
+    cols = [c for c in tables[0] if c not in ("filter", "scenario")]
+    assert tables[0][cols].equals(tables[1][cols])
+
+
+def test_a_streamed_study_refuses_an_output_rate_the_filter_cannot_keep(tmp_path, with_data):
+    """The recording's filter records at 100 Hz: 0.3 Hz does not divide it."""
+    doc = _doc(["akit:auv:1"], ["akit:auv:2"])
+    doc["streaming"] = {"output_rate_hz": 0.3}
+    ev = Evaluator(load_study_config(write_study(tmp_path, doc)))
+    from fuzzynav.errors import FuzzynavError
+
+    with pytest.raises(FuzzynavError, match=r"\[streaming\] output_rate_hz = 0\.3 Hz "
+                                            r"\(filter ekf\)"):
+        ev.baseline("akit:auv:1", 0)
+
+
+@pytest.fixture
+def car_data(monkeypatch, tmp_path_factory):
+    """A data directory holding the synthetic car drive (``car/``, 4-Hz RTK fixes)."""
+    from tests.realdata.rtklib_files import write_drive
+
+    root = tmp_path_factory.mktemp("cardata")
+    (root / "car").mkdir()
+    write_drive(root / "car")
+    monkeypatch.setenv(DATA_DIR_ENV, str(root))
+    return root
+
+
+def test_a_streamed_gnss_study_scores_the_whole_runs_to_the_bit(tmp_path, car_data):
+    """A GNSS recording's study runs (the validation protocol's noisy fixes, scored against
+    the RTK fixes) streamed: the baseline's and another filter's metrics are the whole
+    run's exactly, for two seeds of the fed noise."""
+    runs = ["rtklib:car@0-60%", "rtklib:car@60-100%"]
+    docs = [_doc(runs[:1], runs[1:]) for _ in range(2)]
+    docs[1]["streaming"] = {"chunk_s": 5.3, "output_rate_hz": 2.0}
+    whole, streamed = (Evaluator(load_study_config(write_study(tmp_path, doc,
+                                                               file_name=f"{i}.toml")))
+                       for i, doc in enumerate(docs))
+    for seed in (0, 1):
+        base = streamed.baseline(runs[0], seed)
+        same_metrics(base, whole.baseline(runs[0], seed))   # the outage figures: NaN both
+        assert np.isfinite(base["rms_pos_h_m"])
+        got, ref = (ev.run(runs[0], seed, "sage-husa") for ev in (streamed, whole))
+        same_metrics(got.metrics, ref.metrics)
+        assert np.allclose(np.diff(got.result.time_s), 0.5, atol=1e-9)
