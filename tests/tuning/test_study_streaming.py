@@ -120,7 +120,7 @@ def test_a_run_too_long_to_hold_asks_for_the_table(tmp_path, monkeypatch):
     cfg = load_study_config(path)
     assert not cfg.streaming.holds(load_scenario(str(scn)))  # its log is ~580 MB
     assert cfg.streaming.holds(load_scenario(str(TINY)))
-    assert cfg.streaming.chunk_samples(load_scenario(str(scn))) == 700
+    assert cfg.streaming.chunk_samples(load_scenario(str(scn)).imu.rate_hz) == 700
 
 
 @pytest.mark.parametrize("table, where, what", [
@@ -139,7 +139,7 @@ def test_defaults_are_the_command_lines(tmp_path):
     cfg = load_study_config(write_study(tmp_path, streaming={}))
     assert cfg.streaming.output_rate_hz == 1.0
     assert cfg.streaming.hold_log_bytes == budget.TRUTH_STORE_BYTES
-    assert cfg.streaming.chunk_samples(load_scenario(str(TINY))) == budget.DEFAULT_CHUNK_SAMPLES
+    assert cfg.streaming.chunk_samples(load_scenario(str(TINY)).imu.rate_hz) == budget.DEFAULT_CHUNK_SAMPLES
     assert load_study_config(write_study(tmp_path, file_name="none.toml")).streaming is None
 
 
