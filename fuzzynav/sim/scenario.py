@@ -28,7 +28,7 @@ import numpy as np
 from fuzzynav.errors import DataMissingError, InputFileError, UnknownNameError
 from fuzzynav.registry import paper_files
 from fuzzynav.sim.imu import ImuSpec
-from fuzzynav.sim.scenario_checks import check_scenario
+from fuzzynav.sim.scenario_checks import as_base, check_scenario
 from fuzzynav.sim.sea import SeaState
 from fuzzynav.sim.segments import SEGMENT_KINDS, Profile, Segment
 from fuzzynav.sim.sensors import spec_class
@@ -291,10 +291,17 @@ def merge_base(doc: dict, stem: str, here, depth: int, parent_doc) -> dict:
     return merge_tables(parent, doc)
 
 
+def _base_doc(base, depth: int) -> dict:
+    """The document of a ``base =`` scenario, checked as a scenario but for its run's size
+    (:func:`~fuzzynav.sim.scenario_checks.as_base`: the derived scenario's is checked)."""
+    with as_base():
+        return _load(base, depth).to_dict()
+
+
 def _load(name_or_path, depth=0) -> Scenario:
     doc, stem, label, here = read_file(name_or_path)
     with with_path(label):
-        doc = merge_base(doc, stem, here, depth, lambda base, d: _load(base, d).to_dict())
+        doc = merge_base(doc, stem, here, depth, _base_doc)
         return scenario_from_dict(doc, default_name=stem)
 
 

@@ -8,12 +8,14 @@ file whose ``where`` is the key to change.
 """
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import math
 
 from fuzzynav.errors import InputFileError
 from fuzzynav.sim.budget import check_run_size
 
-__all__ = ["MAX_SPEED_MPS", "POLE_MARGIN_DEG", "check_scenario"]
+__all__ = ["MAX_SPEED_MPS", "POLE_MARGIN_DEG", "check_scenario", "as_base"]
 
 #: fastest vehicle the near-surface Earth model is meant for [m/s] (jets fly < 1000 m/s)
 MAX_SPEED_MPS = 3000.0
@@ -24,6 +26,23 @@ POLE_MARGIN_DEG = 0.5
 _M_PER_DEG = 111_000.0
 #: shortest s-turn, in IMU samples (a turn needs samples to be seen at all)
 _MIN_TURN_SAMPLES = 2
+
+
+#: set while a scenario is built only as another's ``base =`` (:func:`as_base`)
+_AS_BASE = contextvars.ContextVar("fuzzynav_scenario_as_base", default=False)
+
+
+@contextlib.contextmanager
+def as_base():
+    """Build scenarios inside this block only as the ``base =`` of another: every check
+    runs but the run's size (:func:`~fuzzynav.sim.budget.check_run_size`).  A base is never
+    simulated; the scenario derived from it is checked whole, its own length included, so
+    a short flight derived from a long base is not refused for the base's length."""
+    token = _AS_BASE.set(True)
+    try:
+        yield
+    finally:
+        _AS_BASE.reset(token)
 
 
 def check_scenario(segments, imu, sensors, start: dict) -> None:
@@ -40,7 +59,8 @@ def check_scenario(segments, imu, sensors, start: dict) -> None:
     """
     _check_start(start)
     duration = float(sum(s.duration_s for s in segments))
-    check_run_size(duration, imu.rate_hz, sensors)
+    if not _AS_BASE.get():
+        check_run_size(duration, imu.rate_hz, sensors)
     _check_segments(segments, imu.rate_hz)
     _check_speed_and_pole(segments, start)
     for name, spec in sensors.items():

@@ -217,3 +217,33 @@ def test_a_run_cut_from_its_cached_log_stays_within_the_streamed_estimate(tmp_pa
                       + 2000 * (6 * budget.BYTES_PER_EPOCH_COLUMN + budget.BYTES_PER_OUTPUT_ROW))
     assert simulated_path < log < peak  # the figure of the simulated path alone is short
     assert peak < budget.streamed_estimate(2000.0, 50.0, scn.sensors, chunk_samples=500)
+
+
+def test_a_base_is_not_refused_for_its_own_length(tmp_path, monkeypatch):
+    """A short run derived from a long base fits a limit its base does not: the base is
+    never simulated, only the derived run's size is checked (the tiny study flight was
+    refused under 86 MB, paper000's streamed estimate).  A derived run made longer than
+    the limit allows is still refused, under its own file's name."""
+    base = _write(tmp_path / "long.toml", RUN.format(rate=100.0, duration=40_000.0))
+    short = _write(tmp_path / "short.toml", 'base = "long.toml"\nname = "short"\n'
+                   '[[segments]]\nkind = "cruise"\nduration_s = 60.0\n')
+    longer = _write(tmp_path / "longer.toml", 'base = "short.toml"\nname = "longer"\n'
+                    '[imu]\nrate_hz = 400.0\n[[segments]]\nkind = "cruise"\n'
+                    'duration_s = 80000.0\n')
+    monkeypatch.setenv(budget.ENV_VAR, str(64 / 1024))       # 64 MB
+    with pytest.raises(InputFileError, match="limit"):
+        load_scenario(str(base))
+    scn = load_scenario(str(short))                            # its base: 40 000 s
+    assert scn.duration_s == 60.0 and scn.imu.rate_hz == 100.0
+    with pytest.raises(InputFileError, match="limit") as exc:   # its own 80 000 s at 400 Hz
+        load_scenario(str(longer))
+    assert "longer.toml" in str(exc.value)
+
+
+def test_a_base_with_a_bad_value_is_still_refused_naming_the_base(tmp_path):
+    """Only the size is left to the derived run: every other check of the base runs."""
+    _write(tmp_path / "bad.toml", RUN.format(rate=-5.0, duration=100.0))
+    derived = _write(tmp_path / "d.toml", 'base = "bad.toml"\n[imu]\nrate_hz = 50.0\n')
+    with pytest.raises(InputFileError) as exc:
+        load_scenario(str(derived))
+    assert "bad.toml" in str(exc.value) and "rate_hz" in str(exc.value)

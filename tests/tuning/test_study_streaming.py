@@ -171,8 +171,8 @@ def _nbytes(obj) -> int:
 
 
 def test_the_logs_a_study_holds_at_once_are_counted_together(tmp_path, monkeypatch):
-    """Each tiny run fits a 100-MB limit (12 MB filtered whole, 1.2 MB held; its base
-    paper000, checked when tiny is read, 86 MB in chunks), 75 held at once do not; with
+    """Each tiny run fits a 100-MB limit (12 MB filtered whole, 1.2 MB held), 75 held at
+    once do not; with
     ``hold_log_mb = 0`` none is held and the study is accepted."""
     scn = load_scenario(str(TINY))
     one = budget.held_log_bytes(scn.duration_s, scn.imu.rate_hz, scn.sensors)
