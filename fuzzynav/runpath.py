@@ -38,6 +38,7 @@ from fuzzynav.errors import FuzzynavError, OutputRateError, RunDivergedError
 from fuzzynav.filters.named import FilterContext, FilterSetup, get_filter, parse_filter_spec
 from fuzzynav.filters.runner import InitialState, run_filter
 from fuzzynav.filters.sensor_states import with_sensor_states
+from fuzzynav.sim.budget import check_run_outputs
 
 __all__ = ["RUN_SETTINGS", "STREAMING_SETTINGS", "RunInputs", "RunOutcome", "Source",
            "check_outcomes", "keep_every", "make_setup", "nonfinite", "refuse_settings", "run"]
@@ -206,6 +207,7 @@ def run(source: Source, filter_spec: str, options=None,
             raise OutputRateError(f"{source.KIND} score their whole result, so their "
                                   "output cannot be decimated")
         scorer = source.streaming_scorer()
+    _check_outputs(source, inp.imu, sensors, config, keep)
     res = run_filter(inp.imu, sensors, inp.init, config, setup.adapters,
                      _merged(setup.sensor_options, inp.sensor_options),
                      chunk_samples=chunk_samples, keep_every=keep,
@@ -214,6 +216,21 @@ def run(source: Source, filter_spec: str, options=None,
     metrics["completed"] = float(res.ok)
     return RunOutcome(filter_spec, source.name, int(source.seed), res, metrics,
                       nonfinite(source, metrics))
+
+
+def _check_outputs(source, imu, sensors: dict, config, keep: int) -> None:
+    """:func:`fuzzynav.sim.budget.check_run_outputs` of a run about to be filtered: the
+    solution rows it will keep (one per output period, every ``keep``-th), the epochs its
+    event logs record, beside the IMU and sensor arrays it is given."""
+    n = int(np.size(imu.time_s))
+    if n < 2:
+        return
+    dt = float(imu.time_s[-1] - imu.time_s[0]) / (n - 1)
+    stride = max(1, round(1.0 / (config.out_rate_hz * dt))) if dt > 0 else 1
+    held = sum(getattr(imu, f).nbytes for f in ("time_s", "dtheta_b", "dv_b"))
+    held += sum(d.time_s.nbytes + d.z.nbytes + d.sigma.nbytes for d in sensors.values())
+    epochs = sum(d.time_s.size for d in sensors.values())
+    check_run_outputs(source.name, held, n / stride / keep, epochs)
 
 
 def keep_every(filter_rate_hz: float, output_rate_hz: float) -> int:

@@ -26,7 +26,7 @@ ALLOWED = {
     "metrics": {"nav"},
     "metrics_rscale": set(),  # the metrics layer: usage of a sensor's R
     "report": {"metrics"},
-    "runpath": {"filters"},
+    "runpath": {"filters", "sim"},  # sim.budget: the memory a run's outputs need
     "experiment": {"runpath", "filters", "sim", "metrics", "metrics_rscale", "nav", "simsource",
                    "streamrun"},
     # a simulated log as a run source (context, initial error): whole or streamed

@@ -33,7 +33,8 @@ __all__ = ["BYTES_PER_IMU_SAMPLE", "BYTES_PER_BLOCK_SAMPLE", "BYTES_PER_EPOCH_CO
            "BYTES_PER_OUTPUT_ROW", "DEFAULT_CHUNK_SAMPLES", "whole_estimate",
            "streamed_estimate", "check_whole_run", "BYTES_PER_TRUTH_SAMPLE",
            "TRUTH_STORE_BYTES", "stored_truth_bytes", "keeps_truth",
-           "BYTES_PER_LOGGED_IMU_SAMPLE", "held_log_bytes"]
+           "BYTES_PER_LOGGED_IMU_SAMPLE", "held_log_bytes", "BYTES_PER_EVENT_ROW",
+           "check_run_outputs"]
 
 #: bytes held per IMU sample of the whole run through simulation and filtering, beyond the
 #: generator's block (marginal tracemalloc peaks of runs longer than a block: paper003
@@ -287,4 +288,46 @@ def check_held_logs(held: dict, working_bytes: float, what: str, how: str) -> No
                              f"held at once, need ~{human_bytes(total)} (the largest, {big}, "
                              f"~{human_bytes(held[big])}) and a run filtered meanwhile "
                              f"~{human_bytes(working_bytes)}; the limit is "
+                             f"{human_bytes(limit)} ({source}): {how}")
+
+
+#: bytes per epoch of a sensor's event log (time, residuals, innovation variances, NIS,
+#: flag and adaptation diagnostics of up to six channels: ~20 floats), rounded up for the
+#: loop's event arrays and their copy into the log
+BYTES_PER_EVENT_ROW = 512
+#: how to keep fewer of a run's outputs
+DECIMATE_HOW = ("keep fewer outputs: --output-rate HZ on the command line, [streaming] "
+                "output_rate_hz in a study")
+
+
+def check_run_outputs(what: str, held_bytes: float, output_rows: float, epochs: float,
+                      how: str = DECIMATE_HOW) -> None:
+    """Refuse a filter run whose recorded outputs, event logs and the data it is given
+    need more than :func:`memory_limit`, before the run allocates them (every run passes
+    here: :func:`fuzzynav.runpath.run`).  A recording is held as loaded, and an
+    undecimated day of a 10-Hz solution holds ~0.9 GB.
+
+    Parameters
+    ----------
+    what : str
+        The run (its source's name).
+    held_bytes : float
+        The data the run is given, already held (IMU and sensor arrays).
+    output_rows : float
+        Rows of the recorded solution kept (:data:`BYTES_PER_OUTPUT_ROW` each).
+    epochs : float
+        Sensor epochs the event logs record (:data:`BYTES_PER_EVENT_ROW` each).
+    how : str
+
+    Raises
+    ------
+    InputFileError
+        Without a file; ``where`` names the run.
+    """
+    out = output_rows * BYTES_PER_OUTPUT_ROW + epochs * BYTES_PER_EVENT_ROW
+    limit, source = memory_limit()
+    if held_bytes + out > limit:
+        raise InputFileError(None, what, f"its {output_rows:.3g} kept outputs and "
+                             f"{epochs:.3g} sensor epochs need ~{human_bytes(out)} beside the "
+                             f"~{human_bytes(held_bytes)} of data it is given; the limit is "
                              f"{human_bytes(limit)} ({source}): {how}")

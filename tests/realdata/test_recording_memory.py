@@ -85,3 +85,59 @@ def test_a_file_padded_with_nuls_is_not_read_as_one_huge_line(tmp_path, write, r
     with pytest.raises(InputFileError, match="MAX_MEAN_LINE_BYTES") as exc:
         read(path)
     assert str(exc.value).startswith(str(path))
+
+
+@pytest.fixture(scope="module")
+def auv_recording(tmp_path_factory):
+    """A 300-s synthetic A-KIT trajectory, loaded (100-Hz IMU, 1-Hz DVL)."""
+    from fuzzynav.realdata.loaders.akit_recording import load_trajectory
+    from tests.realdata.akit_files import auv_trajectory, write_akit
+
+    d = tmp_path_factory.mktemp("auv300")
+    write_akit(d, auv_trajectory(300.0), n=1, lag=1.0)
+    return load_trajectory(d, 1)
+
+
+def test_the_output_estimate_bounds_what_a_run_on_a_recording_allocates(auv_recording):
+    """``budget.check_run_outputs``'s figures against the peak tracemalloc sees while the
+    run path filters a loaded recording at its full 10-Hz output: the estimate must bound
+    it, and not by more than 4x (measured 540 B per output row with the events, against
+    1 024 + 0.1 x 512 estimated)."""
+    import tracemalloc
+
+    from fuzzynav.realdata.akit import AkitSource
+    from fuzzynav.runpath import run
+
+    src = AkitSource(auv_recording)
+    run(src, "ekf")                                   # compiled before the trace
+    tracemalloc.start()
+    out = run(src, "ekf")
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    rows, epochs = out.result.time_s.size, sum(e.time_s.size for e in
+                                               out.result.events.values())
+    estimate = rows * budget.BYTES_PER_OUTPUT_ROW + epochs * budget.BYTES_PER_EVENT_ROW
+    assert rows > 2900 and peak <= estimate <= 4 * peak, (rows, epochs, peak, estimate)
+
+
+def test_a_run_whose_outputs_do_not_fit_is_refused_before_it_runs(auv_recording,
+                                                                  monkeypatch):
+    """Loaded, the recording's data fits a 2.5-MB limit; its 3 000 undecimated outputs do not:
+    the run is refused naming the run, both figures and how to decimate; kept at 1 Hz it
+    runs (what ``--output-rate 1`` and a study's ``[streaming]`` do)."""
+    from fuzzynav.realdata.akit import AkitSource
+    from fuzzynav.runpath import run
+
+    src = AkitSource(auv_recording)
+    imu = auv_recording.imu
+    held = imu.time_s.nbytes + imu.dtheta_b.nbytes + imu.dv_b.nbytes
+    limit = 2.5 * 2**20
+    assert held < limit < held + 3000 * budget.BYTES_PER_OUTPUT_ROW   # the premise
+    monkeypatch.setenv(budget.ENV_VAR, str(limit / 2**30))
+    with pytest.raises(InputFileError) as exc:
+        run(src, "ekf")
+    msg = str(exc.value)
+    assert exc.value.where == src.name and "kept outputs" in msg and "--output-rate" in msg
+    assert f"limit is {budget.human_bytes(limit)}" in msg and "output_rate_hz" in msg, msg
+    out = run(src, "ekf", output_rate_hz=1.0)
+    assert out.metrics["completed"] == 1.0 and out.result.time_s.size <= 301
