@@ -21,7 +21,8 @@ import numpy as np
 from fuzzynav.nav import attitude, earth
 from fuzzynav.sim.imu import ImuData, ImuSpec
 
-__all__ = ["Sway", "AlignLog", "ideal_increments", "simulate_alignment"]
+__all__ = ["Sway", "AlignLog", "AlignChunk", "AlignChunks", "ideal_increments", "gradient",
+           "grid", "simulate_alignment"]
 
 
 @dataclass(frozen=True)
@@ -77,18 +78,33 @@ def _attitude(t, att0_rad, sway: Sway):
     return att0_rad + a * np.sin(np.outer(t, w) + ph)
 
 
-def _gusts(t, sway: Sway, rng):
-    """Gauss-Markov gust velocity (E, N) on the grid ``t`` (exact discretisation)."""
-    out = np.zeros((t.size, 3))
-    if sway.gust_sigma_mps <= 0.0:
+class _Gusts:
+    """The Gauss-Markov gust velocity (E, N), exact discretisation, made for consecutive
+    pieces of the grid: each piece draws its own normals in turn and carries the last
+    point, so the pieces are one draw over the whole grid to the last bit."""
+
+    def __init__(self, sway: Sway, rng):
+        self.sway, self.rng, self.last = sway, rng, None   # (t, value) of the last point
+
+    def next(self, t) -> np.ndarray:
+        """The gusts at the grid points ``t`` following those made before."""
+        out = np.zeros((t.size, 3))
+        sigma = self.sway.gust_sigma_mps
+        if sigma <= 0.0 or not t.size:
+            return out
+        e = self.rng.standard_normal((t.size, 2))
+        if self.last is None:
+            prev_t, k0 = t[:1], 1
+            out[0, :2] = sigma * e[0]
+        else:
+            prev_t, k0 = np.array([self.last[0]]), 0
+            out_prev = self.last[1]
+        phi = np.exp(-np.diff(np.concatenate([prev_t, t[k0:]])) / self.sway.gust_tau_s)
+        for k in range(k0, t.size):
+            before = out[k - 1, :2] if k > 0 else out_prev
+            out[k, :2] = phi[k - k0] * before + sigma * np.sqrt(1.0 - phi[k - k0] ** 2) * e[k]
+        self.last = (t[-1], out[-1, :2].copy())
         return out
-    phi = np.exp(-np.diff(t) / sway.gust_tau_s)
-    e = rng.standard_normal((t.size, 2))
-    out[0, :2] = sway.gust_sigma_mps * e[0]
-    for k in range(1, t.size):
-        out[k, :2] = phi[k - 1] * out[k - 1, :2] + sway.gust_sigma_mps * np.sqrt(
-            1.0 - phi[k - 1] ** 2) * e[k]
-    return out
 
 
 def _velocity(t, sway: Sway, gusts):
@@ -97,16 +113,17 @@ def _velocity(t, sway: Sway, gusts):
     return v
 
 
-def ideal_increments(t, C_bn, vel_n, lat_rad, h_m):
+def ideal_increments(t, C_bn, vel_n, lat_rad, h_m, acc_n=None):
     """Exact angle and Simpson velocity increments between the samples of ``t``.
 
-    ``t`` holds the IMU samples and the mid-points between them (length 2N+1).
+    ``t`` holds the IMU samples and the mid-points between them (length 2N+1); ``acc_n``
+    the acceleration at them (default: :func:`gradient` of ``vel_n``).
     """
     w_ie = earth.omega_ie_n(lat_rad)
     C_in = attitude.rotvec_to_dcm(np.outer(t, w_ie))
     C_ib = C_in @ C_bn
     dtheta = attitude.dcm_to_rotvec(np.swapaxes(C_ib[:-2:2], -1, -2) @ C_ib[2::2])
-    acc = np.gradient(vel_n, t, axis=0)
+    acc = gradient(vel_n, t) if acc_n is None else acc_n
     f_n = acc + 2.0 * np.cross(w_ie, vel_n) + np.array([0.0, 0.0, earth.gravity(lat_rad, h_m)])
     f_b = np.einsum("kji,kj->ki", C_bn, f_n)
     h = t[2::2] - t[:-2:2]
@@ -114,9 +131,90 @@ def ideal_increments(t, C_bn, vel_n, lat_rad, h_m):
     return dtheta, dv
 
 
+def gradient(f, t) -> np.ndarray:
+    """``np.gradient(f, t, axis=0)`` by its formula for an uneven grid, always: numpy takes
+    another formula when the spacing is exactly even, which a piece of a grid may be when
+    the whole is not, so a chunk would differ from the whole run in its last bits."""
+    dx = np.diff(t)
+    dx1, dx2 = dx[:-1], dx[1:]
+    a = (-(dx2) / (dx1 * (dx1 + dx2)))[:, None]
+    b = ((dx2 - dx1) / (dx1 * dx2))[:, None]
+    c = (dx1 / (dx2 * (dx1 + dx2)))[:, None]
+    out = np.empty_like(f, dtype=float)
+    out[1:-1] = a * f[:-2] + b * f[1:-1] + c * f[2:]
+    out[0] = (f[1] - f[0]) / dx[0]
+    out[-1] = (f[-1] - f[-2]) / dx[-1]
+    return out
+
+
+def grid(j0: int, j1: int, num: int, stop: float) -> np.ndarray:
+    """Points ``j0 .. j1-1`` of ``np.linspace(0, stop, num)``, to the last bit (numpy's
+    ``j * (stop / (num - 1))``, the last point ``stop`` itself)."""
+    t = np.arange(j0, j1, dtype=float) * (stop / (num - 1))
+    if j1 == num:
+        t[-1] = stop
+    return t
+
+
+@dataclass(frozen=True)
+class AlignChunk:
+    """IMU samples ``k0 .. k1`` of an alignment run: the increments between them (``imu``,
+    ``time_s`` of the ``k1 - k0 + 1`` samples) and the truth at them."""
+
+    k0: int
+    k1: int
+    imu: ImuData
+    C_bn: np.ndarray
+    vel_n: np.ndarray
+
+
+class AlignChunks:
+    """An alignment run's IMU data and truth made chunk by chunk, each the whole run's to
+    the last bit (:func:`simulate_alignment` is the one-chunk case).
+
+    The time grid (samples and mid-points) is :func:`grid`'s; each chunk's acceleration is
+    :func:`gradient` over its piece of the grid widened by a point each side (only the run's
+    own ends take the one-sided formula); the gusts (:class:`_Gusts`) and the IMU errors
+    (:class:`~fuzzynav.sim.imu.ImuStream`) carry their random processes across chunks.
+
+    Parameters
+    ----------
+    imu, lat_rad, h_m, att0_rad, duration_s, rng, sway
+        As :func:`simulate_alignment`.
+    chunk_samples : int, optional
+        IMU samples per chunk (default: the whole run in one).
+    """
+
+    def __init__(self, imu: ImuSpec, lat_rad, h_m, att0_rad, duration_s, rng,
+                 sway: Sway = Sway(), chunk_samples: int | None = None):
+        self.imu_spec, self.lat_rad, self.h_m, self.sway = imu, float(lat_rad), float(h_m), sway
+        self.att0 = np.asarray(att0_rad, dtype=float)
+        self.n = int(round(duration_s * imu.rate_hz))
+        self.chunk = self.n if chunk_samples is None else max(1, int(chunk_samples))
+        self.g_gust, self.g_imu = rng.spawn(2)
+
+    def __iter__(self):
+        n, num, stop = self.n, 2 * self.n + 1, self.n / self.imu_spec.rate_hz
+        gusts, errors = _Gusts(self.sway, self.g_gust), self.imu_spec.stream(self.g_imu)
+        made, tail = 0, np.zeros((0, 3))   # grid points whose gusts are drawn; the last few
+        for k0 in range(0, max(n, 1), self.chunk):
+            k1 = min(k0 + self.chunk, n)
+            lo, hi = max(2 * k0 - 1, 0), min(2 * k1 + 2, num)
+            t = grid(lo, hi, num, stop)
+            g = np.vstack([tail[tail.shape[0] - (made - lo):], gusts.next(t[made - lo:])])
+            made, tail = hi, g[-3:]
+            vel = _velocity(t, self.sway, g)
+            C = attitude.euler_to_dcm(_attitude(t, self.att0, self.sway))
+            a, b = 2 * k0 - lo, 2 * k1 - lo + 1           # this chunk's grid points
+            dtheta, dv = ideal_increments(t[a:b], C[a:b], vel[a:b], self.lat_rad, self.h_m,
+                                          gradient(vel, t)[a:b])
+            ideal = ImuData(time_s=t[a:b:2], dtheta_b=dtheta, dv_b=dv)
+            yield AlignChunk(k0, k1, errors.corrupt(ideal), C[a:b:2], vel[a:b:2])
+
+
 def simulate_alignment(imu: ImuSpec, lat_rad, h_m, att0_rad, duration_s, rng,
                        sway: Sway = Sway()) -> AlignLog:
-    """IMU data and truth of an alignment run.
+    """IMU data and truth of an alignment run (:class:`AlignChunks` in one chunk).
 
     Parameters
     ----------
@@ -131,12 +229,6 @@ def simulate_alignment(imu: ImuSpec, lat_rad, h_m, att0_rad, duration_s, rng,
     sway : Sway
         Base motion (default: at rest).
     """
-    g_gust, g_imu = rng.spawn(2)
-    n = int(round(duration_s * imu.rate_hz))
-    t = np.linspace(0.0, n / imu.rate_hz, 2 * n + 1)
-    C_bn = attitude.euler_to_dcm(_attitude(t, np.asarray(att0_rad, dtype=float), sway))
-    vel = _velocity(t, sway, _gusts(t, sway, g_gust))
-    dtheta, dv = ideal_increments(t, C_bn, vel, lat_rad, h_m)
-    ideal = ImuData(time_s=t[::2], dtheta_b=dtheta, dv_b=dv)
-    return AlignLog(imu=imu.corrupt(ideal, g_imu), lat_rad=float(lat_rad), h_m=float(h_m),
-                    C_bn=C_bn[::2], vel_n=vel[::2])
+    (whole,) = AlignChunks(imu, lat_rad, h_m, att0_rad, duration_s, rng, sway)
+    return AlignLog(imu=whole.imu, lat_rad=float(lat_rad), h_m=float(h_m), C_bn=whole.C_bn,
+                    vel_n=whole.vel_n)
