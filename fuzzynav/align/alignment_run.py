@@ -29,19 +29,21 @@ from dataclasses import dataclass
 import numpy as np
 
 from fuzzynav import units
+from fuzzynav.align.budget import check_size
 from fuzzynav.align.fast import fast_azimuth, level_history
 from fuzzynav.align.fine import Epochs, FineResult, r_policy, run_fine
 from fuzzynav.align.alignment_states import EAST, LAYOUT_10, LAYOUT_12, NORTH, UP
-from fuzzynav.align.mechanize import mechanize
+from fuzzynav.align.mechanize import Mechanizer, mechanize
 from fuzzynav.align.scenario import AlignScenario
-from fuzzynav.align.simulate import AlignLog, simulate_alignment
+from fuzzynav.align.simulate import AlignChunks, AlignLog, simulate_alignment
 from fuzzynav.errors import FuzzynavError, brief
 from fuzzynav.nav import attitude, earth
 from fuzzynav.registry import Registry
 from fuzzynav.sim.sensor_log import component_rng
 
 __all__ = ["AlignFilter", "ALIGN_FILTERS", "get_align_filter", "align_spec", "AlignRun",
-           "simulate", "epochs", "true_misalignment", "run_align_filter", "ALIGN_ROWS", "alignment_time", "metrics", "seed_runs"]
+           "simulate", "epochs", "streamed_epochs", "true_misalignment", "run_align_filter",
+           "ALIGN_ROWS", "alignment_time", "metrics", "seed_runs"]
 
 #: (row label, metric key) of the comparison table
 ALIGN_ROWS = (
@@ -128,7 +130,9 @@ class AlignRun:
 
 
 def simulate(scn: AlignScenario, seed: int) -> AlignLog:
-    """The IMU log of a scenario and seed."""
+    """The IMU log of a scenario and seed (refused when it cannot fit:
+    :func:`fuzzynav.align.budget.check_size`)."""
+    check_size(scn)
     return simulate_alignment(scn.imu, np.radians(scn.lat_deg), scn.h_m,
                               np.radians(scn.att_deg), scn.duration_s,
                               component_rng(seed, "align-imu"), scn.sway)
@@ -142,6 +146,22 @@ def _reference_noise(scn: AlignScenario, time_s, seed):
     return sigma[:, None] * component_rng(seed, "align-ref").standard_normal((time_s.size, 3))
 
 
+def _step(scn: AlignScenario) -> int:
+    """IMU samples per filter epoch."""
+    return int(round(scn.noise.period_s * scn.imu.rate_hz))
+
+
+def _start(scn: AlignScenario, C_true0) -> np.ndarray:
+    """The open-loop start: the truth turned by ``misalign_deg`` (``exp(-[phi x]) C``)."""
+    return attitude.rotvec_to_dcm(-np.radians(scn.misalign_deg)) @ C_true0
+
+
+def _epochs(scn, seed, t, C, v, f, lat_rad, C_true, vel_true) -> Epochs:
+    """The epochs of a solution, with the reference's noise and the truth at them."""
+    return Epochs(t, C, v + _reference_noise(scn, t, seed), f, lat_rad, vel_err=v - vel_true,
+                  C_bn_true=C_true)
+
+
 def epochs(scn: AlignScenario, log: AlignLog, seed: int, C_bn0=None) -> Epochs:
     """The open-loop solution at the filter epochs, plus the reference's noise.
 
@@ -149,21 +169,51 @@ def epochs(scn: AlignScenario, log: AlignLog, seed: int, C_bn0=None) -> Epochs:
     ``misalign_deg`` (``C_calc = exp(-[phi x]) C_true``).
     """
     if C_bn0 is None:
-        C_bn0 = attitude.rotvec_to_dcm(-np.radians(scn.misalign_deg)) @ log.C_bn[0]
-    step = int(round(scn.noise.period_s * scn.imu.rate_hz))
+        C_bn0 = _start(scn, log.C_bn[0])
+    step = _step(scn)
     C, v, f = mechanize(log.imu, C_bn0, log.lat_rad, log.h_m, step)
-    t = log.imu.time_s[::step][:C.shape[0]]
-    return Epochs(t, C, v + _reference_noise(scn, t, seed), f, log.lat_rad,
-                  vel_err=v - log.vel_n[::step][:C.shape[0]])
+    k = slice(None, None, step)
+    t = log.imu.time_s[k][:C.shape[0]]
+    return _epochs(scn, seed, t, C, v, f, log.lat_rad, log.C_bn[k][:C.shape[0]],
+                   log.vel_n[k][:C.shape[0]])
 
 
-def true_misalignment(log: AlignLog, ep: Epochs) -> np.ndarray:
-    """``phi`` of the open-loop attitude at the epochs (exact vee)."""
+def streamed_epochs(scn: AlignScenario, seed: int, chunk_samples: int) -> Epochs:
+    """:func:`epochs` of a run simulated and mechanized chunk by chunk
+    (:class:`~fuzzynav.align.simulate.AlignChunks`, :class:`~fuzzynav.align.mechanize.
+    Mechanizer`): nothing of the run's length is held but the epochs (one per filter
+    period), and they are those of the whole run to the last bit.  ``chunk_samples`` is
+    rounded down to whole epochs (at least one)."""
+    step = _step(scn)
+    chunk = max(1, int(chunk_samples) // step) * step
+    check_size(scn, chunk)
+    chunks = AlignChunks(scn.imu, np.radians(scn.lat_deg), scn.h_m, np.radians(scn.att_deg),
+                         scn.duration_s, component_rng(seed, "align-imu"), scn.sway, chunk)
+    mech, t, C_true, vel_true = None, [], [], []
+    for ch in chunks:
+        if mech is None:
+            mech = Mechanizer(_start(scn, ch.C_bn[0]), chunks.lat_rad, chunks.h_m, step)
+            t, C_true, vel_true = [ch.imu.time_s[:1]], [ch.C_bn[:1]], [ch.vel_n[:1]]
+        mech.feed(ch.imu)
+        k = slice(step, None, step)       # the epochs that end in this chunk
+        t.append(ch.imu.time_s[k])
+        C_true.append(ch.C_bn[k])
+        vel_true.append(ch.vel_n[k])
+    C, v, f = mech.result()
+    return _epochs(scn, seed, np.concatenate(t), C, v, f, chunks.lat_rad,
+                   np.concatenate(C_true), np.concatenate(vel_true))
+
+
+def true_misalignment(log: AlignLog | None, ep: Epochs) -> np.ndarray:
+    """``phi`` of the open-loop attitude at the epochs (exact vee), against the truth the
+    epochs carry (else ``log``'s)."""
+    if ep.C_bn_true is not None:
+        return attitude.attitude_error(ep.C_bn, ep.C_bn_true)
     step = (log.imu.time_s.size - 1) // (ep.time_s.size - 1) if ep.time_s.size > 1 else 1
     return attitude.attitude_error(ep.C_bn, log.C_bn[::step][:ep.time_s.size])
 
 
-def run_align_filter(name: str, scn: AlignScenario, log: AlignLog, ep: Epochs,
+def run_align_filter(name: str, scn: AlignScenario, log: AlignLog | None, ep: Epochs,
                      rules=None, fast_kw=None, params=None) -> AlignRun:
     """Run a named alignment filter (``NAME`` or ``NAME@FILE``: :func:`align_spec`) on
     prepared epochs and score it against the truth.
@@ -211,7 +261,8 @@ def metrics(run: AlignRun, threshold_arcmin: float) -> dict:
             "final_level_n_arcmin": abs(e[-1, NORTH]) / units.ARCMIN}
 
 
-def seed_runs(scn: AlignScenario, rules=None, threshold_arcmin=None):
+def seed_runs(scn: AlignScenario, rules=None, threshold_arcmin=None,
+              chunk_samples: int | None = None):
     """The alignment runs of one seed for :func:`fuzzynav.experiment.monte_carlo`:
     ``seed -> (filter name -> metrics)``, each seed simulated once for all filters.
 
@@ -222,11 +273,18 @@ def seed_runs(scn: AlignScenario, rules=None, threshold_arcmin=None):
         Rule file of the fuzzy filters (default: the paper's).
     threshold_arcmin : float, optional
         Overrides the scenario's threshold.
+    chunk_samples : int, optional
+        Simulate and mechanize each seed in chunks of this many IMU samples
+        (:func:`streamed_epochs`: the same epochs, so the same metrics to the last bit);
+        default whole.
     """
     thr = scn.threshold_arcmin if threshold_arcmin is None else threshold_arcmin
 
     def of_seed(seed):
-        log = simulate(scn, seed)
-        ep = epochs(scn, log, seed)
+        if chunk_samples is None:
+            log = simulate(scn, seed)
+            ep = epochs(scn, log, seed)
+        else:
+            log, ep = None, streamed_epochs(scn, seed, chunk_samples)
         return lambda name: metrics(run_align_filter(name, scn, log, ep, rules=rules), thr)
     return of_seed

@@ -23,14 +23,27 @@ def _refuse(args, *options) -> None:
                             "(compare on an alignment scenario, run --align)")
 
 
+def _chunk_samples(args, scn):
+    """IMU samples per chunk from ``--chunk S`` (``None``: the run simulated whole)."""
+    chunk = getattr(args, "chunk", None)
+    if chunk is None:
+        return None
+    if not 0.0 < chunk < float("inf"):
+        raise FuzzynavError(f"--chunk must be a positive number, got {chunk:g}")
+    return max(1, int(round(chunk * scn.imu.rate_hz)))
+
+
 #: largest azimuth threshold (arcmin): half a turn; more means nothing
 MAX_THRESHOLD_ARCMIN = 180.0 * 60.0
 
 
 def compare_alignment(args, filters, claims=None, claim_labels=(), rows=()) -> int:
     """Run ``filters`` on ``args.mc`` seeds of an alignment scenario and print the table."""
-    _refuse(args, ("plot", "--plot"), ("t_start", "--t-start"))
+    _refuse(args, ("plot", "--plot"), ("t_start", "--t-start"),
+            ("output_rate", "--output-rate (its outputs are its filter epochs)"),
+            ("output_dir", "--output-dir"))
     scn = load_alignment_scenario(args.scenario)
+    chunk = _chunk_samples(args, scn)
     fuzzy = [f for f in filters if align_spec(f)[0].fuzzy]
     if args.rules and len(args.rules) > 1:
         raise FuzzynavError("--rules: the alignment filters take one rule file (ROR -> t)")
@@ -45,7 +58,7 @@ def compare_alignment(args, filters, claims=None, claim_labels=(), rows=()) -> i
                             f"arcmin, got {thr}")
     seeds = list(range(args.seed, args.seed + args.mc))
     df = monte_carlo(scn, filters, seeds, progress=not args.json and args.mc > 1,
-                     seed_runs=seed_runs(scn, (args.rules or [None])[0], thr))
+                     seed_runs=seed_runs(scn, (args.rules or [None])[0], thr, chunk))
     thr = scn.threshold_arcmin if thr is None else thr
     if args.json:
         out = {"scenario": scn.name, "seeds": seeds, "threshold_arcmin": thr, "filters": {}}

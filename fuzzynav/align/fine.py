@@ -73,6 +73,8 @@ class Epochs:
     lat_rad : float
     vel_err : ndarray (K+1, 3), optional
         True velocity error of the solution (simulations only, for consistency checks).
+    C_bn_true : ndarray (K+1, 3, 3), optional
+        True attitude at the epochs (simulations only: the misalignment to score).
     """
 
     time_s: np.ndarray
@@ -81,6 +83,7 @@ class Epochs:
     f_n: np.ndarray
     lat_rad: float
     vel_err: np.ndarray | None = None
+    C_bn_true: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

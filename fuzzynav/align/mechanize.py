@@ -17,7 +17,7 @@ import numpy as np
 from fuzzynav.nav import attitude, earth
 from fuzzynav.nav.strapdown import quat_mul, rv2q
 
-__all__ = ["mechanize"]
+__all__ = ["Mechanizer", "mechanize"]
 
 
 @nb.njit(cache=True)
@@ -67,6 +67,64 @@ def _integrate(dtheta, dv, h, q_init, v_init, w_ie, g_up, step, out_q, out_v, ou
             fsum[:] = 0.0
 
 
+class Mechanizer:
+    """The open-loop solution made chunk by chunk: attitude, velocity and mean specific
+    force at every ``step``-th IMU sample, each chunk continuing from the last one's state
+    (:func:`mechanize` is the one-chunk case).
+
+    Every chunk but the last must hold a whole number of epochs (``step`` samples), so that
+    an epoch's interval and its specific-force sum never straddle two chunks: the epochs
+    are then the whole run's to the last bit.  Samples after the last whole epoch are left
+    out, as one run over all of them leaves them.
+
+    Parameters
+    ----------
+    C_bn0 : ndarray (3, 3)
+        Initial attitude (from coarse alignment).
+    lat_rad, h_m : float
+        The fixed place.
+    step : int
+        IMU samples per filter epoch.
+    vel0 : array_like, optional
+        Initial velocity [m/s] (default zero).
+    """
+
+    def __init__(self, C_bn0, lat_rad, h_m, step, vel0=None):
+        self.step = int(step)
+        self.w_ie, self.g = earth.omega_ie_n(lat_rad), float(earth.gravity(lat_rad, h_m))
+        self.q = [attitude.dcm_to_quat(np.asarray(C_bn0, dtype=float))[None]]
+        self.v = [(np.zeros(3) if vel0 is None else np.asarray(vel0, dtype=float))[None]]
+        self.f = []
+        self.done = False   # a chunk that was not a whole number of epochs came (the last)
+
+    def feed(self, imu) -> None:
+        """The next chunk of increments (``time_s`` starting at the last chunk's end)."""
+        if self.done:
+            raise ValueError("Mechanizer: a chunk after one that was not a whole number of "
+                             "epochs")
+        n_ep = imu.dtheta_b.shape[0] // self.step
+        k_end = n_ep * self.step
+        self.done = k_end != imu.dtheta_b.shape[0]
+        h = np.diff(imu.time_s)[:k_end]
+        out_q, out_v, out_f = np.zeros((n_ep + 1, 4)), np.zeros((n_ep + 1, 3)), \
+            np.zeros((n_ep + 1, 3))
+        out_q[0], out_v[0] = self.q[-1][-1], self.v[-1][-1]
+        _integrate(np.ascontiguousarray(imu.dtheta_b[:k_end]),
+                   np.ascontiguousarray(imu.dv_b[:k_end]), h, out_q[0].copy(),
+                   out_v[0].copy(), self.w_ie, self.g, self.step, out_q, out_v, out_f)
+        T = h.reshape(n_ep, self.step).sum(1)
+        self.q.append(out_q[1:])
+        self.v.append(out_v[1:])
+        self.f.append(out_f[1:] / T[:, None])
+
+    def result(self):
+        """``(C_bn, vel_n, f_n)`` at the epochs so far, as :func:`mechanize` returns them."""
+        f = np.concatenate(self.f) if self.f else np.zeros((0, 3))
+        f0 = f[:1] if f.shape[0] else np.zeros((1, 3))       # row 0 copies row 1
+        return (attitude.quat_to_dcm(np.concatenate(self.q)), np.concatenate(self.v),
+                np.concatenate([f0, f]))
+
+
 def mechanize(imu, C_bn0, lat_rad, h_m, step, vel0=None):
     """Attitude, velocity and mean specific force at every ``step``-th IMU sample.
 
@@ -93,18 +151,6 @@ def mechanize(imu, C_bn0, lat_rad, h_m, step, vel0=None):
         Mean specific force over the interval ending at each epoch [m/s^2] (row 0 copies
         row 1).
     """
-    n_ep = imu.dtheta_b.shape[0] // step
-    k_end = n_ep * step
-    h = np.diff(imu.time_s)[:k_end]
-    out_q = np.zeros((n_ep + 1, 4))
-    out_v = np.zeros((n_ep + 1, 3))
-    out_f = np.zeros((n_ep + 1, 3))
-    out_q[0] = attitude.dcm_to_quat(np.asarray(C_bn0, dtype=float))
-    out_v[0] = np.zeros(3) if vel0 is None else vel0
-    _integrate(np.ascontiguousarray(imu.dtheta_b[:k_end]), np.ascontiguousarray(imu.dv_b[:k_end]),
-               h, out_q[0].copy(), out_v[0].copy(), earth.omega_ie_n(lat_rad),
-               float(earth.gravity(lat_rad, h_m)), int(step), out_q, out_v, out_f)
-    T = h.reshape(n_ep, step).sum(1)
-    out_f[1:] /= T[:, None]
-    out_f[0] = out_f[1] if n_ep else 0.0
-    return attitude.quat_to_dcm(out_q), out_v, out_f
+    m = Mechanizer(C_bn0, lat_rad, h_m, step, vel0)
+    m.feed(imu)
+    return m.result()

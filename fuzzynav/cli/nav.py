@@ -37,6 +37,7 @@ def register(sub) -> None:
                         "its own rule files); the first is the baseline of the improvement "
                         "column (default: %(default)s)")
     add_common_arguments(p)
+    add_streaming_arguments(p)
     p.add_argument("--align-threshold", type=float, metavar="ARCMIN",
                    help="alignment scenarios: azimuth threshold of the alignment time "
                         "(default: the scenario's, 10 arcmin)")
@@ -67,9 +68,9 @@ DEFAULT_CHUNK_S = 300.0
 
 
 def add_streaming_arguments(p) -> None:
-    """``--output-rate`` and ``--chunk`` of ``fuzzynav run`` (a simulated scenario or a
-    recording, ``--data``)."""
-    g = p.add_argument_group("long runs (simulated scenarios and recordings)")
+    """``--output-rate``, ``--chunk`` and ``--output-dir`` of ``fuzzynav run`` (a simulated
+    scenario or a recording, ``--data``) and ``fuzzynav compare``."""
+    g = p.add_argument_group("long runs (simulated scenarios, recordings, alignment: --chunk)")
     g.add_argument("--output-rate", type=float, metavar="HZ",
                    help="keep the filter's recorded solution at this rate only (its output "
                         "rate, 10 Hz by default, divided by a whole number: 5, 2, 1, 0.1 ...); the "
@@ -83,7 +84,9 @@ def add_streaming_arguments(p) -> None:
                         "with nothing of the run's length held, so a day-long run fits in a "
                         f"few hundred MB (default {DEFAULT_CHUNK_S:g} s with --output-rate "
                         "or --output-dir; without any of the three the log is simulated "
-                        "whole and cached)")
+                        "whole and cached). An alignment scenario (compare paper002 ...) is "
+                        "simulated and mechanized in chunks of S seconds (whole epochs), "
+                        "its metrics those of the whole run to the last bit")
     g.add_argument("--output-dir", metavar="DIR",
                    help="write each chunk's kept solution (at --output-rate) and its event "
                         "logs (innovations, S, NIS, flags, adaptation traces) to "
