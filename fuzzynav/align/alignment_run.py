@@ -195,10 +195,10 @@ def streamed_epochs(scn: AlignScenario, seed: int, chunk_samples: int) -> Epochs
             mech = Mechanizer(_start(scn, ch.C_bn[0]), chunks.lat_rad, chunks.h_m, step)
             t, C_true, vel_true = [ch.imu.time_s[:1]], [ch.C_bn[:1]], [ch.vel_n[:1]]
         mech.feed(ch.imu)
-        k = slice(step, None, step)       # the epochs that end in this chunk
-        t.append(ch.imu.time_s[k])
-        C_true.append(ch.C_bn[k])
-        vel_true.append(ch.vel_n[k])
+        k = slice(step, None, step)       # the epochs that end in this chunk (copies: a
+        t.append(ch.imu.time_s[k].copy())  # view would keep the chunk's arrays alive)
+        C_true.append(ch.C_bn[k].copy())
+        vel_true.append(ch.vel_n[k].copy())
     C, v, f = mech.result()
     return _epochs(scn, seed, np.concatenate(t), C, v, f, chunks.lat_rad,
                    np.concatenate(C_true), np.concatenate(vel_true))

@@ -4,9 +4,10 @@ An alignment run simulated whole (:func:`fuzzynav.align.alignment_run.simulate`)
 time grid of samples and mid-points, the truth, the increments and the open-loop solution
 per IMU sample (:data:`BYTES_PER_SAMPLE`); one simulated and mechanized chunk by chunk
 (:func:`fuzzynav.align.alignment_run.streamed_epochs`, ``--chunk``) holds one chunk of
-them.  Both hold every filter epoch: the solution there, the filter's estimate and
-covariance history and the transition matrices with their ``expm`` temporaries
-(:data:`BYTES_PER_EPOCH`), and every run a few megabytes (:data:`BASE_BYTES`).  The limit is the navigation runs'
+them.  Both hold every filter epoch: the solution there and the filter's estimate and
+covariance history (:data:`BYTES_PER_EPOCH`; the transition matrices are made a block of
+epochs at a time, :data:`fuzzynav.align.fine.TRANSITION_BLOCK`), and every run a few
+megabytes (:data:`BASE_BYTES`).  The limit is the navigation runs'
 (:func:`fuzzynav.sim.budget.memory_limit`).
 """
 from __future__ import annotations
@@ -19,12 +20,12 @@ __all__ = ["BYTES_PER_SAMPLE", "BYTES_PER_EPOCH", "BASE_BYTES", "estimate", "che
 #: bytes per IMU sample of an alignment run simulated whole: measured 930 (tracemalloc peak
 #: of paper002-gusts at 400 s and 1 600 s, align-fuzzy), rounded up
 BYTES_PER_SAMPLE = 1024
-#: bytes per filter epoch: measured 20-23 kB (the marginal peak of a streamed run between
-#: 400 s and 1 600 s), rounded up
-BYTES_PER_EPOCH = 32 * 1024
+#: bytes per filter epoch: measured ~1.5 kB (a streamed run between 400 s and 1 600 s: its
+#: epochs 230 B, the filter's estimate and covariance history 1.2 kB), rounded up
+BYTES_PER_EPOCH = 4096
 #: bytes of an alignment run whatever its length (the filter's rule system and policy, the
-#: scenario, the per-run arrays): measured ~4 MB (a 200-s streamed run's peak less its
-#: epochs and chunk), rounded up
+#: scenario, the per-run arrays): measured ~3.5 MB (a streamed run's peak less its epochs
+#: and its 6 000-sample chunk), rounded up
 BASE_BYTES = 8 * 2**20
 #: how to ask for an alignment run in chunks, on the command line
 HOW = "compare it with --chunk S (simulated and mechanized S seconds of IMU at a time)"

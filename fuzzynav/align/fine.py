@@ -28,6 +28,9 @@ __all__ = ["DEFAULT_RULES", "SCALE_BOUNDS", "Epochs", "FineResult", "r_policy", 
 
 #: the rule file shipped with the paper's three hand rules (ROR -> t)
 DEFAULT_RULES = "paper002_ror.json"
+#: epochs whose transition matrices are made at once: the Taylor series' temporaries of a
+#: whole day's epochs would be ~7 kB an epoch
+TRANSITION_BLOCK = 1024
 #: bounds of ``tr R / tr R0`` in the alignment (the paper leaves R free; the navigation
 #: loop's default floor is 1e-3)
 SCALE_BOUNDS = (1e-2, 1e3)
@@ -148,10 +151,13 @@ def run_fine(epochs: Epochs, layout: AlignLayout, noise: AlignNoise = AlignNoise
     scale, ror = np.ones(K + 1), np.full(K + 1, np.nan)
     x_hist[0], P_hist[0] = x, P
     stepper = None if policy is None else EpochPolicy(policy, ("vel",) * m)
-    Phis = transition(layout, epochs.C_bn[:-1], epochs.f_n[1:], epochs.lat_rad,
-                      noise.period_s)
     for k in range(1, K + 1):
-        x, P = predict(x, P, Phis[k - 1], Qd)
+        j = (k - 1) % TRANSITION_BLOCK
+        if j == 0:  # the next block's transitions (each epoch's alone: the same numbers)
+            b = slice(k - 1, min(k - 1 + TRANSITION_BLOCK, K))
+            Phis = transition(layout, epochs.C_bn[:-1][b], epochs.f_n[1:][b], epochs.lat_rad,
+                              noise.period_s)
+        x, P = predict(x, P, Phis[j], Qd)
         z = epochs.vel_n[k, :m]
         if stepper is not None:
             step = stepper.step(z - H @ x, H @ P @ H.T, R0)

@@ -135,7 +135,7 @@ def test_compare_with_chunk_prints_the_whole_runs_table():
 
 
 def test_a_run_too_large_whole_is_refused_with_the_chunked_estimate(monkeypatch):
-    """paper002 (400 s at 100 Hz): ~60 MB whole, ~27 MB in 60-s chunks; a 40-MB limit
+    """paper002 (400 s at 100 Hz): ~51 MB whole, ~16 MB in 60-s chunks; a 40-MB limit
     refuses the first with both figures and the option, runs the second."""
     scn = load_alignment_scenario("paper002")
     whole, chunked = align_budget.estimate(scn), align_budget.estimate(scn, 6000)
@@ -155,7 +155,7 @@ def test_a_run_too_large_whole_is_refused_with_the_chunked_estimate(monkeypatch)
 @pytest.mark.parametrize("chunk", [None, 1000])
 def test_the_estimates_bound_a_traced_run(chunk):
     """The estimate against tracemalloc's peak of one seed and one filter (measured 930 B
-    a sample whole, 20-23 kB an epoch, ~4 MB a run): it must bound the run, within 4x."""
+    a sample whole, ~1.5 kB an epoch, ~3.5 MB a run): it must bound the run, within 4x."""
     scn = _short("paper002-gusts", 200.0)
     R.seed_runs(scn, chunk_samples=chunk)(0)("align-fuzzy")   # compiled before the trace
     tracemalloc.start()
@@ -164,3 +164,20 @@ def test_the_estimates_bound_a_traced_run(chunk):
     tracemalloc.stop()
     need = align_budget.estimate(scn, chunk)
     assert peak <= need <= 4 * peak, (peak, need)
+
+
+def test_transitions_made_in_blocks_are_the_whole_runs(monkeypatch):
+    """The fine filter makes its transition matrices a block of epochs at a time; each
+    epoch's is its own Taylor series, so any block size gives the same filter run."""
+    from fuzzynav.align import fine
+
+    scn = _short("paper002-sway", 120.0)
+    ep = R.streamed_epochs(scn, 4, 3000)
+    runs = []
+    for block in (fine.TRANSITION_BLOCK, 7, 1):
+        monkeypatch.setattr(fine, "TRANSITION_BLOCK", block)
+        runs.append(R.run_align_filter("align-fuzzy", scn, None, ep))
+    for other in runs[1:]:
+        np.testing.assert_array_equal(other.result.x, runs[0].result.x)
+        np.testing.assert_array_equal(other.result.P, runs[0].result.P)
+        np.testing.assert_array_equal(other.phi_hat, runs[0].phi_hat)
