@@ -13,7 +13,8 @@ import pytest
 from fuzzynav.errors import InputFileError
 from fuzzynav.realdata.loaders import akit_checks, chunked
 from fuzzynav.realdata.loaders.akit_recording import read_table
-from fuzzynav.realdata.loaders.imu_csv import HELD_BYTES_PER_LINE, read_imu_csv
+from fuzzynav.realdata.loaders.imu_csv import (BLOCK_BYTES_PER_LINE, HELD_BYTES_PER_LINE,
+                                               read_imu_csv)
 from fuzzynav.sim import budget
 
 
@@ -67,12 +68,17 @@ def test_an_rtklib_imu_file_over_the_memory_limit_is_refused_with_its_estimate(t
     path = tmp_path / "imu_1.csv"
     _rtklib_imu(path, 400)
     assert read_imu_csv(path)[0].shape == (400, 7)
-    monkeypatch.setenv(budget.ENV_VAR, str(400 * HELD_BYTES_PER_LINE / 2 / 2**30))
+    need = 401 * (HELD_BYTES_PER_LINE + BLOCK_BYTES_PER_LINE)   # one block: the whole file
+    monkeypatch.setenv(budget.ENV_VAR, str(need / 2 / 2**30))
     with pytest.raises(InputFileError) as exc:
         read_imu_csv(path)
     msg = str(exc.value)
     assert msg.startswith(str(path)) and "has 401 lines" in msg
-    assert budget.human_bytes(401 * HELD_BYTES_PER_LINE) in msg, msg
+    assert budget.human_bytes(need) in msg, msg
+    # read 100 lines at a time, it holds its lines and one block of 100
+    monkeypatch.setenv(budget.ENV_VAR, str(
+        (401 * HELD_BYTES_PER_LINE + 100 * BLOCK_BYTES_PER_LINE) * 1.01 / 2**30))
+    assert read_imu_csv(path, chunk_rows=100)[0].shape == (400, 7)
 
 
 @pytest.mark.parametrize("write, read", [(_akit_imu, lambda p: read_table(p, "IMU")),
@@ -141,3 +147,33 @@ def test_a_run_whose_outputs_do_not_fit_is_refused_before_it_runs(auv_recording,
     assert f"limit is {budget.human_bytes(limit)}" in msg and "output_rate_hz" in msg, msg
     out = run(src, "ekf", output_rate_hz=1.0)
     assert out.metrics["completed"] == 1.0 and out.result.time_s.size <= 301
+
+
+@pytest.fixture(scope="module")
+def car_drive(tmp_path_factory):
+    """A synthetic car drive of 26 401 IMU lines (the rtklib format, 264 s)."""
+    from fuzzynav.sim.segments import Segment
+    from tests.realdata.rtklib_files import DRIVE_SEGMENTS, write_drive
+
+    d = tmp_path_factory.mktemp("drive")
+    write_drive(d, segments=list(DRIVE_SEGMENTS) + [Segment("cruise", 200.0)])
+    return d
+
+
+@pytest.mark.parametrize("chunk_rows", [None, 1024, 4096])
+def test_the_load_estimate_bounds_a_traced_load_of_a_car_recording(car_drive, chunk_rows):
+    """The guard's figure (the lines at HELD_BYTES_PER_LINE, the parse block at
+    BLOCK_BYTES_PER_LINE) against tracemalloc's peak over the whole load, in one block and
+    in blocks much smaller than the file: it must bound it, within 2x (measured 1.04-1.45)."""
+    import tracemalloc
+
+    from fuzzynav.realdata.loaders.rtklib import load_rtklib
+
+    n = chunked.count_lines(car_drive / "imu_1.csv")
+    load_rtklib(car_drive, chunk_rows=chunk_rows)            # imports and caches first
+    tracemalloc.start()
+    load_rtklib(car_drive, chunk_rows=chunk_rows)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    need = n * HELD_BYTES_PER_LINE + min(n, chunk_rows or n) * BLOCK_BYTES_PER_LINE
+    assert peak <= need <= 2 * peak, (n, peak, need)

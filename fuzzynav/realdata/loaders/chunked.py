@@ -78,11 +78,13 @@ def count_lines(path, universal: bool = False) -> int:
     return n + (tail not in ends)
 
 
-def counted_lines(path, bytes_per_line: float, universal: bool = False) -> int:
+def counted_lines(path, bytes_per_line: float, universal: bool = False,
+                  block_lines=None, bytes_per_block_line: float = 0.0) -> int:
     """:func:`count_lines` of ``path``, refusing, before a line is parsed, a file that is not
     text lines (a mean line over :data:`MAX_MEAN_LINE_BYTES`) or whose lines, held at
-    ``bytes_per_line`` each once read, need more memory than one run may use
-    (:func:`fuzzynav.sim.budget.memory_limit`).
+    ``bytes_per_line`` each once read, and its block of ``block_lines`` lines being parsed
+    (``None``: every line), at ``bytes_per_block_line`` each, need more memory than one run
+    may use (:func:`fuzzynav.sim.budget.memory_limit`).
 
     Memory, not the file's size, is what limits a recording: it is read a block of lines
     at a time and only its parsed rows are held.
@@ -93,7 +95,9 @@ def counted_lines(path, bytes_per_line: float, universal: bool = False) -> int:
         raise InputFileError(path, "", f"is {budget.human_bytes(size)} in {n} lines: not a "
                                        f"text table (lines of at most {MAX_MEAN_LINE_BYTES} "
                                        "bytes on average, MAX_MEAN_LINE_BYTES)")
-    need, (limit, source) = n * bytes_per_line, budget.memory_limit()
+    block = n if block_lines is None else min(n, block_lines)
+    need = n * bytes_per_line + block * bytes_per_block_line
+    limit, source = budget.memory_limit()
     if need > limit:
         raise InputFileError(path, "", f"has {n} lines: read and held they need "
                                        f"~{budget.human_bytes(need)}; the limit is "

@@ -17,12 +17,18 @@ from fuzzynav.errors import InputFileError
 from fuzzynav.realdata.loaders import chunked
 from fuzzynav.realdata.loaders.chunked import DEFAULT_CHUNK_ROWS
 
-__all__ = ["read_imu_csv", "HELD_BYTES_PER_LINE"]
+__all__ = ["read_imu_csv", "HELD_BYTES_PER_LINE", "BLOCK_BYTES_PER_LINE"]
 
-#: peak memory of loading a recording per line of its IMU CSV [bytes]: measured 484 (the
-#: peak traced by tracemalloc over ``load_rtklib`` of the 54 860-line drive, whose one block
-#: of parsed lines is a larger share than in a longer file), rounded up
-HELD_BYTES_PER_LINE = 512
+#: peak memory of loading a recording per line of its IMU CSV beyond its parse block
+#: [bytes]: measured 170 (the growth of the peak tracemalloc traces over ``load_rtklib``
+#: between synthetic drives of 186 401 and 726 401 lines: the parsed rows, the timing
+#: columns, the increments), rounded up
+HELD_BYTES_PER_LINE = 192
+#: peak memory per line of the block being parsed and integrated [bytes]: the lines' text
+#: and the block's rates, areas and running integrals; measured ~460 (the 186 401-line
+#: peak less its lines at 170 B, over a block of 65 536), rounded up.  The 54 860-line
+#: drive, one block, traced 484 B a line in all against 704 estimated
+BLOCK_BYTES_PER_LINE = 512
 
 _CSV_COLUMNS = 7
 _CSV_NAMES = ("acc x", "acc y", "acc z", "gyro x", "gyro y", "gyro z", "tick")
@@ -112,7 +118,8 @@ def read_imu_csv(path, chunk_rows=DEFAULT_CHUNK_ROWS):
     path = Path(path)
     chunk_rows = chunked.check_chunk_rows(chunk_rows)
     errors = chunked.FirstErrors(_ERROR_ORDER)
-    n = chunked.counted_lines(path, HELD_BYTES_PER_LINE)
+    n = chunked.counted_lines(path, HELD_BYTES_PER_LINE, block_lines=chunk_rows,
+                              bytes_per_block_line=BLOCK_BYTES_PER_LINE)
     # every line's length, the data lines' indices and rows: at most one per line
     lengths, kept_rows = (chunked.Rows(path, n, None, np.int64) for _ in range(2))
     data_rows = chunked.Rows(path, n, _CSV_COLUMNS)
