@@ -98,7 +98,7 @@ def report(args, res: dict, load: tuple, secs: float) -> str:
                          + ("the whole run's" if same else "DIFFERS") + " |")
     lines += ["", "The chunked run holds one 60-s chunk of samples (and the grid's mid-points) "
               "and the filter's epochs, one a second; the whole run holds every sample's grid "
-              "points, truth and increments (`align/budget.py`: 1 kB a sample, 4 kB an epoch)."]
+              "points, truth and increments (`align/run_size.py`: 1 kB a sample, 4 kB an epoch)."]
     return "\n".join(lines)
 
 

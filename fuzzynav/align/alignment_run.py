@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fuzzynav import units
-from fuzzynav.align.budget import check_size
+from fuzzynav.align.run_size import check_size
 from fuzzynav.align.fast import fast_azimuth, level_history
 from fuzzynav.align.fine import Epochs, FineResult, r_policy, run_fine
 from fuzzynav.align.alignment_states import EAST, LAYOUT_10, LAYOUT_12, NORTH, UP
@@ -131,7 +131,7 @@ class AlignRun:
 
 def simulate(scn: AlignScenario, seed: int) -> AlignLog:
     """The IMU log of a scenario and seed (refused when it cannot fit:
-    :func:`fuzzynav.align.budget.check_size`)."""
+    :func:`fuzzynav.align.run_size.check_size`)."""
     check_size(scn)
     return simulate_alignment(scn.imu, np.radians(scn.lat_deg), scn.h_m,
                               np.radians(scn.att_deg), scn.duration_s,

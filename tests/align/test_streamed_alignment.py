@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from fuzzynav.align import alignment_run as R
-from fuzzynav.align import budget as align_budget
+from fuzzynav.align import run_size as run_size
 from fuzzynav.align.mechanize import Mechanizer, mechanize
 from fuzzynav.align.scenario import list_alignment_scenarios, load_alignment_scenario
 from fuzzynav.align.simulate import AlignChunks, gradient, grid, simulate_alignment
@@ -138,7 +138,7 @@ def test_a_run_too_large_whole_is_refused_with_the_chunked_estimate(monkeypatch)
     """paper002 (400 s at 100 Hz): ~51 MB whole, ~16 MB in 60-s chunks; a 40-MB limit
     refuses the first with both figures and the option, runs the second."""
     scn = load_alignment_scenario("paper002")
-    whole, chunked = align_budget.estimate(scn), align_budget.estimate(scn, 6000)
+    whole, chunked = run_size.estimate(scn), run_size.estimate(scn, 6000)
     limit = 40 * 2**20
     assert chunked < limit < whole                       # the premise
     monkeypatch.setenv(budget.ENV_VAR, str(limit / 2**30))
@@ -162,7 +162,7 @@ def test_the_estimates_bound_a_traced_run(chunk):
     R.seed_runs(scn, chunk_samples=chunk)(0)("align-fuzzy")
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
-    need = align_budget.estimate(scn, chunk)
+    need = run_size.estimate(scn, chunk)
     assert peak <= need <= 4 * peak, (peak, need)
 
 
