@@ -132,14 +132,8 @@ def mechanize(imu, C_bn0, lat_rad, h_m, step, vel0=None):
     ----------
     imu : ImuData
         Increments (``time_s``, ``dtheta_b``, ``dv_b``).
-    C_bn0 : ndarray (3, 3)
-        Initial attitude (from coarse alignment).
-    lat_rad, h_m : float
-        The fixed place.
-    step : int
-        IMU samples per filter epoch.
-    vel0 : array_like, optional
-        Initial velocity [m/s] (default zero).
+    C_bn0, lat_rad, h_m, step, vel0
+        As :class:`Mechanizer` (the start, the place, the epoch length in samples).
 
     Returns
     -------
