@@ -174,21 +174,32 @@ class StreamingRms:
 
     def add(self, err: NavErrors) -> None:
         """Add the next chunk of errors (times after those added before)."""
-        sel = err.time_s >= self.t_start_s
-        p, v, a = err.pos_m[sel], err.vel_mps[sel], np.rad2deg(err.att_rad[sel])
-        if not p.shape[0]:
+        k = int(np.searchsorted(err.time_s, self.t_start_s, side="left"))  # times increase
+        n = err.time_s.shape[0] - k
+        if n <= 0:
             return
-        h = np.hypot(p[:, 0], p[:, 1])
-        cols = (*p.T, h, np.linalg.norm(p, axis=1), *v.T, np.linalg.norm(v, axis=1),
-                np.hypot(v[:, 0], v[:, 1]), *a.T, np.linalg.norm(a, axis=1))
-        for name, x in zip(self._RMS, cols):
-            self._sq[name] += float(np.sum(np.square(x)))
+        p, v = err.pos_m[k:], err.vel_mps[k:]
+        # every RMS quantity a row of one array, in _RMS's order: each row is summed
+        # pairwise like a 1-D array of its own, so the sums are np.sum's of each column
+        q = np.empty((len(self._RMS), n))
+        q[0:3] = p.T
+        h = q[3]
+        np.hypot(p[:, 0], p[:, 1], out=h)
+        q[4] = np.linalg.norm(p, axis=1)
+        q[5:8] = v.T
+        q[8] = np.linalg.norm(v, axis=1)
+        np.hypot(v[:, 0], v[:, 1], out=q[9])
+        a = np.rad2deg(err.att_rad[k:])
+        q[10:13] = a.T
+        q[13] = np.linalg.norm(a, axis=1)
         # the first chunk's maximum as it is; later ones through np.maximum (NaN sticks)
         big = float(np.max(h))
         self._max_h = big if self._n == 0 else float(np.maximum(self._max_h, big))
         self._sum_h += float(np.sum(h))
         self._final_h = float(h[-1])
-        self._n += p.shape[0]
+        self._n += n
+        for name, sq in zip(self._RMS, np.square(q, out=q).sum(axis=1).tolist()):
+            self._sq[name] += sq
 
     def metrics(self) -> dict:
         """The metrics of everything added (:func:`rms_metrics`' names and order; NaN

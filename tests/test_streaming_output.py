@@ -157,3 +157,23 @@ def test_streamed_run_keeps_the_sensor_usage_metrics(tmp_path):
     # two code paths (chunked vs whole): equal within a stated tolerance
     assert usage and all(streamed[k] == pytest.approx(whole[k], rel=1e-12, nan_ok=True)
                          for k in usage)
+
+
+def test_streaming_rms_sums_are_each_chunks_own_sums_added_in_order():
+    """The accumulator's RMS is, to the bit, the square root of the mean of the chunks'
+    sums of squares, each summed as numpy sums a 1-D array (pairwise), added in order:
+    its chunk-invariant part is the order of those additions and nothing else."""
+    err = _errors(3001, seed=5)
+    edges = [0, 7, 1000, 1001, 2999, 3001]
+    acc = StreamingRms()
+    sums = {"rms_pos_n_m": 0.0, "rms_vel_h_mps": 0.0, "rms_att_deg": 0.0}
+    for part in _cut(err, edges):
+        acc.add(part)
+        sums["rms_pos_n_m"] += float(np.sum(np.square(part.pos_m[:, 1])))
+        sums["rms_vel_h_mps"] += float(np.sum(np.square(np.hypot(part.vel_mps[:, 0],
+                                                                  part.vel_mps[:, 1]))))
+        deg = np.rad2deg(part.att_rad)
+        sums["rms_att_deg"] += float(np.sum(np.square(np.linalg.norm(deg, axis=1))))
+    got = acc.metrics()
+    for k, s in sums.items():
+        assert got[k] == float(np.sqrt(s / 3001)), k
