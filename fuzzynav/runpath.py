@@ -41,7 +41,8 @@ from fuzzynav.filters.sensor_states import with_sensor_states
 from fuzzynav.sim.budget import check_run_outputs
 
 __all__ = ["RUN_SETTINGS", "STREAMING_SETTINGS", "RunInputs", "RunOutcome", "Source",
-           "check_outcomes", "keep_every", "make_setup", "nonfinite", "refuse_settings", "run"]
+           "check_outcomes", "keep_every", "make_setup", "nonfinite", "refuse_settings", "run",
+           "start_cut"]
 
 
 @dataclass(frozen=True)
@@ -152,7 +153,7 @@ def _merged(base: dict, extra: dict) -> dict:
     return out
 
 
-def _from(data, t0: float):
+def start_cut(data, t0: float):
     """A stream without its epochs before ``t0`` (per-epoch ``meta`` arrays cut alike)."""
     keep = data.time_s >= t0
     meta = {k: (v[keep] if isinstance(v, np.ndarray) and v.shape[:1] == keep.shape else v)
@@ -198,7 +199,7 @@ def run(source: Source, filter_spec: str, options=None,
     inp = source.inputs(setup)
     sensors = setup.sensors_for(inp.sensors)
     if inp.from_s is not None:
-        sensors = {nm: _from(d, inp.from_s) for nm, d in sensors.items()}
+        sensors = {nm: start_cut(d, inp.from_s) for nm, d in sensors.items()}
     config = inp.config or setup.config
     keep, scorer = 1, None
     if output_rate_hz is not None:

@@ -17,6 +17,8 @@ does on a simulated scenario.
 """
 from __future__ import annotations
 
+import itertools
+from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -36,7 +38,7 @@ from fuzzynav.sim.stream import SimulatedChunks
 from fuzzynav.simsource import OnSimulatedLog, perturbed_initial_state
 from fuzzynav.streamtrace import StreamTrace
 
-__all__ = ["DEFAULT_CHUNK_SAMPLES", "StreamedSource", "run_streamed"]
+__all__ = ["DEFAULT_CHUNK_SAMPLES", "Start", "StreamedSource", "run_streamed"]
 
 #: IMU samples per chunk when none is given (:data:`fuzzynav.sim.budget.DEFAULT_CHUNK_SAMPLES`)
 DEFAULT_CHUNK_SAMPLES = budget.DEFAULT_CHUNK_SAMPLES
@@ -67,6 +69,28 @@ def _output_arrays(result, logs: dict) -> dict:
                     for f in ("time_s", "residual", "S_diag", "nis", "flag", "diag")})
         out[f"events.{nm}.diag_names"] = np.array(ev.diag_names, dtype=str)
     return out
+
+
+@dataclass(frozen=True)
+class Start:
+    """Where a streamed run starts when it does not start on the truth (``start=``).
+
+    Attributes
+    ----------
+    init : InitialState
+    config : FilterConfig
+        The filter's configuration from there (e.g. the aligned attitude's sigma).
+    pieces : list of Chunk
+        The chunks taken from the stream to find the start, cut to begin at it (their IMU
+        from the start sample, their sensors' epochs from its time): fed first.
+    metrics : dict
+        Metrics of the start itself, added to the run's.
+    """
+
+    init: object
+    config: object
+    pieces: list
+    metrics: dict
 
 
 class _Usage:
@@ -101,7 +125,7 @@ class _Usage:
 def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None,
                  chunk_samples: int = DEFAULT_CHUNK_SAMPLES, output_rate_hz: float | None = None,
                  t_start_s: float = 0.0, output_dir=None, keep_events: bool = False,
-                 cache_dir=None, trace: bool = False):
+                 cache_dir=None, trace: bool = False, start=None):
     """Simulate ``(scenario, seed)`` chunk by chunk and run one named filter on it.
 
     Parameters
@@ -132,6 +156,11 @@ def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None
     trace : bool
         Keep the kept outputs' errors and the event logs thinned to the output rate
         (:class:`fuzzynav.streamtrace.StreamTrace`) in the outcome's ``trace``, for figures.
+    start : callable, optional
+        ``start(chunks, setup) -> Start``: where the filter starts instead of the truth
+        plus an error from P0 (``run --align``: behind an alignment on the opening chunks,
+        :func:`fuzzynav.align.chain.run_aligned_streamed`); ``chunks`` is the iterator of
+        the run's chunks, of which it may take the first few.
 
     Returns
     -------
@@ -152,7 +181,11 @@ def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None
                             f"({', '.join(sorted(setup.sigma_override))}); a streamed run "
                             "has its epochs one chunk at a time (run without --output-rate/"
                             "--chunk)")
-    config = setup.config
+    stream, begun = iter(chunks), None
+    if start is not None:
+        begun = start(stream, setup)
+        stream = itertools.chain(begun.pieces, stream)
+    config = setup.config if begun is None else begun.config
     keep = 1 if output_rate_hz is None else keep_every(config.out_rate_hz, output_rate_hz)
     header = setup.sensors_for(chunks.header)
     names = sorted(header)
@@ -169,10 +202,10 @@ def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None
 
     first = True
     fr = None
-    for i, ch in enumerate(chunks):
+    for i, ch in enumerate(stream):
         if first:
-            init = perturbed_initial_state(SimpleNamespace(seed=chunks.seed, truth=ch.truth),
-                                           setup)
+            init = begun.init if begun is not None else perturbed_initial_state(
+                SimpleNamespace(seed=chunks.seed, truth=ch.truth), setup)
             dt_nom = float(np.median(np.diff(ch.imu.time_s))) if ch.k1 > ch.k0 else 0.01
             fr = FilterRun(header, init, config, setup.adapters,
                            setup.sensor_options, dt_nom, keep,
@@ -193,6 +226,8 @@ def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None
     res = fr.result()
     metrics = scorer.metrics()
     metrics.update(usage.metrics())
+    if begun is not None:
+        metrics.update(begun.metrics)
     metrics["completed"] = float(res.ok)
     return RunOutcome(filter_spec, scenario.name, chunks.seed, res, metrics,
                       nonfinite(source, metrics), None if tracer is None else tracer.trace())

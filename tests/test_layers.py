@@ -36,7 +36,8 @@ ALLOWED = {
                   "streamtrace"},
     # what a streamed run keeps for its figures (errors of the kept rows, thinned events)
     "streamtrace": {"filters", "metrics"},
-    "align": {"runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "metrics_rscale", "report", "nav"},
+    "align": {"runpath", "experiment", "streamrun", "filters", "fuzzy", "sim", "metrics",
+              "metrics_rscale", "report", "nav"},
     "realdata": {"runpath", "filters", "sim", "metrics", "metrics_rscale", "report", "nav", "plots"},
     "tuning": {"runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "metrics_rscale", "report", "nav", "plots",
                "realdata", "align"},

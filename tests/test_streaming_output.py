@@ -123,8 +123,8 @@ def test_cli_output_rate_gives_the_whole_runs_table(capsys, sim_cache):
     (["run", "paper000", "--output-rate", "3"], "--output-rate 3 Hz: must be the filter's"),
     (["run", "paper000", "--chunk", "0"], "--chunk must be a positive number"),
     (["run", "paper000", "--output-rate", "-1"], "--output-rate must be a positive number"),
-    (["run", "paper000", "--align", "align-kf", "--output-rate", "1"],
-     "--output-rate: not available with alignment"),
+    (["compare", "paper002", "--filters", "align-kf,align-fuzzy", "--output-rate", "1"],
+     "--output-rate (its outputs are its filter epochs): not available with alignment"),
 ])
 def test_cli_streaming_options_refused_with_one_line(capsys, argv, fragment, sim_cache,
                                                      tmp_path):

@@ -110,25 +110,35 @@ def parse_align_spec(text: str):
     return spec.name, file
 
 
-def run_with_alignment(args) -> int:
-    """``fuzzynav run SCENARIO --filter F --align A``: align on the rest, then navigate."""
+def run_with_alignment(args, streaming_of=lambda rate_hz: {}) -> int:
+    """``fuzzynav run SCENARIO --filter F --align A``: align on the rest, then navigate;
+    ``streaming_of(imu_rate_hz)``: the run's ``chunk_samples``, ``output_rate_hz`` and
+    ``output_dir`` (``--chunk``, ``--output-rate``, ``--output-dir``), with which the
+    scenario is simulated and run chunk by chunk (:func:`~.chain.run_aligned_streamed`)."""
     import pandas as pd
 
-    from fuzzynav.align.chain import run_aligned
+    from fuzzynav.align.chain import run_aligned, run_aligned_streamed
+    from fuzzynav.fileio import safe_stem
     from fuzzynav.report import NAV_ROWS
     from fuzzynav.sim.sensor_log import simulate
     from fuzzynav.sim.scenario import load_scenario
 
-    _refuse(args, ("plot", "--plot"), ("json", "--json"), ("t_start", "--t-start"),
-            ("output_rate", "--output-rate"), ("chunk", "--chunk"),
-            ("output_dir", "--output-dir"))
+    _refuse(args, ("plot", "--plot"), ("json", "--json"), ("t_start", "--t-start"))
     scn = load_scenario(args.scenario)
+    streaming = streaming_of(scn.imu.rate_hz)
     seeds = list(range(args.seed, args.seed + args.mc))
     align, rules = parse_align_spec(args.align)
     opts = {"rules": list(args.rules)} if args.rules else {}
     rows = []
     for seed in seeds:
-        out = run_aligned(simulate(scn, seed, args.cache), args.filter, opts, align, rules)
+        if streaming:  # simulated chunk by chunk, aligned on the chunks of the rest
+            kw = dict(streaming, cache_dir=args.cache)
+            if "output_dir" in kw:
+                kw["output_dir"] = f"{kw['output_dir']}/{safe_stem(args.filter)}-seed{seed}"
+            out = run_aligned_streamed(scn, seed, args.filter, opts, align, rules, **kw)
+        else:
+            out = run_aligned(simulate(scn, seed, args.cache), args.filter, opts, align,
+                              rules)
         rows.append({"filter": args.filter, "seed": seed, **out.metrics})
     df = pd.DataFrame(rows)
     label = f"{args.align} -> {args.filter}"

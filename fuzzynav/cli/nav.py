@@ -230,7 +230,7 @@ def _cmd_run(args) -> int:
     if args.align:
         from fuzzynav.align.compare_cli import run_with_alignment
 
-        return run_with_alignment(args)
+        return run_with_alignment(args, lambda rate_hz: streaming_options(args, rate_hz))
     return run_scenario_filters(args, [args.filter], baseline=None)
 
 

@@ -181,3 +181,39 @@ def test_transitions_made_in_blocks_are_the_whole_runs(monkeypatch):
         np.testing.assert_array_equal(other.result.x, runs[0].result.x)
         np.testing.assert_array_equal(other.result.P, runs[0].result.P)
         np.testing.assert_array_equal(other.phi_hat, runs[0].phi_hat)
+
+
+@pytest.mark.parametrize("chunk", [6000, 777, 100_000])
+def test_run_align_streamed_aligns_on_the_same_samples_and_navigates_alike(chunk, sim_cache):
+    """``run --align`` on a scenario simulated chunk by chunk: the alignment takes the
+    chunks that hold the opening rest (the whole log's samples, so the aligned attitude's
+    errors are the whole run's to the bit), the navigation starts at its end (a chunk cut
+    there; with 6 000-sample chunks the end is a chunk boundary, whose epochs at that
+    instant are the previous chunk's) and its metrics are the whole run's up to the order
+    of the RMS sums."""
+    from fuzzynav.align.chain import run_aligned, run_aligned_streamed
+    from fuzzynav.sim.scenario import load_scenario
+    from fuzzynav.sim.sensor_log import simulate
+    from tests.floats import sum_order_rtol
+
+    scn = load_scenario("paper000-nominal")
+    whole = run_aligned(simulate(scn, 1, sim_cache), "ekf").metrics
+    got = run_aligned_streamed(scn, 1, "ekf", chunk_samples=chunk, output_rate_hz=1.0,
+                               cache_dir=sim_cache).metrics
+    assert set(got) == set(whole) and whole["align_end_s"] == 60.0
+    rtol = sum_order_rtol(int(scn.duration_s * 10))
+    for k, v in whole.items():
+        if k.startswith(("align_", "max_", "final_")) or k == "completed":
+            assert got[k] == v, k
+        else:
+            assert got[k] == pytest.approx(v, rel=rtol, abs=0.0), k
+
+
+def test_cli_run_align_streamed_prints_the_whole_runs_table(sim_cache):
+    args = ("run", "paper000-nominal", "--filter", "ekf", "--align", "align-kf", "--cache",
+            str(sim_cache))
+    code, whole, err = _cli(*args)
+    assert code == 0, err
+    code, streamed, err = _cli(*args, "--output-rate", "1", "--chunk", "45")
+    assert code == 0, err
+    assert streamed == whole and "aligned with align-kf" in whole
