@@ -139,7 +139,8 @@ def test_defaults_are_the_command_lines(tmp_path):
     cfg = load_study_config(write_study(tmp_path, streaming={}))
     assert cfg.streaming.output_rate_hz == 1.0
     assert cfg.streaming.hold_log_bytes == budget.TRUTH_STORE_BYTES
-    assert cfg.streaming.chunk_samples(load_scenario(str(TINY)).imu.rate_hz) == budget.DEFAULT_CHUNK_SAMPLES
+    rate_hz = load_scenario(str(TINY)).imu.rate_hz
+    assert cfg.streaming.chunk_samples(rate_hz) == budget.DEFAULT_CHUNK_SAMPLES
     assert load_study_config(write_study(tmp_path, file_name="none.toml")).streaming is None
 
 
