@@ -258,7 +258,11 @@ def read_file(name_or_path, what: str = "scenario", builtins: dict | None = None
         return read_toml(path, f"{what} file"), path.stem, str(path), path.parent
     name = str(name_or_path)
     if name not in builtins:
-        raise UnknownNameError(what, name, sorted(builtins))
+        exc = UnknownNameError(what, name, sorted(builtins))
+        if builtins.keys() != (aligns := builtin_files(alignment=True)).keys() and name in aligns:
+            exc.args = (f"{exc.args[0]} ({name!r} is an alignment scenario: a file that "
+                        'derives from it needs kind = "alignment")',)
+        raise exc
     label = f"<built-in {name}.toml>"
     with with_path(label):
         doc = parse_toml(builtins[name].read_bytes())

@@ -247,3 +247,15 @@ def test_a_base_with_a_bad_value_is_still_refused_naming_the_base(tmp_path):
     with pytest.raises(InputFileError) as exc:
         load_scenario(str(derived))
     assert "bad.toml" in str(exc.value) and "rate_hz" in str(exc.value)
+
+
+def test_a_navigation_file_based_on_an_alignment_scenario_says_which_kind_it_needs(tmp_path):
+    """``base = "paper002"`` in a file without ``kind = "alignment"`` was "unknown scenario"
+    with only the navigation built-ins listed."""
+    derived = _write(tmp_path / "d.toml", 'base = "paper002-gusts"\nduration_s = 100.0\n')
+    with pytest.raises(InputFileError) as exc:
+        load_scenario(str(derived))
+    assert exc.value.where == "base" and 'needs kind = "alignment"' in str(exc.value)
+    with pytest.raises(InputFileError) as exc:          # a name of neither kind: no hint
+        load_scenario(str(_write(tmp_path / "e.toml", 'base = "nowhere"\n')))
+    assert "alignment" not in str(exc.value)
