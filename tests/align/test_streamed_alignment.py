@@ -1,11 +1,14 @@
 """Alignment runs simulated and mechanized chunk by chunk (``compare paper002 --chunk S``).
 
-A chunk is the whole run's piece to the last bit: the time grid is numpy's linspace point by
-point, each chunk's acceleration is formed over its piece widened by one grid point each
-side (so only the run's own ends take the one-sided formula), the gusts and the IMU errors
-carry their random processes across, and the mechanization carries its state over chunks
-of whole epochs.  So the epochs, and every metric computed from them, equal the whole run's
-exactly (the same arithmetic on the same numbers, only the array lengths differ).
+A chunk is the whole run's piece: the time grid is numpy's linspace point by point, each
+chunk's acceleration is formed over its piece widened by one grid point each side (so only
+the run's own ends take the one-sided formula), the gusts and the IMU errors carry their
+random processes across, and the mechanization carries its state over chunks of whole
+epochs.  The same arithmetic on the same numbers, only the array lengths differ: on this
+machine the epochs and metrics equal the whole run's to the last bit, but numpy's vector
+functions (sin, exp) and stacked products may round a piece of another length differently
+on another CPU (tests/floats.py), so the comparisons allow :data:`RTOL`; a chunking error
+(a lost or repeated sample, a one-sided difference inside the run) is orders larger.
 """
 import contextlib
 import dataclasses
@@ -27,6 +30,9 @@ from fuzzynav.sim import budget
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.sim.sensor_log import component_rng
 
+#: two paths' agreement: a few ulps on O(1) numbers, grown by the cancellation in the
+#: increments (rotations 1e-4 rad apart) and by the filter; a lost sample is ~1e-2
+RTOL, ATOL = 1e-9, 1e-15
 FILTERS = ("align-kf", "align-kf12", "align-kf-fast", "align-fuzzy", "align-fuzzy-fast")
 
 
@@ -40,6 +46,16 @@ def _chunks(scn, seed, chunk):
                             component_rng(seed, "align-imu"), scn.sway, chunk))
 
 
+def _close(got, ref):
+    np.testing.assert_allclose(got, ref, rtol=RTOL, atol=ATOL)
+
+
+def _same_metrics(got: dict, ref: dict):
+    assert list(got) == list(ref)
+    for k, v in ref.items():
+        assert got[k] == pytest.approx(v, rel=RTOL, abs=ATOL), k
+
+
 def _joined(chunks, field):
     """A per-sample field of consecutive chunks (each repeats the last one's end sample)."""
     parts = [getattr(c, field) if field != "time_s" else c.imu.time_s for c in chunks]
@@ -47,24 +63,25 @@ def _joined(chunks, field):
 
 
 @pytest.mark.parametrize("chunk", [1, 7, 250, 5999, 6000, 10 ** 6])
-def test_chunks_are_the_whole_runs_samples_to_the_bit(chunk):
+def test_chunks_are_the_whole_runs_samples(chunk):
     """Swaying with gusts (every term of the simulation at work), chunk sizes from one
     sample to more than the run, odd ones included."""
     scn = _short("paper002-gusts")
     whole = R.simulate(scn, 3)
     chunks = _chunks(scn, 3, chunk)
     assert len(chunks) == -(-6000 // chunk)
-    np.testing.assert_array_equal(_joined(chunks, "time_s"), whole.imu.time_s)
+    np.testing.assert_array_equal(_joined(chunks, "time_s"), whole.imu.time_s)  # j * step
     for field in ("dtheta_b", "dv_b"):
-        np.testing.assert_array_equal(np.concatenate([getattr(c.imu, field) for c in chunks]),
-                                      getattr(whole.imu, field))
-    np.testing.assert_array_equal(_joined(chunks, "C_bn"), whole.C_bn)
-    np.testing.assert_array_equal(_joined(chunks, "vel_n"), whole.vel_n)
+        _close(np.concatenate([getattr(c.imu, field) for c in chunks]),
+               getattr(whole.imu, field))
+    _close(_joined(chunks, "C_bn"), whole.C_bn)
+    _close(_joined(chunks, "vel_n"), whole.vel_n)
     assert np.abs(whole.vel_n).max() > 0.01          # the gusts did move the base
 
 
 @pytest.mark.parametrize("num, stop", [(2, 1.0), (3, 0.1), (80001, 400.0), (12345, 7.3)])
 def test_the_grid_is_linspace_point_by_point(num, stop):
+    # one IEEE product per point, as numpy's linspace makes it: exact on any CPU
     whole = np.linspace(0.0, stop, num)
     np.testing.assert_array_equal(grid(0, num, num, stop), whole)
     cut = num // 3 + 1
@@ -75,6 +92,7 @@ def test_the_grid_is_linspace_point_by_point(num, stop):
 def test_the_gradient_is_numpys_on_an_uneven_grid_and_exact_on_a_quadratic():
     t = np.cumsum(np.random.default_rng(0).uniform(0.5, 1.5, 40))
     f = np.column_stack([np.sin(t), t ** 2])
+    # the same IEEE +, *, / element by element on the same inputs: exact on any CPU
     np.testing.assert_array_equal(gradient(f, t), np.gradient(f, t, axis=0))
     # the three-point formula is exact for a quadratic at interior points, even grid or not
     even = np.arange(10.0)
@@ -99,7 +117,7 @@ def test_the_mechanization_over_chunks_is_the_whole_one():
                             dtheta_b=log.imu.dtheta_b[:6000 - 37],
                             dv_b=log.imu.dv_b[:6000 - 37]), C0, lat, scn.h_m, 100)
     for got, ref in zip(m.result(), cut):
-        np.testing.assert_array_equal(got, ref)
+        _close(got, ref)
     assert cut[0].shape[0] == 60 and whole[0].shape[0] == 61
     with pytest.raises(ValueError, match="whole number of epochs"):
         m.feed(log.imu)
@@ -112,7 +130,7 @@ def test_every_paper002_scenario_streamed_gives_the_whole_metrics(name):
     for chunk in (100, 1234):
         streamed = R.seed_runs(scn, chunk_samples=chunk)(2)
         for f in FILTERS:
-            assert streamed(f) == whole(f), (name, chunk, f)
+            _same_metrics(streamed(f), whole(f))
 
 
 def _cli(*argv):
@@ -128,7 +146,12 @@ def test_compare_with_chunk_prints_the_whole_runs_table():
     assert code == 0, err
     code, chunked, err = _cli(*args, "--chunk", "13")
     assert code == 0, err
-    assert json.loads(chunked) == json.loads(whole)
+    a, b = json.loads(chunked), json.loads(whole)
+    assert a["seeds"] == b["seeds"] and list(a["filters"]) == list(b["filters"])
+    for f, rows in b["filters"].items():
+        for k, est in rows.items():
+            _close(a["filters"][f][k]["mean"], est["mean"])
+            _close(a["filters"][f][k]["ci95"], est["ci95"])
     code, _, err = _cli("compare", "paper002", "--filters", "align-kf,align-fuzzy",
                         "--output-rate", "1")
     assert code == 2 and "--output-rate" in err and "filter epochs" in err
@@ -177,20 +200,20 @@ def test_transitions_made_in_blocks_are_the_whole_runs(monkeypatch):
     for block in (fine.TRANSITION_BLOCK, 7, 1):
         monkeypatch.setattr(fine, "TRANSITION_BLOCK", block)
         runs.append(R.run_align_filter("align-fuzzy", scn, None, ep))
-    for other in runs[1:]:
-        np.testing.assert_array_equal(other.result.x, runs[0].result.x)
-        np.testing.assert_array_equal(other.result.P, runs[0].result.P)
-        np.testing.assert_array_equal(other.phi_hat, runs[0].phi_hat)
+    for other in runs[1:]:   # stacked products of other stack sizes: to rounding
+        _close(other.result.x, runs[0].result.x)
+        _close(other.result.P, runs[0].result.P)
+        _close(other.phi_hat, runs[0].phi_hat)
 
 
 @pytest.mark.parametrize("chunk", [6000, 777, 100_000])
 def test_run_align_streamed_aligns_on_the_same_samples_and_navigates_alike(chunk, sim_cache):
     """``run --align`` on a scenario simulated chunk by chunk: the alignment takes the
     chunks that hold the opening rest (the whole log's samples, so the aligned attitude's
-    errors are the whole run's to the bit), the navigation starts at its end (a chunk cut
-    there; with 6 000-sample chunks the end is a chunk boundary, whose epochs at that
-    instant are the previous chunk's) and its metrics are the whole run's up to the order
-    of the RMS sums."""
+    errors are the whole run's), the navigation starts at its end (a chunk cut there; with
+    6 000-sample chunks the end is a chunk boundary, whose epochs at that instant are the
+    previous chunk's: dropping them moved the RMS by 0.2 %) and its metrics are the whole
+    run's up to the order of the RMS sums."""
     from fuzzynav.align.chain import run_aligned, run_aligned_streamed
     from fuzzynav.sim.scenario import load_scenario
     from fuzzynav.sim.sensor_log import simulate
@@ -201,12 +224,10 @@ def test_run_align_streamed_aligns_on_the_same_samples_and_navigates_alike(chunk
     got = run_aligned_streamed(scn, 1, "ekf", chunk_samples=chunk, output_rate_hz=1.0,
                                cache_dir=sim_cache).metrics
     assert set(got) == set(whole) and whole["align_end_s"] == 60.0
-    rtol = sum_order_rtol(int(scn.duration_s * 10))
+    rtol = max(sum_order_rtol(int(scn.duration_s * 10)), RTOL)
+    assert got["completed"] == whole["completed"] == 1.0
     for k, v in whole.items():
-        if k.startswith(("align_", "max_", "final_")) or k == "completed":
-            assert got[k] == v, k
-        else:
-            assert got[k] == pytest.approx(v, rel=rtol, abs=0.0), k
+        assert got[k] == pytest.approx(v, rel=rtol, abs=ATOL), k
 
 
 def test_cli_run_align_streamed_prints_the_whole_runs_table(sim_cache):
