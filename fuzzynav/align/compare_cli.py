@@ -23,27 +23,20 @@ def _refuse(args, *options) -> None:
                             "(compare on an alignment scenario, run --align)")
 
 
-def _chunk_samples(args, scn):
-    """IMU samples per chunk from ``--chunk S`` (``None``: the run simulated whole)."""
-    chunk = getattr(args, "chunk", None)
-    if chunk is None:
-        return None
-    if not 0.0 < chunk < float("inf"):
-        raise FuzzynavError(f"--chunk must be a positive number, got {chunk:g}")
-    return max(1, int(round(chunk * scn.imu.rate_hz)))
-
-
 #: largest azimuth threshold (arcmin): half a turn; more means nothing
 MAX_THRESHOLD_ARCMIN = 180.0 * 60.0
 
 
-def compare_alignment(args, filters, claims=None, claim_labels=(), rows=()) -> int:
-    """Run ``filters`` on ``args.mc`` seeds of an alignment scenario and print the table."""
+def compare_alignment(args, filters, claims=None, claim_labels=(), rows=(),
+                      streaming_of=lambda rate_hz: {}) -> int:
+    """Run ``filters`` on ``args.mc`` seeds of an alignment scenario and print the table;
+    ``streaming_of(imu_rate_hz)``'s ``chunk_samples`` (``--chunk``), if any, simulates and
+    mechanizes each seed in chunks (:func:`~.alignment_run.streamed_epochs`)."""
     _refuse(args, ("plot", "--plot"), ("t_start", "--t-start"),
             ("output_rate", "--output-rate (its outputs are its filter epochs)"),
             ("output_dir", "--output-dir"))
     scn = load_alignment_scenario(args.scenario)
-    chunk = _chunk_samples(args, scn)
+    chunk = streaming_of(scn.imu.rate_hz).get("chunk_samples")
     fuzzy = [f for f in filters if align_spec(f)[0].fuzzy]
     if args.rules and len(args.rules) > 1:
         raise FuzzynavError("--rules: the alignment filters take one rule file (ROR -> t)")

@@ -250,7 +250,8 @@ def _cmd_compare(args) -> int:
     if is_alignment_scenario(str(args.scenario)):  # alignment filters: their own runner
         from fuzzynav.align.compare_cli import compare_alignment
 
-        return compare_alignment(args, filters, claims, labels, rows_for(str(args.scenario)))
+        return compare_alignment(args, filters, claims, labels, rows_for(str(args.scenario)),
+                                 lambda rate_hz: streaming_options(args, rate_hz))
     if args.align_threshold is not None:
         raise FuzzynavError("--align-threshold: only for alignment scenarios (paper002...)")
     check_rules(args, filters, "--filters")

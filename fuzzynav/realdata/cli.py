@@ -120,10 +120,7 @@ def streaming_of(streaming, rec) -> dict:
     ``streaming``."""
     if streaming is None:
         return {}
-    import numpy as np
-
-    imu = (rec[0] if isinstance(rec, list) else rec).imu
-    return streaming(1.0 / float(np.median(np.diff(imu.time_s))))
+    return streaming((rec[0] if isinstance(rec, list) else rec).imu.rate_hz)
 
 
 def run_recording(spec, filter_name, options, args, streaming=None) -> int:

@@ -104,12 +104,6 @@ def _scored(metrics: dict) -> dict:
     return {k: v for k, v in metrics.items() if k not in UNSCORED}
 
 
-def _rate_hz(imu) -> float:
-    """The mean rate of an IMU's increments [Hz]."""
-    t = imu.time_s
-    return (t.size - 1) / float(t[-1] - t[0])
-
-
 @lru_cache(maxsize=16)
 def _load(kind: str, directory: str, session, options: str | None = None):
     """A loaded recording (kept: the two halves of a split and every seed share it)."""
@@ -154,7 +148,7 @@ def _dvl_run(name, seed, rec, lo, hi) -> RecordingRun:
     cut = replace(rec, imu=until(rec.imu, hi), dvl=until(rec.dvl, hi))
     ref = within(rec.reference, lo, hi)
     return RecordingRun(name, int(seed), {"dvl": cut.dvl}, hi - lo,
-                        akit.AkitSource(cut, ref, name), _rate_hz(cut.imu))
+                        akit.AkitSource(cut, ref, name), cut.imu.rate_hz)
 
 
 def _gnss_run(name, seed, rec, lo, hi,
@@ -181,4 +175,4 @@ def _gnss_run(name, seed, rec, lo, hi,
             lambda res: errors_against(res, cut.reference, lever, settings.velocity_lag_s),
             windows, t0),
         lambda m: required_names(m, vel_scored), settings.use_velocity)
-    return RecordingRun(name, int(seed), {"gnss": fixes}, hi - t0, source, _rate_hz(cut.imu))
+    return RecordingRun(name, int(seed), {"gnss": fixes}, hi - t0, source, cut.imu.rate_hz)

@@ -157,6 +157,12 @@ class ImuData:
     accel_bias_mps2: np.ndarray | None = None
     meta: dict = field(default_factory=dict)
 
+    @property
+    def rate_hz(self) -> float:
+        """The increments' rate [Hz]: one over the median interval (a recording's gaps and
+        jitter aside), what a chunk length in seconds is counted in."""
+        return 1.0 / float(np.median(np.diff(self.time_s)))
+
     def __post_init__(self):
         n = self.dtheta_b.shape[0]
         if (self.time_s.shape != (n + 1,) or self.dtheta_b.shape != (n, 3)
