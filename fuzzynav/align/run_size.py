@@ -20,8 +20,9 @@ __all__ = ["BYTES_PER_SAMPLE", "BYTES_PER_EPOCH", "BASE_BYTES", "estimate", "che
 #: bytes per IMU sample of an alignment run simulated whole: measured 930 (tracemalloc peak
 #: of paper002-gusts at 400 s and 1 600 s, align-fuzzy), rounded up
 BYTES_PER_SAMPLE = 1024
-#: bytes per filter epoch: measured ~1.5 kB (a streamed run between 400 s and 1 600 s: its
-#: epochs 230 B, the filter's estimate and covariance history 1.2 kB), rounded up
+#: bytes per filter epoch: measured 0.2-1.5 kB (the growth of a streamed run's peak between
+#: 400 s and 1 600 s; what it holds at the end: its epochs 230 B, the filter's estimate and
+#: covariance history 1.2 kB; ``benchmarks/bench_memory_figures.py``), rounded up
 BYTES_PER_EPOCH = 4096
 #: bytes of an alignment run whatever its length (the filter's rule system and policy, the
 #: scenario, the per-run arrays): measured ~3.5 MB (a streamed run's peak less its epochs

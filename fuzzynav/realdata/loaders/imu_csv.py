@@ -20,14 +20,15 @@ from fuzzynav.realdata.loaders.chunked import DEFAULT_CHUNK_ROWS
 __all__ = ["read_imu_csv", "HELD_BYTES_PER_LINE", "BLOCK_BYTES_PER_LINE"]
 
 #: peak memory of loading a recording per line of its IMU CSV beyond its parse block
-#: [bytes]: measured 170 (the growth of the peak tracemalloc traces over ``load_rtklib``
-#: between synthetic drives of 186 401 and 726 401 lines: the parsed rows, the timing
-#: columns, the increments), rounded up
-HELD_BYTES_PER_LINE = 192
+#: [bytes]: measured 170 and 198 (the growth of the peak tracemalloc traces over
+#: ``load_rtklib`` between synthetic drives of 186 401 and 726 401 lines, and of 106 401 and
+#: 306 401: the parsed rows, the timing columns, the increments;
+#: ``benchmarks/bench_memory_figures.py``), rounded up
+HELD_BYTES_PER_LINE = 256
 #: peak memory per line of the block being parsed and integrated [bytes]: the lines' text
-#: and the block's rates, areas and running integrals; measured ~460 (the 186 401-line
-#: peak less its lines at 170 B, over a block of 65 536), rounded up.  The 54 860-line
-#: drive, one block, traced 484 B a line in all against 704 estimated
+#: and the block's rates, areas and running integrals; measured 330-460 (a drive's peak less
+#: its lines, over a block of 65 536), rounded up.  The 54 860-line drive, one block, traced
+#: 484 B a line in all against 768 estimated
 BLOCK_BYTES_PER_LINE = 512
 
 _CSV_COLUMNS = 7
