@@ -120,7 +120,9 @@ def streaming_of(streaming, rec) -> dict:
     ``streaming``."""
     if streaming is None:
         return {}
-    return streaming((rec[0] if isinstance(rec, list) else rec).imu.rate_hz)
+    from fuzzynav.sim.imu import rate_hz_of
+
+    return streaming(rate_hz_of((rec[0] if isinstance(rec, list) else rec).imu))
 
 
 def run_recording(spec, filter_name, options, args, streaming=None) -> int:

@@ -27,7 +27,7 @@ from fuzzynav.sim.tomltable import Table
 from fuzzynav.sim.triad_stream import TriadStream
 
 __all__ = ["FILTER_STATES", "TriadNoise", "TriadStream", "ImuNoise", "ImuData", "ImuSpec",
-           "ImuStream"]
+           "ImuStream", "rate_hz_of"]
 
 _ZERO3 = (0.0, 0.0, 0.0)
 _ZERO33 = (_ZERO3, _ZERO3, _ZERO3)
@@ -131,6 +131,13 @@ class ImuNoise:
         return self.accel.white
 
 
+def rate_hz_of(imu) -> float:
+    """The rate of an IMU log's increments [Hz] (anything with ``time_s``): one over the
+    median interval (a recording's gaps and jitter aside), what a chunk length in seconds
+    is counted in."""
+    return 1.0 / float(np.median(np.diff(imu.time_s)))
+
+
 @dataclass(frozen=True)
 class ImuData:
     """IMU increments over a run, with the truth of the applied errors when simulated.
@@ -159,9 +166,8 @@ class ImuData:
 
     @property
     def rate_hz(self) -> float:
-        """The increments' rate [Hz]: one over the median interval (a recording's gaps and
-        jitter aside), what a chunk length in seconds is counted in."""
-        return 1.0 / float(np.median(np.diff(self.time_s)))
+        """The increments' rate [Hz] (:func:`rate_hz_of`)."""
+        return rate_hz_of(self)
 
     def __post_init__(self):
         n = self.dtheta_b.shape[0]
