@@ -4,10 +4,10 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from fuzzynav.metrics import improvement_ci, mean_ci
+from fuzzynav.metrics import improvement_ci, mean_ci, summary_json
 
 __all__ = ["NAV_ROWS", "ci_cell", "diff_cell", "improvement_cell", "comparison_rows",
-           "pooled_rows", "scenario_rows", "render"]
+           "pooled_rows", "scenario_rows", "render", "summary_document"]
 
 #: (row label, metric key) in the order of the papers' tables
 NAV_ROWS = (
@@ -114,6 +114,20 @@ def pooled_rows(piv: pd.DataFrame, filters, baseline: str, subset=None, *,
                       "" if f == baseline else improvement_cell(piv[baseline][runs], col[runs])]
         rows.append([label(f), *cells])
     return rows
+
+def summary_document(df: pd.DataFrame, scenario: str, filters, seeds,
+                     prefixes=("rms_", "max_"), label=None) -> dict:
+    """The ``--json`` document of a table of runs: ``{"scenario", "seeds", "filters": {F:
+    {metric: summary_json}}}``, the metrics those of ``df``'s columns starting with one of
+    ``prefixes``; ``label(f)`` names filter ``f``'s entry (default ``f``)."""
+    metrics = [c for c in df.columns if c.startswith(tuple(prefixes))]
+    out = {"scenario": scenario, "seeds": list(seeds), "filters": {}}
+    for f in filters:
+        sub = df[df["filter"] == f]
+        out["filters"][f if label is None else label(f)] = {m: summary_json(sub[m])
+                                                            for m in metrics}
+    return out
+
 
 def comparison_rows(df: pd.DataFrame, filters, baseline=None, rows=NAV_ROWS, claims=None):
     """Rows of a comparison table: label, one cell per filter, improvements, claims.

@@ -103,44 +103,76 @@ def parse_align_spec(text: str):
     return spec.name, file
 
 
-def run_with_alignment(args, streaming_of=lambda rate_hz: {}) -> int:
+def run_with_alignment(args, streaming_of=lambda rate_hz: {}, plot_traces=None) -> int:
     """``fuzzynav run SCENARIO --filter F --align A``: align on the rest, then navigate;
     ``streaming_of(imu_rate_hz)``: the run's ``chunk_samples``, ``output_rate_hz`` and
     ``output_dir`` (``--chunk``, ``--output-rate``, ``--output-dir``), with which the
-    scenario is simulated and run chunk by chunk (:func:`~.chain.run_aligned_streamed`)."""
+    scenario is simulated and run chunk by chunk (:func:`~.chain.run_aligned_streamed`).
+
+    Like every table of runs, a diverged run prints nothing and exits 3
+    (:func:`fuzzynav.runpath.check_outcomes`).  ``--json`` prints the runs' summary
+    (:func:`fuzzynav.report.summary_document`, the aligned attitude's errors with the
+    navigation's); ``--plot DIR`` draws the first seed's run with ``plot_traces(traces,
+    name, seed, DIR, output_rate_hz)`` (the command line's figures), from the run the
+    table was made of: its errors from the navigation's start, at the output rate.
+    """
     import pandas as pd
 
-    from fuzzynav.align.chain import run_aligned, run_aligned_streamed
-    from fuzzynav.fileio import safe_stem
-    from fuzzynav.report import NAV_ROWS
-    from fuzzynav.sim.sensor_log import simulate
+    from fuzzynav.report import NAV_ROWS, summary_document
+    from fuzzynav.runpath import check_outcomes
     from fuzzynav.sim.scenario import load_scenario
 
-    _refuse(args, ("plot", "--plot"), ("json", "--json"), ("t_start", "--t-start"))
+    _refuse(args, ("t_start", "--t-start"))
+    if args.plot and plot_traces is None:
+        raise FuzzynavError("--plot: no figures here (run_with_alignment without plot_traces)")
     scn = load_scenario(args.scenario)
     streaming = streaming_of(scn.imu.rate_hz)
     seeds = list(range(args.seed, args.seed + args.mc))
     align, rules = parse_align_spec(args.align)
-    opts = {"rules": list(args.rules)} if args.rules else {}
-    rows = []
+    outcomes, traces = [], None
     for seed in seeds:
-        if streaming:  # simulated chunk by chunk, aligned on the chunks of the rest
-            kw = dict(streaming, cache_dir=args.cache)
-            if "output_dir" in kw:
-                kw["output_dir"] = f"{kw['output_dir']}/{safe_stem(args.filter)}-seed{seed}"
-            out = run_aligned_streamed(scn, seed, args.filter, opts, align, rules, **kw)
-        else:
-            out = run_aligned(simulate(scn, seed, args.cache), args.filter, opts, align,
-                              rules)
-        rows.append({"filter": args.filter, "seed": seed, **out.metrics})
-    df = pd.DataFrame(rows)
+        out, trace = _aligned_run(args, scn, seed, streaming, align, rules,
+                                  figures=bool(args.plot) and seed == seeds[0])
+        outcomes.append(out)
+        traces = traces or trace
+    check_outcomes(outcomes)   # a diverged run: no table, no figure, exit 3
+    df = pd.DataFrame([{"filter": args.filter, "seed": o.seed, **o.metrics} for o in outcomes])
     label = f"{args.align} -> {args.filter}"
-    print(f"scenario {scn.name}: aligned with {args.align} on the opening rest (until "
-          f"{df['align_end_s'].iloc[0]:.0f} s), then {args.filter}; seeds "
-          f"{seeds[0]}..{seeds[-1]}\n"
-          + render(["error", label], comparison_rows(df, [args.filter],
-                                                     rows=(*ALIGNED_NAV_ROWS, *NAV_ROWS))))
+    if args.json:
+        doc = summary_document(df, scn.name, [args.filter], seeds,
+                               prefixes=("rms_", "max_", "align_"), label=lambda f: label)
+        print(json.dumps(doc, indent=2, allow_nan=False))
+    else:
+        print(f"scenario {scn.name}: aligned with {args.align} on the opening rest (until "
+              f"{df['align_end_s'].iloc[0]:.0f} s), then {args.filter}; seeds "
+              f"{seeds[0]}..{seeds[-1]}\n"
+              + render(["error", label],
+                       comparison_rows(df, [args.filter], rows=(*ALIGNED_NAV_ROWS, *NAV_ROWS))))
+    if traces is not None:
+        plot_traces({label: traces}, scn.name, seeds[0], args.plot,
+                    streaming.get("output_rate_hz"))
     return 0
+
+
+def _aligned_run(args, scn, seed, streaming, align, rules, figures=False):
+    """One seed of :func:`run_with_alignment`: its outcome and, with ``figures``, its
+    (errors, event logs) from the navigation's start."""
+    from fuzzynav.align.chain import run_aligned, run_aligned_streamed
+    from fuzzynav.fileio import safe_stem
+    from fuzzynav.metrics import errors_vs_trajectory
+    from fuzzynav.sim.sensor_log import simulate
+
+    opts = {"rules": list(args.rules)} if args.rules else {}
+    if streaming:  # simulated chunk by chunk, aligned on the chunks of the rest
+        kw = dict(streaming, cache_dir=args.cache, trace=figures)
+        if "output_dir" in kw:
+            kw["output_dir"] = f"{kw['output_dir']}/{safe_stem(args.filter)}-seed{seed}"
+        out = run_aligned_streamed(scn, seed, args.filter, opts, align, rules, **kw)
+        return out, (out.trace.errors, out.trace.events) if figures else None
+    log = simulate(scn, seed, args.cache)
+    out = run_aligned(log, args.filter, opts, align, rules)
+    return out, ((errors_vs_trajectory(out.result, log.truth), out.result.events)
+                 if figures else None)
 
 
 def describe_alignment() -> str:

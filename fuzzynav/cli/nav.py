@@ -230,7 +230,8 @@ def _cmd_run(args) -> int:
     if args.align:
         from fuzzynav.align.compare_cli import run_with_alignment
 
-        return run_with_alignment(args, lambda rate_hz: streaming_options(args, rate_hz))
+        return run_with_alignment(args, lambda rate_hz: streaming_options(args, rate_hz),
+                                  plot_traces)
     return run_scenario_filters(args, [args.filter], baseline=None)
 
 
@@ -263,7 +264,7 @@ def run_scenario_filters(args, filters, baseline=None, claims=None, claim_labels
                          rows=()) -> int:
     """Simulate, run ``filters`` on ``args.mc`` seeds, print the table, plot if asked."""
     from fuzzynav.experiment import monte_carlo
-    from fuzzynav.report import NAV_ROWS, comparison_rows, render
+    from fuzzynav.report import NAV_ROWS, comparison_rows, render, summary_document
     from fuzzynav.sim.scenario import load_scenario
 
     scn = load_scenario(args.scenario)
@@ -274,7 +275,8 @@ def run_scenario_filters(args, filters, baseline=None, claims=None, claim_labels
                      progress=not args.json and args.mc > 1, refuse_diverged=True,
                      streaming=streaming_options(args, scn.imu.rate_hz))
     if args.json:
-        print(json.dumps(_json_summary(df, scn, filters, seeds), indent=2, allow_nan=False))
+        print(json.dumps(summary_document(df, scn.name, filters, seeds), indent=2,
+                         allow_nan=False))
     else:
         header = ["RMS error", *filters]
         if baseline is not None:
@@ -293,35 +295,30 @@ def run_scenario_filters(args, filters, baseline=None, claims=None, claim_labels
     return 0
 
 
-def _json_summary(df, scn, filters, seeds) -> dict:
-    from fuzzynav.metrics import summary_json
-
-    metrics = [c for c in df.columns if c.startswith(("rms_", "max_"))]
-    out = {"scenario": scn.name, "seeds": seeds, "filters": {}}
-    for f in filters:
-        sub = df[df["filter"] == f]
-        out["filters"][f] = {m: summary_json(sub[m]) for m in metrics}
-    return out
-
-
 def _plot_first_seed(scn, filters, seed, args) -> None:
-    from fuzzynav import plots
-
     streaming = streaming_options(args, scn.imu.rate_hz)
     traces = (_streamed_traces if streaming else _whole_traces)(scn, filters, seed, args,
                                                                 streaming)
-    out_dir = Path(args.plot)
-    stem = safe_stem(scn.name)
+    plot_traces(traces, scn.name, seed, args.plot, streaming.get("output_rate_hz"))
+
+
+def plot_traces(traces, name: str, seed: int, out_dir, output_rate_hz=None) -> None:
+    """Write ``<name>_errors.png`` (and ``<name>_adaptation.png`` when a filter adapts) into
+    ``out_dir`` (``--plot DIR``) from ``traces``: label -> (errors, event logs) of the runs
+    on seed ``seed``, at ``output_rate_hz`` when their outputs were decimated."""
+    from fuzzynav import plots
+
+    out_dir, stem = Path(out_dir), safe_stem(name)
     errs = {f: errors for f, (errors, _) in traces.items()}
-    rate = streaming.get("output_rate_hz")
-    title = f"{scn.name}, seed {seed}" + (f" ({rate:g}-Hz output)" if rate else "")
+    title = f"{name}, seed {seed}" + (f" ({output_rate_hz:g}-Hz output)"
+                                      if output_rate_hz else "")
     path = plots.save(plots.error_curves(errs, title), out_dir / f"{stem}_errors.png")
     print(f"wrote {path}")
     series = {}
     for f, (_, events) in traces.items():
         for sensor, ev in events.items():
-            for name in ev.diag_names:
-                series[f"{f} {sensor} {name}"] = (ev.time_s, ev.diagnostic(name))
+            for nm in ev.diag_names:
+                series[f"{f} {sensor} {nm}"] = (ev.time_s, ev.diagnostic(nm))
     if series:
         path = plots.save(plots.adaptation_curves(series, "adaptation"),
                           out_dir / f"{stem}_adaptation.png")

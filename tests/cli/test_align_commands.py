@@ -71,7 +71,8 @@ def test_options_that_mean_nothing_for_alignment_are_refused(capsys, tmp_path):
           str(tmp_path)], "--plot: not available with alignment"),
         (["compare", "paper000", "--filters", "ekf,fakf", "--align-threshold", "5"],
          "--align-threshold: only for alignment scenarios"),
-        (["run", "paper000", "--align", "align-kf", "--json"], "--json: not available"),
+        (["run", "paper000", "--align", "align-kf", "--t-start", "100"],
+         "--t-start: not available"),
         (["run", "--data", "rtklib:nowhere", "--align", "align-kf"], "--align: only with"),
     ]:
         code, _, err = _run(capsys, *argv)

@@ -57,6 +57,8 @@ fuzzynav compare paper002 --filters align-kf,align-fuzzy,align-fuzzy-fast --mc 5
 fuzzynav run paper000-nominal --filter ekf --align align-kf      # align, then navigate
 fuzzynav run paper000-nominal --filter fakf --align align-fuzzy@rules/paper002_ror_tuned.json
                                   # the aligner's rule file after @; --rules is fakf's
+fuzzynav run paper000-nominal --filter fakf --align align-kf --plot figs --json
+                                  # the runs' JSON; figures from the alignment's end
 fuzzynav study run studies/align/paper002_tune.toml             # tune ROR -> t
 fuzzynav study export studies/align/paper002_tune.toml --out rules/paper002_ror_tuned.json
 fuzzynav study run studies/align/paper002_baselines.toml        # the equally tuned KF
