@@ -22,7 +22,7 @@ from pathlib import Path
 
 from fuzzynav.errors import InputFileError, OutputError, brief
 
-__all__ = ["write_npz", "FILE_MODE", "publish", "MAX_STEM", "safe_stem", "output_errors", "SYSTEM_DIRS",
+__all__ = ["say_written", "write_npz", "FILE_MODE", "publish", "MAX_STEM", "safe_stem", "output_errors", "SYSTEM_DIRS",
            "is_inside", "check_place", "study_output", "make_dir", "write_atomic", "write_text_atomic",
            "publish_all", "process_alive", "sweep_staged", "staged", "json_ready"]
 
@@ -293,6 +293,14 @@ def staged(directory, what: str = "", last=()):
         raise OutputError(directory, exc, what) from None
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+
+
+def say_written(path, json_on_stdout: bool = False) -> None:
+    """Print ``wrote PATH`` for a file a command wrote: on stdout, or on stderr when stdout
+    carries the command's JSON (``--json --plot``), which must stay one JSON document."""
+    import sys
+
+    print(f"wrote {path}", file=sys.stderr if json_on_stdout else sys.stdout)
 
 
 def json_ready(x):

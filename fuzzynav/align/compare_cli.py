@@ -113,7 +113,7 @@ def run_with_alignment(args, streaming_of=lambda rate_hz: {}, plot_traces=None) 
     (:func:`fuzzynav.runpath.check_outcomes`).  ``--json`` prints the runs' summary
     (:func:`fuzzynav.report.summary_document`, the aligned attitude's errors with the
     navigation's); ``--plot DIR`` draws the first seed's run with ``plot_traces(traces,
-    name, seed, DIR, output_rate_hz)`` (the command line's figures), from the run the
+    name, seed, DIR, output_rate_hz, json_on_stdout)`` (the command line's figures), from the run the
     table was made of: its errors from the navigation's start, at the output rate.
     """
     import pandas as pd
@@ -150,7 +150,7 @@ def run_with_alignment(args, streaming_of=lambda rate_hz: {}, plot_traces=None) 
                        comparison_rows(df, [args.filter], rows=(*ALIGNED_NAV_ROWS, *NAV_ROWS))))
     if traces is not None:
         plot_traces({label: traces}, scn.name, seeds[0], args.plot,
-                    streaming.get("output_rate_hz"))
+                    streaming.get("output_rate_hz"), args.json)
     return 0
 
 

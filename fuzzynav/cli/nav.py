@@ -7,7 +7,7 @@ from pathlib import Path
 
 from fuzzynav.cli.values import check_count, check_t_start
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.fileio import safe_stem
+from fuzzynav.fileio import safe_stem, say_written
 
 
 def default_cache_dir() -> Path:
@@ -299,13 +299,16 @@ def _plot_first_seed(scn, filters, seed, args) -> None:
     streaming = streaming_options(args, scn.imu.rate_hz)
     traces = (_streamed_traces if streaming else _whole_traces)(scn, filters, seed, args,
                                                                 streaming)
-    plot_traces(traces, scn.name, seed, args.plot, streaming.get("output_rate_hz"))
+    plot_traces(traces, scn.name, seed, args.plot, streaming.get("output_rate_hz"), args.json)
 
 
-def plot_traces(traces, name: str, seed: int, out_dir, output_rate_hz=None) -> None:
+def plot_traces(traces, name: str, seed: int, out_dir, output_rate_hz=None,
+                json_on_stdout: bool = False) -> None:
     """Write ``<name>_errors.png`` (and ``<name>_adaptation.png`` when a filter adapts) into
     ``out_dir`` (``--plot DIR``) from ``traces``: label -> (errors, event logs) of the runs
-    on seed ``seed``, at ``output_rate_hz`` when their outputs were decimated."""
+    on seed ``seed``, at ``output_rate_hz`` when their outputs were decimated
+    (``json_on_stdout``: the notices of the files go to stderr, :func:`~fuzzynav.fileio.
+    say_written`)."""
     from fuzzynav import plots
 
     out_dir, stem = Path(out_dir), safe_stem(name)
@@ -313,7 +316,7 @@ def plot_traces(traces, name: str, seed: int, out_dir, output_rate_hz=None) -> N
     title = f"{name}, seed {seed}" + (f" ({output_rate_hz:g}-Hz output)"
                                       if output_rate_hz else "")
     path = plots.save(plots.error_curves(errs, title), out_dir / f"{stem}_errors.png")
-    print(f"wrote {path}")
+    say_written(path, json_on_stdout)
     series = {}
     for f, (_, events) in traces.items():
         for sensor, ev in events.items():
@@ -322,7 +325,7 @@ def plot_traces(traces, name: str, seed: int, out_dir, output_rate_hz=None) -> N
     if series:
         path = plots.save(plots.adaptation_curves(series, "adaptation"),
                           out_dir / f"{stem}_adaptation.png")
-        print(f"wrote {path}")
+        say_written(path, json_on_stdout)
 
 
 def _whole_traces(scn, filters, seed, args, _streaming) -> dict:

@@ -100,8 +100,9 @@ def run_akit(spec, recs, filter_name, options, args, streaming=None) -> int:
     else:
         print(text_summary(spec, recs, filter_name, df))
     if args.plot:
+        from fuzzynav.fileio import say_written
         from fuzzynav.realdata.akit_figures import write_figures
 
         for path in write_figures(recs, results, Path(args.plot), filter_name):
-            print(f"wrote {path}")
+            say_written(path, args.json)
     return 0

@@ -161,10 +161,11 @@ def run_recording(spec, filter_name, options, args, streaming=None) -> int:
     else:
         print(text_summary(spec, rec, vals, df))
     if args.plot:
+        from fuzzynav.fileio import say_written
         from fuzzynav.realdata.figures import write_figures
 
         for path in write_figures(vals[0], rec, Path(args.plot)):
-            print(f"wrote {path}")
+            say_written(path, args.json)
     return 0
 
 

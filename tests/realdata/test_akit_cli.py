@@ -29,6 +29,15 @@ def test_json_has_a_column_per_trajectory_and_the_pooled_one(two_trajectories):
     assert abs(doc["start"]["1"]["reference_offset_s"] - 1.0) < 0.005
 
 
+def test_json_with_figures_is_one_json_document(two_trajectories, tmp_path):
+    code, out, err = _run("run", "--data", f"akit:{two_trajectories}:1-2", "--json",
+                          "--plot", str(tmp_path))
+    assert code == 0, err
+    assert json.loads(out)["trajectories"] == [1, 2] and "wrote" not in out
+    notices = [line for line in err.splitlines() if line.startswith("wrote ")]
+    assert notices and all(str(tmp_path) in line for line in notices)   # on stderr
+
+
 def test_text_table_and_bad_options(two_trajectories):
     code, out, _ = _run("run", "--data", f"akit:{two_trajectories}:2")
     assert code == 0 and "as % of the distance travelled" in out and "traj 2" in out

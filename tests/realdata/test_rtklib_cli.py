@@ -83,6 +83,14 @@ def test_table_and_figures(rtklib_drive, tmp_path):
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_json_with_figures_is_one_json_document(rtklib_drive, tmp_path):
+    code, out, err = _run("run", "--data", f"rtklib:{rtklib_drive}", *SHORT, "--json",
+                          "--plot", str(tmp_path))
+    assert code == 0, err
+    assert json.loads(out)["feeds"] and "wrote" not in out
+    assert err.count(f"wrote {tmp_path}") == 2    # the notices of both figures, on stderr
+
+
 def test_rule_files_bind_to_the_gnss_sensor(rtklib_drive):
     doc = _json(rtklib_drive, "fakf", "--rules", "paper002_ror_gnss.json")
     assert doc["status"]["with outages"] == ["ok"]
