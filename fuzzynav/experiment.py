@@ -16,6 +16,7 @@ from fuzzynav.filters.named import FilterContext, FilterSetup
 from fuzzynav.metrics import (StreamingRms, errors_vs_trajectory, improvement_ci, mean_ci,
                               rms_metrics)
 from fuzzynav.metrics_rscale import usage_metrics
+from fuzzynav.metrics_segments import SegmentRms, scenario_edges_s, segment_metrics
 from fuzzynav.runpath import RunInputs, RunOutcome, check_outcomes, make_setup, run
 from fuzzynav.simsource import OnSimulatedLog, perturbed_initial_state  # noqa: F401 (API)
 from fuzzynav.sim.sensor_log import SensorLog, simulate
@@ -32,6 +33,9 @@ class SimulatedSource(OnSimulatedLog):
     t_start_s: float = 0.0
     #: False: the free inertial run (no aiding streams fed)
     aided: bool = True
+    #: True: also score each motion segment of the scenario (:mod:`fuzzynav.
+    #: metrics_segments`, ``seg<j>_...`` metrics; ``fuzzynav run --segments``)
+    segments: bool = False
 
     def inputs(self, setup: FilterSetup) -> RunInputs:
         return RunInputs(self.log.imu, self.log.sensors if self.aided else {},
@@ -42,14 +46,19 @@ class SimulatedSource(OnSimulatedLog):
     SETTINGS = OnSimulatedLog.SETTINGS | {"output_rate", "chunk"}
 
     def score(self, result) -> dict:
-        metrics = rms_metrics(errors_vs_trajectory(result, self.log.truth), self.t_start_s)
+        err = errors_vs_trajectory(result, self.log.truth)
+        metrics = rms_metrics(err, self.t_start_s)
+        if self.segments:
+            metrics.update(segment_metrics(err, scenario_edges_s(self.log.scenario),
+                                           self.t_start_s))
         # how much the run still uses its magnetometer (a study may penalise switching it off)
         metrics.update(usage_metrics(result, self.log.sensors))
         return metrics
 
     def streaming_scorer(self) -> StreamingRms:
         """A streaming form of :meth:`score`: fed each chunk of the result."""
-        return StreamingRms(self.t_start_s, self.log.truth)
+        return StreamingRms(self.t_start_s, self.log.truth, segment_scorer(
+            self.log.scenario, self.t_start_s) if self.segments else None)
 
     def score_streamed(self, result, scorer: StreamingRms) -> dict:
         """:meth:`score` of a run scored chunk by chunk: the accumulated error metrics and
@@ -60,11 +69,22 @@ class SimulatedSource(OnSimulatedLog):
 
 
 
-def as_source(log, t_start_s: float = 0.0):
-    """A run source of a log: a :class:`SensorLog` becomes a :class:`SimulatedSource`; a
-    source (a recording run, :mod:`fuzzynav.realdata.studyruns`) is itself (it scores in
-    its own window: ``t_start_s`` does not apply)."""
-    return SimulatedSource(log, t_start_s) if isinstance(log, SensorLog) else log
+def segment_scorer(scenario, t_start_s: float = 0.0) -> SegmentRms:
+    """The per-segment metrics of a run on ``scenario``, accumulated chunk by chunk."""
+    return SegmentRms(scenario_edges_s(scenario), t_start_s)
+
+
+def as_source(log, t_start_s: float = 0.0, segments: bool = False):
+    """A run source of a log: a :class:`SensorLog` becomes a :class:`SimulatedSource`
+    (``segments``: scored per motion segment too); a source (a recording run,
+    :mod:`fuzzynav.realdata.studyruns`) is itself (it scores in its own window:
+    ``t_start_s`` and ``segments`` do not apply)."""
+    if isinstance(log, SensorLog):
+        return SimulatedSource(log, t_start_s, segments=segments)
+    if segments:
+        raise FuzzynavError(f"{log.name}: per-segment metrics are for simulated scenarios "
+                            "(a recording has no motion segments)")
+    return log
 
 
 def filter_context(log, options=None) -> FilterContext:
@@ -79,16 +99,17 @@ def setup_for(log, filter_name: str, options=None) -> FilterSetup:
 
 
 def run_on_log(log, filter_name: str, options=None, t_start_s: float = 0.0,
-               setup: FilterSetup | None = None, **streaming) -> RunOutcome:
+               setup: FilterSetup | None = None, segments: bool = False,
+               **streaming) -> RunOutcome:
     """Run one named filter (or an explicit ``setup``) on a log and score it
-    (:func:`fuzzynav.runpath.run` on :func:`as_source`; ``streaming``: its
-    ``chunk_samples`` and ``output_rate_hz``)."""
-    return run(as_source(log, t_start_s), filter_name, options, setup, **streaming)
+    (:func:`fuzzynav.runpath.run` on :func:`as_source`; ``segments``: per motion segment
+    too; ``streaming``: its ``chunk_samples`` and ``output_rate_hz``)."""
+    return run(as_source(log, t_start_s, segments), filter_name, options, setup, **streaming)
 
 
 def monte_carlo(scenario, filters, seeds, options=None, cache_dir=None, t_start_s=0.0,
                 progress=False, refuse_diverged=False, seed_runs=None,
-                streaming=None) -> pd.DataFrame:
+                streaming=None, segments: bool = False) -> pd.DataFrame:
     """Metrics of every filter on every seed, one row per (filter, seed).
 
     Parameters
@@ -119,16 +140,19 @@ def monte_carlo(scenario, filters, seeds, options=None, cache_dir=None, t_start_
         each is then simulated chunk by chunk (:func:`fuzzynav.streamrun.run_streamed`, the
         same data and filter arithmetic as the whole log, nothing of the run's length
         held) instead of simulated whole and cached.
+    segments : bool
+        Score every run per motion segment of the scenario too (``seg<j>_...`` columns:
+        :mod:`fuzzynav.metrics_segments`), whole or streamed alike.
     """
     outcomes = []
     if seed_runs is None:
         scn = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
         seed_runs = _navigation_runs(scn, dict(options or {}), cache_dir, t_start_s, outcomes,
-                                     dict(streaming or {}))
+                                     dict(streaming or {}), segments)
     else:
         given = [k for k, v in (("options", options), ("cache_dir", cache_dir),
                                 ("t_start_s", t_start_s), ("refuse_diverged", refuse_diverged),
-                                ("streaming", streaming))
+                                ("streaming", streaming), ("segments", segments))
                  if v]
         if given:  # not silently ignored: the runs of seed_runs take their own
             raise FuzzynavError(f"monte_carlo: {', '.join(given)} apply to navigation filters "
@@ -149,7 +173,7 @@ def monte_carlo(scenario, filters, seeds, options=None, cache_dir=None, t_start_
     return pd.DataFrame(rows)
 
 
-def _navigation_runs(scn, options, cache_dir, t_start_s, outcomes, streaming):
+def _navigation_runs(scn, options, cache_dir, t_start_s, outcomes, streaming, segments=False):
     """``seed -> (filter -> metrics)`` of named navigation filters on ``scn``'s logs (each
     run's outcome appended to ``outcomes``)."""
     def of_seed(seed):
@@ -161,9 +185,10 @@ def _navigation_runs(scn, options, cache_dir, t_start_s, outcomes, streaming):
             opts.update(options.get(name, {}) if isinstance(options.get(name), dict) else {})
             # NAME@FILE: resolved by the run
             if streaming:
-                out = streamed_run(scn, seed, name, opts, t_start_s, streaming, cache_dir)
+                out = streamed_run(scn, seed, name, opts, t_start_s, streaming, cache_dir,
+                                   segments=segments)
             else:
-                out = run_on_log(log, name, opts, t_start_s)
+                out = run_on_log(log, name, opts, t_start_s, segments=segments)
             outcomes.append(out)
             return out.metrics
         return run_one
@@ -171,11 +196,11 @@ def _navigation_runs(scn, options, cache_dir, t_start_s, outcomes, streaming):
 
 
 def streamed_run(scn, seed, name, opts, t_start_s, streaming, cache_dir,
-                 setup: FilterSetup | None = None) -> RunOutcome:
+                 setup: FilterSetup | None = None, segments: bool = False) -> RunOutcome:
     """One run of :func:`fuzzynav.streamrun.run_streamed` (``streaming``: its chunk, output
     rate and output directory, one sub-directory per filter and seed; ``cache_dir``: read,
     never written; ``setup``: a configuration made elsewhere, e.g. on
-    :func:`streamed_source`)."""
+    :func:`streamed_source`; ``segments``: scored per motion segment too)."""
     from fuzzynav.fileio import safe_stem
     from fuzzynav.streamrun import DEFAULT_CHUNK_SAMPLES, run_streamed
 
@@ -185,7 +210,8 @@ def streamed_run(scn, seed, name, opts, t_start_s, streaming, cache_dir,
         out_dir = f"{out_dir}/{safe_stem(name)}-seed{int(seed)}"
     return run_streamed(scn, seed, name, opts, chunk_samples=kw.pop(
         "chunk_samples", DEFAULT_CHUNK_SAMPLES), t_start_s=t_start_s, output_dir=out_dir,
-        cache_dir=cache_dir, setup=setup, **kw)
+        cache_dir=cache_dir, setup=setup,
+        segments=segment_scorer(scn, t_start_s) if segments else None, **kw)
 
 
 def streamed_source(scn, seed: int, chunk_samples: int):

@@ -155,6 +155,9 @@ class StreamingRms:
         Errors before this time are left out (as :func:`rms_metrics`).
     truth : Trajectory, optional
         What :meth:`add_result` scores a filter result against.
+    segments : SegmentRms, optional
+        Also fed every chunk of errors; its per-segment metrics join :meth:`metrics`
+        (:class:`fuzzynav.metrics_segments.SegmentRms`).
     """
 
     #: the RMS quantities in :func:`rms_metrics`' order, with the metric each goes into
@@ -162,8 +165,8 @@ class StreamingRms:
             *(f"rms_vel_{ax}_mps" for ax in AXES), "rms_vel_mps", "rms_vel_h_mps",
             *(f"rms_{nm}_deg" for nm in ATT_NAMES), "rms_att_deg")
 
-    def __init__(self, t_start_s: float = 0.0, truth=None):
-        self.t_start_s, self.truth = float(t_start_s), truth
+    def __init__(self, t_start_s: float = 0.0, truth=None, segments=None):
+        self.t_start_s, self.truth, self.segments = float(t_start_s), truth, segments
         self._sq = dict.fromkeys(self._RMS, 0.0)
         self._n = 0
         self._sum_h, self._max_h, self._final_h = 0.0, float("nan"), float("nan")
@@ -174,6 +177,8 @@ class StreamingRms:
 
     def add(self, err: NavErrors) -> None:
         """Add the next chunk of errors (times after those added before)."""
+        if self.segments is not None:
+            self.segments.add(err)
         k = int(np.searchsorted(err.time_s, self.t_start_s, side="left"))  # times increase
         n = err.time_s.shape[0] - k
         if n <= 0:
@@ -212,6 +217,8 @@ class StreamingRms:
         out.update({k: rms[k] for k in self._RMS[5:10]})
         out["final_pos_h_m"] = self._final_h
         out.update({k: rms[k] for k in self._RMS[10:]})
+        if self.segments is not None:
+            out.update(self.segments.metrics())
         return out
 
 

@@ -125,7 +125,7 @@ class _Usage:
 def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None,
                  chunk_samples: int = DEFAULT_CHUNK_SAMPLES, output_rate_hz: float | None = None,
                  t_start_s: float = 0.0, output_dir=None, keep_events: bool = False,
-                 cache_dir=None, trace: bool = False, start=None):
+                 cache_dir=None, trace: bool = False, start=None, segments=None):
     """Simulate ``(scenario, seed)`` chunk by chunk and run one named filter on it.
 
     Parameters
@@ -161,6 +161,10 @@ def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None
         plus an error from P0 (``run --align``: behind an alignment on the opening chunks,
         :func:`fuzzynav.align.chain.run_aligned_streamed`); ``chunks`` is the iterator of
         the run's chunks, of which it may take the first few.
+    segments : SegmentRms, optional
+        Fed every chunk's errors too: the run's per-segment metrics join its metrics
+        (:class:`fuzzynav.metrics_segments.SegmentRms`, :func:`fuzzynav.experiment.
+        segment_scorer`).
 
     Returns
     -------
@@ -189,7 +193,7 @@ def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None
     keep = 1 if output_rate_hz is None else keep_every(config.out_rate_hz, output_rate_hz)
     header = setup.sensors_for(chunks.header)
     names = sorted(header)
-    scorer = StreamingRms(t_start_s, None)
+    scorer = StreamingRms(t_start_s, None, segments)
     usage = _Usage([nm for nm in names if header[nm].kind == USAGE_KIND
                     and "deflection_rad" in header[nm].meta][:1])
     out_dir = None if output_dir is None else Path(output_dir)

@@ -25,30 +25,31 @@ ALLOWED = {
     "filters": {"fuzzy", "nav"},
     "metrics": {"nav"},
     "metrics_rscale": set(),  # the metrics layer: usage of a sensor's R
+    "metrics_segments": {"metrics"},  # the metrics layer: errors per motion segment
     "report": {"metrics"},
     "runpath": {"filters", "sim"},  # sim.budget: the memory a run's outputs need
-    "experiment": {"runpath", "filters", "sim", "metrics", "metrics_rscale", "nav", "simsource",
+    "experiment": {"runpath", "filters", "sim", "metrics", "metrics_rscale", "metrics_segments", "nav", "simsource",
                    "streamrun"},
     # a simulated log as a run source (context, initial error): whole or streamed
     "simsource": {"filters", "sim", "nav"},
     # a run on a scenario simulated chunk by chunk (under experiment, which dispatches to it)
-    "streamrun": {"simsource", "runpath", "filters", "sim", "metrics", "metrics_rscale",
+    "streamrun": {"simsource", "runpath", "filters", "sim", "metrics", "metrics_rscale", "metrics_segments",
                   "streamtrace"},
     # what a streamed run keeps for its figures (errors of the kept rows, thinned events)
     "streamtrace": {"filters", "metrics"},
     "align": {"runpath", "experiment", "streamrun", "filters", "fuzzy", "sim", "metrics",
               "metrics_rscale", "report", "nav"},
-    "realdata": {"runpath", "filters", "sim", "metrics", "metrics_rscale", "report", "nav", "plots"},
-    "tuning": {"runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "metrics_rscale", "report", "nav", "plots",
+    "realdata": {"runpath", "filters", "sim", "metrics", "metrics_rscale", "metrics_segments", "report", "nav", "plots"},
+    "tuning": {"runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "metrics_rscale", "metrics_segments", "report", "nav", "plots",
                "realdata", "align"},
     # a paper folder: its claims, filters and scenarios, and its results page (which runs
     # everything: studies, recordings, figures)
-    "papers": {"pages", "runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "metrics_rscale", "report",
+    "papers": {"pages", "runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "metrics_rscale", "metrics_segments", "report",
                "nav", "tuning", "realdata", "plots", "align"},
     "plots": {"fuzzy", "nav", "metrics"},
-    "cli": {"runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "metrics_rscale", "report", "nav", "tuning",
+    "cli": {"runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "metrics_rscale", "metrics_segments", "report", "nav", "tuning",
             "realdata", "papers", "plots", "align", "pages"},
-    "pages": {"papers", "runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "metrics_rscale", "report",
+    "pages": {"papers", "runpath", "experiment", "filters", "fuzzy", "sim", "metrics", "metrics_rscale", "metrics_segments", "report",
               "nav", "tuning", "realdata", "plots", "align"},
     "__main__": {"cli"},
 }

@@ -5,6 +5,7 @@ import json
 import os
 from pathlib import Path
 
+from fuzzynav.cli.segment_table import add_segments_argument, refuse_segments
 from fuzzynav.cli.values import check_count, check_t_start
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.fileio import safe_stem, say_written
@@ -123,6 +124,7 @@ def add_common_arguments(p) -> None:
     p.add_argument("--plot", metavar="DIR", help="write error-curve figures into DIR")
     p.add_argument("--cache", metavar="DIR", help="simulation cache (default: %(default)s)",
                    default=str(default_cache_dir()))
+    add_segments_argument(p)
 
 
 def _cmd_scenarios(args) -> int:
@@ -213,6 +215,12 @@ def _cmd_run(args) -> int:
     check_common(args)
     if args.data and args.align:
         raise FuzzynavError("--align: only with a simulated SCENARIO, not with --data")
+    if args.data:
+        refuse_segments(args, "only with a simulated SCENARIO (a recording has no motion "
+                              "segments; its outages are tabled one by one)")
+    if args.align:
+        refuse_segments(args, "not with --align (the navigation starts inside the first "
+                              "segment, at the alignment's end)")
     if args.data and getattr(args, "output_dir", None):
         raise FuzzynavError("--output-dir: only with a simulated SCENARIO (a recording's "
                             "run is streamed with --output-rate, its chunks not written)")
@@ -251,6 +259,7 @@ def _cmd_compare(args) -> int:
     if is_alignment_scenario(str(args.scenario)):  # alignment filters: their own runner
         from fuzzynav.align.compare_cli import compare_alignment
 
+        refuse_segments(args, "not for alignment scenarios (one rest, no motion segments)")
         return compare_alignment(args, filters, claims, labels, rows_for(str(args.scenario)),
                                  lambda rate_hz: streaming_options(args, rate_hz))
     if args.align_threshold is not None:
@@ -273,10 +282,16 @@ def run_scenario_filters(args, filters, baseline=None, claims=None, claim_labels
     # a diverged run: no table at all, exit 3
     df = monte_carlo(scn, filters, seeds, filter_options(args), args.cache, args.t_start,
                      progress=not args.json and args.mc > 1, refuse_diverged=True,
-                     streaming=streaming_options(args, scn.imu.rate_hz))
+                     streaming=streaming_options(args, scn.imu.rate_hz),
+                     segments=args.segments)
     if args.json:
-        print(json.dumps(summary_document(df, scn.name, filters, seeds), indent=2,
-                         allow_nan=False))
+        doc = summary_document(df, scn.name, filters, seeds)
+        if args.segments:  # a segment before --t-start has no epoch scored: null
+            from fuzzynav.cli.segment_table import segment_document
+            from fuzzynav.fileio import json_ready
+
+            doc["segments"] = json_ready(segment_document(df, scn, filters))
+        print(json.dumps(doc, indent=2, allow_nan=False))
     else:
         header = ["RMS error", *filters]
         if baseline is not None:
@@ -290,6 +305,10 @@ def run_scenario_filters(args, filters, baseline=None, claims=None, claim_labels
                                               claims=claims))
               + (f"\nwarning: {len(bad)} run(s) stopped early (covariance lost)"
                  if len(bad) else ""))
+        if args.segments:
+            from fuzzynav.cli.segment_table import segment_table
+
+            print("\n" + segment_table(df, scn, filters, baseline))
     if args.plot:
         _plot_first_seed(scn, filters, seeds[0], args)
     return 0
