@@ -19,13 +19,16 @@ _AXES = ("east", "north", "up")
 _STYLES = ("-", "--", "-.", ":")
 
 
-def error_curves(errors: dict, title: str = "") -> plt.Figure:
+def error_curves(errors: dict, title: str = "", segments=()) -> plt.Figure:
     """Position, velocity and attitude errors of one or more filters against time.
 
     Parameters
     ----------
     errors : dict
         Label -> :class:`fuzzynav.metrics.NavErrors`.
+    segments : sequence of (start_s, end_s, label), optional
+        Motion segments to mark: every other one shaded in each panel, and each labelled
+        at the top of the first row (``fuzzynav run --segments --plot DIR``).
     """
     fig, axs = plt.subplots(3, 3, figsize=(13, 8), sharex=True)
     for j, (label, err) in enumerate(errors.items()):
@@ -42,6 +45,12 @@ def error_curves(errors: dict, title: str = "") -> plt.Figure:
         axs[2, i].set_xlabel("time (s)")
     for ax in axs.flat:
         ax.grid(alpha=0.3)
+        for t0, t1, _ in list(segments)[1::2]:
+            ax.axvspan(t0, t1, color="0.85", alpha=0.5, lw=0)
+    for ax in axs[0]:
+        for t0, t1, label in segments:
+            ax.text(0.5 * (t0 + t1), 1.0, label, transform=ax.get_xaxis_transform(),
+                    ha="center", va="bottom", fontsize=6, clip_on=True)
     axs[0, 0].legend(loc="best", fontsize=8)
     if title:
         fig.suptitle(title)

@@ -318,23 +318,30 @@ def _plot_first_seed(scn, filters, seed, args) -> None:
     streaming = streaming_options(args, scn.imu.rate_hz)
     traces = (_streamed_traces if streaming else _whole_traces)(scn, filters, seed, args,
                                                                 streaming)
-    plot_traces(traces, scn.name, seed, args.plot, streaming.get("output_rate_hz"), args.json)
+    spans = ()
+    if args.segments:
+        from fuzzynav.cli.segment_table import segment_spans
+
+        spans = segment_spans(scn)
+    plot_traces(traces, scn.name, seed, args.plot, streaming.get("output_rate_hz"), args.json,
+                spans)
 
 
 def plot_traces(traces, name: str, seed: int, out_dir, output_rate_hz=None,
-                json_on_stdout: bool = False) -> None:
+                json_on_stdout: bool = False, segments=()) -> None:
     """Write ``<name>_errors.png`` (and ``<name>_adaptation.png`` when a filter adapts) into
     ``out_dir`` (``--plot DIR``) from ``traces``: label -> (errors, event logs) of the runs
     on seed ``seed``, at ``output_rate_hz`` when their outputs were decimated
     (``json_on_stdout``: the notices of the files go to stderr, :func:`~fuzzynav.fileio.
-    say_written`)."""
+    say_written`; ``segments``: ``(start_s, end_s, label)`` marked on the error curves)."""
     from fuzzynav import plots
 
     out_dir, stem = Path(out_dir), safe_stem(name)
     errs = {f: errors for f, (errors, _) in traces.items()}
     title = f"{name}, seed {seed}" + (f" ({output_rate_hz:g}-Hz output)"
                                       if output_rate_hz else "")
-    path = plots.save(plots.error_curves(errs, title), out_dir / f"{stem}_errors.png")
+    path = plots.save(plots.error_curves(errs, title, segments),
+                      out_dir / f"{stem}_errors.png")
     say_written(path, json_on_stdout)
     series = {}
     for f, (_, events) in traces.items():

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from fuzzynav.errors import FuzzynavError
 
-__all__ = ["add_segments_argument", "refuse_segments", "segment_table", "segment_document"]
+__all__ = ["add_segments_argument", "refuse_segments", "segment_table", "segment_document",
+           "segment_spans"]
 
 #: the table's columns per filter: (header, metric, format); of several filters, the first
 #: and the last only (the JSON has every metric)
@@ -23,7 +24,8 @@ def add_segments_argument(p) -> None:
                    help="simulated scenarios: also report the errors per motion segment "
                         "(the scenario's [[segments]]: horizontal RMS, largest and final "
                         "horizontal error, vertical, velocity and heading RMS), whole or "
-                        "streamed (accumulated chunk by chunk)")
+                        "streamed (accumulated chunk by chunk); --plot marks them on the "
+                        "error curves")
 
 
 def refuse_segments(args, why: str) -> None:
@@ -38,6 +40,11 @@ def _spans(scn):
     edges = scenario_edges_s(scn)
     return [(j, seg.kind, float(edges[j]), float(edges[j + 1]))
             for j, seg in enumerate(scn.segments)]
+
+
+def segment_spans(scn) -> list:
+    """``(start_s, end_s, "j kind")`` of each segment: the marks of the error curves."""
+    return [(t0, t1, f"{j + 1} {kind}") for j, kind, t0, t1 in _spans(scn)]
 
 
 def _pivot(df, metric):

@@ -52,9 +52,9 @@ def test_plot_draws_the_navigation_from_the_alignments_end(capsys, monkeypatch, 
     drawn = {}
     real = fuzzynav.plots.error_curves
 
-    def error_curves(errors, title=""):
+    def error_curves(errors, title="", segments=()):
         drawn.update(errors)
-        return real(errors, title)
+        return real(errors, title, segments)
 
     monkeypatch.setattr(fuzzynav.plots, "error_curves", error_curves)
     code, out, err = _run(capsys, "run", SCN, "--filter", "fakf", "--align", "align-kf",

@@ -104,6 +104,35 @@ def test_segments_do_not_change_the_metrics_and_sum_to_the_run(sim_cache):
     assert total / n.sum() == pytest.approx(rms_metrics(err)["rms_pos_h_m"] ** 2, rel=1e-12)
 
 
+def test_plot_marks_the_segments(capsys, monkeypatch, tmp_path, sim_cache):
+    import fuzzynav.plots
+
+    drawn = []
+    real = fuzzynav.plots.error_curves
+
+    def error_curves(errors, title="", segments=()):
+        fig = real(errors, title, segments)
+        drawn.append((list(segments), fig))
+        return fig
+
+    monkeypatch.setattr(fuzzynav.plots, "error_curves", error_curves)
+    code, _, err = _run(capsys, "run", TINY, "--filter", "ekf", "--segments", "--plot",
+                        tmp_path, "--cache", sim_cache)
+    assert code == 0, err
+    assert (tmp_path / "tiny_errors.png").stat().st_size > 0
+    (spans, fig), = drawn
+    scn = load_scenario(TINY)
+    edges = scenario_edges_s(scn)
+    assert spans == [(edges[j], edges[j + 1], f"{j + 1} {s.kind}")
+                     for j, s in enumerate(scn.segments)]
+    first = fig.axes[0]
+    assert len(first.patches) == len(spans) // 2           # every other segment shaded
+    assert [t.get_text() for t in first.texts] == [label for _, _, label in spans]
+    code, _, err = _run(capsys, "run", TINY, "--filter", "ekf", "--plot", tmp_path,
+                        "--cache", sim_cache)
+    assert code == 0 and drawn[-1][0] == [] and not drawn[-1][1].axes[0].patches
+
+
 @pytest.mark.parametrize("argv, fragment", [
     (["run", "--data", "rtklib:nowhere", "--segments"], "--segments: only with a simulated"),
     (["run", "paper000", "--align", "align-kf", "--segments"], "--segments: not with --align"),
