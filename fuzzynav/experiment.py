@@ -22,6 +22,9 @@ from fuzzynav.simsource import OnSimulatedLog, perturbed_initial_state  # noqa: 
 from fuzzynav.sim.sensor_log import SensorLog, simulate
 from fuzzynav.sim.scenario import Scenario, load_scenario
 
+__all__ = ["SimulatedSource", "segment_scorer", "as_source", "filter_context", "setup_for",
+           "run_on_log", "monte_carlo", "streamed_run", "streamed_source", "summary_table"]
+
 
 @dataclass(frozen=True)
 class SimulatedSource(OnSimulatedLog):

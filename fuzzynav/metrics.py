@@ -14,6 +14,10 @@ from scipy import stats
 from fuzzynav.live_cache import LiveCache
 from fuzzynav.nav import attitude, earth
 
+__all__ = ["AXES", "ATT_NAMES", "NavErrors", "errors_vs_trajectory", "errors_vs_reference",
+           "rms_metrics", "StreamingRms", "Estimate", "mean_ci", "crossed_ci", "summary_json",
+           "improvement_ci"]
+
 AXES = ("e", "n", "u")
 ATT_NAMES = ("pitch", "roll", "heading")
 

@@ -18,6 +18,9 @@ from fuzzynav.sim.imu import ImuSpec
 from fuzzynav.sim.scenario import builtin_files, merge_base, read_file
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
 
+__all__ = ["AlignScenario", "list_alignment_scenarios", "is_alignment_scenario",
+           "load_alignment_scenario"]
+
 #: [filter] keys in datasheet units -> (AlignNoise field, SI factor)
 _FILTER_KEYS = {
     "vel_sigma_mps": ("vel_sigma_mps", 1.0),

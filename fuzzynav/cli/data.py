@@ -1,6 +1,8 @@
 """``fuzzynav data list | fetch``: the public recordings, where they are, downloading them."""
 from __future__ import annotations
 
+__all__ = ["register"]
+
 
 def register(sub) -> None:
     p = sub.add_parser("data", help="public recordings: list them, fetch them")

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+__all__ = ["register"]
+
 
 def register(sub) -> None:
     p = sub.add_parser("docs", help="the docs results pages: list them, regenerate them")

@@ -17,6 +17,8 @@ import numpy as np
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.fuzzy.describe import rule_grid
 
+__all__ = ["register", "cmd_surface", "cmd_check", "cmd_convert"]
+
 _FORMATS = {".json": "fuzzynav-fis JSON", ".fis": "MATLAB .fis"}
 
 

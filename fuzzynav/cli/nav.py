@@ -10,6 +10,11 @@ from fuzzynav.cli.values import check_count, check_t_start
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.fileio import safe_stem, say_written
 
+__all__ = ["default_cache_dir", "register", "add_source_arguments", "add_recording_arguments",
+           "DEFAULT_CHUNK_S", "add_streaming_arguments", "streaming_options",
+           "add_common_arguments", "data_sources", "filter_options", "MAX_MC", "MAX_SEED",
+           "check_common", "check_rules", "run_scenario_filters", "plot_traces"]
+
 
 def default_cache_dir() -> Path:
     """Simulation cache: ``$FUZZYNAV_CACHE`` or ``~/.cache/fuzzynav``."""

@@ -11,6 +11,8 @@ from pathlib import Path
 
 from fuzzynav.cli.values import check_count
 
+__all__ = ["MAX_WORKERS", "register"]
+
 #: more worker processes than this only queue on the machine's cores (and its memory)
 MAX_WORKERS = 4 * (os.cpu_count() or 1)
 

@@ -5,6 +5,8 @@ import math
 
 from fuzzynav.errors import FuzzynavError
 
+__all__ = ["check_count", "check_t_start"]
+
 
 def check_count(option: str, value, lo: int = 1, hi: int | None = None) -> None:
     """Refuse an integer option outside ``lo..hi`` (``None``: not given, accepted)."""

@@ -24,6 +24,9 @@ import numpy as np
 
 from fuzzynav.errors import FuzzynavError
 
+__all__ = ["AlsEstimate", "innovations", "sample_autocov", "als_matrices", "als_estimate",
+           "steady_gain"]
+
 
 @dataclass(frozen=True)
 class AlsEstimate:

@@ -65,6 +65,8 @@ import numpy as np
 
 from fuzzynav.errors import InputFileError
 
+__all__ = ["MODES", "BankSpec"]
+
 MODES = ("reset", "no-reset")
 MODE_RESET, MODE_NO_RESET = 1, 0
 _WHERE = "bank"

@@ -68,6 +68,10 @@ from numba import types
 from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.fuzzy.kernels import eval_compiled
 
+__all__ = ["STATISTICS", "DEFAULT_FLOOR", "MIN_CHANGE", "ShareControl", "WEIGH_SIG",
+           "fuzzy_weight", "no_weight", "stat_size", "share_control", "push_innovation",
+           "window_stat", "floor_shares", "update_shares"]
+
 #: the statistics a share controller reads (binding ``statistic``) -> kernel code
 STATISTICS = {"nis": 0, "ror": 1}
 #: smallest share any local keeps unless the controller's floor says otherwise

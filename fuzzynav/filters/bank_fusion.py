@@ -17,6 +17,10 @@ from fuzzynav.filters.error_model import block_end, fill_F
 from fuzzynav.filters.feedback import feedback
 from fuzzynav.filters.layout import N_CORE
 
+__all__ = ["REF_LOCAL", "lower_inverse", "add_gram", "add_information_vector", "spd_inverse",
+           "fuse", "after_propagation", "master_covariance", "share", "propagate_state",
+           "local_residual", "fusion_work", "propagate_locals", "fuse_and_feed_back"]
+
 
 #: the local filter whose standard deviations scale the states for the fusion (any would do)
 REF_LOCAL = 0

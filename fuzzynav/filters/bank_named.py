@@ -23,6 +23,8 @@ from fuzzynav.filters.catalog import bind_systems, find_rule_file
 from fuzzynav.filters.named import FilterContext, FilterSetup, base_config, \
     register_filter
 
+__all__ = ["sensor_groups", "bank_setup", "split_systems", "bank_rule_files"]
+
 
 def sensor_groups(ctx: FilterContext, groups) -> tuple:
     """Each group's sensor names: a group lists sensor names or kinds.

@@ -25,6 +25,8 @@ from fuzzynav.errors import InputFileError
 from fuzzynav.filters.adaptation.binding import Binding
 from fuzzynav.filters.bank_beta import DEFAULT_FLOOR, STATISTICS, ShareControl, share_control
 
+__all__ = ["ADAPTER", "ShareController", "is_share_controller"]
+
 #: the ``binding.adapter`` of a share controller
 ADAPTER = "beta-sharing"
 

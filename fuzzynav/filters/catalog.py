@@ -21,6 +21,9 @@ from fuzzynav.filters.multipliers import Q_FIELDS, is_multiplier, r_scales
 from fuzzynav.filters.named import FilterContext, FilterSetup, base_config, every_sensor, \
     register_alias, register_filter
 
+__all__ = ["PAPER000_RULES", "rules_dirs", "params_dirs", "find_file", "find_rule_file",
+           "find_params_file", "bind_rule_files", "bind_systems"]
+
 #: the paper's two controllers, used by ``fuzzy`` (alias ``fakf``) without ``--rules``
 PAPER000_RULES = ("paper000_gps_sins.json", "paper000_attitude.json")
 

@@ -17,6 +17,8 @@ from fuzzynav.filters.bank import BankSpec
 from fuzzynav.filters.error_model import MODEL_15, ErrorModel
 from fuzzynav.filters.error_st import error_model_code
 
+__all__ = ["FilterConfig"]
+
 
 def _per_block(values, n_blocks, name):
     values = tuple(values) if np.ndim(values) else (values,) * n_blocks

@@ -34,6 +34,9 @@ from fuzzynav.filters.error_st import EM_ST, discretize_dense, st_fused, st_meas
     st_process_noise, st_regauge, st_reset, st_system, st_to_phi, st_velocity_variance
 from fuzzynav.filters.layout import X_VEL
 
+__all__ = ["system", "discretize", "rows", "single_feedback", "fused_feedback", "regauge",
+           "sigma_velocity"]
+
 
 def _hook_point(phi_impl):
     """Make ``phi_impl`` (the phi model's code, and the hook point's signature) a hook point

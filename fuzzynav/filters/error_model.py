@@ -28,6 +28,9 @@ from fuzzynav.filters.layout import (BLOCK_KINDS, CORE, COUPLE_ACCEL, COUPLE_GYR
 from fuzzynav.nav.earth import E2, OMEGA_IE, gravity_sin_nb, radii_sin_nb
 from fuzzynav.nav.state_layout import NAV_H, NAV_LAT, NAV_VEL
 
+__all__ = ["ErrorModel", "MODEL_15", "fill_F", "block_end", "discretize", "discretize_tail",
+           "transition"]
+
 # velocity error components, and the position error's rows/columns: in radians
 # (dlat, dlon, dh) while F is formed, then ENU metres (dE, dN, dU) after _to_metric
 _VE, _VN, _VU = X_VEL, X_VEL + 1, X_VEL + 2

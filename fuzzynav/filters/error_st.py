@@ -34,6 +34,10 @@ from fuzzynav.filters.layout import X_ATT, X_VEL
 from fuzzynav.nav.earth import OMEGA_IE, gravity_nb
 from fuzzynav.nav.state_layout import NAV_H, NAV_LAT, NAV_VEL
 
+__all__ = ["ERROR_MODELS", "error_model_code", "st_system", "st_process_noise", "discretize_dense",
+           "st_measurement", "st_to_phi", "st_reset", "st_velocity_variance", "st_covariance",
+           "st_fused", "st_regauge"]
+
 EM_PHI, EM_ST = 0, 1
 #: error-model name -> code passed into the compiled loop
 ERROR_MODELS = {"phi": EM_PHI, "st": EM_ST}

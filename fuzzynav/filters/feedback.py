@@ -11,6 +11,8 @@ from fuzzynav.nav.earth import radii_nb
 from fuzzynav.nav.state_layout import NAV_H, NAV_LAT, NAV_LON, NAV_Q, NAV_VEL, PREV_LLA, PREV_VEL
 from fuzzynav.nav.strapdown import quat_mul, rv2q, set_quat
 
+__all__ = ["feedback", "bias_totals"]
+
 
 @nb.njit(cache=True, error_model="numpy")
 def feedback(nav, prev, xs, x):

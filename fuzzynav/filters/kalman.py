@@ -21,6 +21,10 @@ import numba as nb
 
 from fuzzynav.filters import sized
 
+__all__ = ["diagonal_tail", "propagate", "propagate_tail", "sparse_left_mul", "square_tail",
+           "innovation_cov", "cholesky", "chol_solve_vec", "nis", "gain", "joseph_update",
+           "correct", "covariance_ok", "scale_predicted"]
+
 
 @nb.njit(cache=True, error_model="numpy")
 def diagonal_tail(A):

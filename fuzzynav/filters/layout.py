@@ -30,6 +30,9 @@ import numpy as np
 from fuzzynav.errors import InputFileError, UnknownNameError
 from fuzzynav.registry import Registry
 
+__all__ = ["CORE_BLOCKS", "BlockKind", "BLOCK_KINDS", "register_block", "kind_of", "StateLayout",
+           "CORE", "N_CORE", "LAYOUT_15", "LAYOUT_18"]
+
 #: couplings of a sensor-error block into the navigation core (codes seen by numba)
 COUPLE_GYRO, COUPLE_ACCEL, COUPLE_NONE = 0, 1, 2
 #: the core blocks, in this order, at the start of every layout

@@ -36,6 +36,8 @@ from fuzzynav.filters.numba_patch_dispatch import memoise_table_types
 from fuzzynav.filters.record import record_output
 from fuzzynav.nav.strapdown import init_prev, mech_step, quat_to_dcm_into
 
+__all__ = ["NO_ADAPTER", "PLAIN_LOOP", "run_loop", "loop_for"]
+
 #: adapter id of a sensor without adaptation (the loop skips the policy's call)
 NO_ADAPTER = -1
 # event flags

@@ -11,6 +11,10 @@ import numpy as np
 
 from fuzzynav.filters.bank_beta import ShareControl
 
+__all__ = ["Imu", "Start", "Bank", "BankState", "Model", "Events", "Sensors", "Settings",
+           "Outputs", "EventOutputs", "NavCarry", "Propagation", "UpdateWork", "AdaptWork",
+           "FusionWork", "Carry", "new_carry"]
+
 
 class Imu(NamedTuple):
     """IMU increments: ``dth``, ``dv`` (N, 3) [rad, m/s] and ``time_s`` (N+1,)."""

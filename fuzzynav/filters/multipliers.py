@@ -18,6 +18,9 @@ from __future__ import annotations
 
 import math
 
+__all__ = ["Q_FIELDS", "R_ALL", "R_PREFIX", "OLD_NAMES", "new_name", "is_multiplier",
+           "scaled_config", "r_scales"]
+
 #: process-noise multipliers: key -> FilterConfig field (a noise density, scaled by sqrt)
 Q_FIELDS = {"q_att": "arw_dpsh", "q_vel": "vrw_ug_psqrthz",
             "q_gyro_bias": "gyro_rw_dph_psh", "q_accel_bias": "accel_rw_ug_psqrts"}

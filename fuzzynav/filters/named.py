@@ -17,6 +17,10 @@ from fuzzynav.errors import FuzzynavError, brief
 from fuzzynav.registry import Registry
 from fuzzynav.filters.config import FilterConfig
 
+__all__ = ["FilterContext", "FilterSetup", "select_sensors", "NamedFilter", "FILTERS",
+           "register_filter", "register_alias", "parse_filter_spec", "get_filter", "list_filters",
+           "config_from_imu", "markov_config", "config_overrides", "base_config", "every_sensor"]
+
 
 @dataclass(frozen=True)
 class FilterContext:

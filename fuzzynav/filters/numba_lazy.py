@@ -24,6 +24,8 @@ from __future__ import annotations
 
 from numba.core.registry import CPUDispatcher
 
+__all__ = ["KERNEL_OPTIONS", "OneSignatureDispatcher", "njit_signature", "table_of"]
+
 #: options of every kernel (those of the modules' ``@nb.njit(SIG, cache=True, ...)``)
 KERNEL_OPTIONS = {"nopython": True, "error_model": "numpy"}
 

@@ -28,6 +28,9 @@ import numpy as np
 import numba.experimental.function_type as _function_type
 from numba.core.dispatcher import Dispatcher
 
+__all__ = ["CHECKED_NUMBA", "numba_checked", "MAX_TABLES", "memoise_table_types",
+           "memoise_kernel_addresses", "restore_kernel_addresses"]
+
 #: numba releases ``(major, minor)`` the patches were checked against, both ends included
 #: (widen it after running the tests above on another release)
 CHECKED_NUMBA = ((0, 68), (0, 68))

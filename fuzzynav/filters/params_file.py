@@ -23,6 +23,9 @@ from fuzzynav.errors import InputFileError, brief
 from fuzzynav.filters import measurements
 from fuzzynav.filters.multipliers import Q_FIELDS, R_ALL, R_PREFIX, new_name
 
+__all__ = ["PARAMS_FORMAT", "MAX_FILE_BYTES", "MULTIPLIER", "Param", "MULTIPLIER_FILTERS",
+           "PARAMETERS", "ALL_REQUIRED", "known_keys", "check_params", "read_params_file"]
+
 PARAMS_FORMAT = "fuzzynav-baselines"
 #: largest tuned-parameter file read (bytes); a study writes a few kilobytes
 MAX_FILE_BYTES = 1 << 20

@@ -30,6 +30,9 @@ import subprocess
 import sys
 import time
 
+__all__ = ["KERNELS", "WAIT_S", "ENV_SWITCH", "ENV_CACHE", "signatures", "dispatcher", "needed",
+           "Helper", "enabled", "start"]
+
 #: the kernels the helper may compile (under ``fuzzynav.``), in the reverse of the order in
 #: which the loop's typing reaches them: this process works from the front, the helper from
 #: the back, and they meet in the middle (:meth:`Helper.claim`)

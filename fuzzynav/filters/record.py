@@ -9,6 +9,8 @@ import numba as nb
 from fuzzynav.filters import error_hook
 from fuzzynav.nav.state_layout import NAV_SIZE
 
+__all__ = ["sigma_into", "record_output"]
+
 
 @nb.njit(cache=True, error_model="numpy")
 def sigma_into(row, P, nav, em):

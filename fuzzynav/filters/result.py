@@ -8,6 +8,8 @@ import numpy as np
 from fuzzynav.filters.layout import LAYOUT_15, StateLayout
 from fuzzynav.nav import attitude
 
+__all__ = ["EventLog", "LocalStates", "FilterResult"]
+
 
 @dataclass(frozen=True)
 class EventLog:

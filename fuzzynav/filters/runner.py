@@ -21,6 +21,8 @@ from fuzzynav.filters.sensor_tables import (concat_event_logs, event_outputs, ev
 from fuzzynav.nav import strapdown
 from fuzzynav.nav.state_layout import LLA_SLICE, NAV_SIZE, Q_SLICE, VEL_SLICE
 
+__all__ = ["InitialState", "run_filter", "FilterRun"]
+
 # the kernel tables are the same few tuples run after run: numba types them once (every
 # loop's tables: fuzzynav.filters.loop), and looks their kernels' addresses up once
 memoise_kernel_addresses()

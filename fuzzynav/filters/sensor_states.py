@@ -14,6 +14,8 @@ from dataclasses import replace
 
 from fuzzynav.filters import measurements
 
+__all__ = ["with_sensor_states"]
+
 
 def _noise(tau_s: float, sigma0: float, steady: float) -> tuple:
     """``(initial sigma, driving-noise density)``: 2 steady^2 / tau for Gauss-Markov."""

@@ -17,6 +17,9 @@ from fuzzynav.filters import adaptation, loop, measurements
 from fuzzynav.filters.adaptation import N_DIAG, NoAdaptation
 from fuzzynav.filters.result import EventLog
 
+__all__ = ["SensorTables", "pack_sensors", "event_table", "event_outputs", "concat_event_logs",
+           "adapter_ids", "split_events"]
+
 
 class SensorTables(NamedTuple):
     """What :func:`pack_sensors` packs of a run's sensors: their ``names`` (sorted: the

@@ -22,6 +22,9 @@ import numba as nb
 
 from fuzzynav.filters.layout import N_CORE
 
+__all__ = ["fixed", "fixed_count", "rows_times", "propagate_sized", "square_sized",
+           "discretize_sized", "times_Ht_sized", "innovation_sized", "gain_sized", "joseph_sized"]
+
 #: state count and diagonal tail compiled as constants: the 15-state phi model, the
 #: navigation error states and then gyro and accelerometer biases (3 each), which only decay
 FIXED_N, FIXED_D = N_CORE + 6, N_CORE

@@ -21,6 +21,8 @@ from fuzzynav.filters.adaptation.supervisors import FuzzyHuber, FuzzySageHusa, F
 from fuzzynav.filters.catalog import bind_rule_files, bind_systems
 from fuzzynav.filters.named import FilterSetup, base_config, register_filter
 
+__all__ = ["SUPERVISED", "supervised_setup"]
+
 
 def _sage_husa(o):
     floor, cap = float(o.get("floor", 0.1)), float(o.get("cap", math.inf))

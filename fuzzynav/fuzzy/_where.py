@@ -11,6 +11,8 @@ from contextlib import contextmanager
 
 from fuzzynav.errors import FuzzynavError, InputFileError
 
+__all__ = ["FisError", "FisEvaluationError", "FisCompileError", "join", "fail", "located", "unique"]
+
 
 class FisError(InputFileError):
     """A fuzzy system (rule file or in-memory definition) is malformed."""

@@ -16,6 +16,8 @@ from fuzzynav.fuzzy.inference import EvalInfo, python_exact
 from fuzzynav.fuzzy.compiled_layout import CLAMPED, NAN_INPUT, NO_RULE
 from fuzzynav.fuzzy.sampled import sampled_evaluate
 
+__all__ = ["evaluate"]
+
 #: batches at least this long use the parallel compiled kernel
 _PARALLEL_MIN = 20000
 

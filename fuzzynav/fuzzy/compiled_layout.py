@@ -24,6 +24,8 @@ F_GL           Gauss-Legendre tables on [0, 1] for n = 1..NGL (pairs node, weigh
 
 Never renumber; the tag changes if the layout ever does.
 """
+
+__all__ = ["TAG_VALUE", "HEADER", "PIECE_VERTS", "PIECE_STRIDE", "MAX_RTOL", "GAP_RTOL", "CODES"]
 TAG_VALUE = 0x46555A31  # "FUZ1"
 HEADER = 48
 

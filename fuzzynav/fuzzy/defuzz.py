@@ -23,6 +23,8 @@ from scipy.optimize import brentq
 from fuzzynav.fuzzy.compiled_layout import GAP_RTOL, MAX_RTOL
 from fuzzynav.fuzzy.membership import evaluate_mf
 
+__all__ = ["Implied", "aggregate", "pwl_knots", "pwl_defuzz", "singleton_defuzz"]
+
 
 @dataclass(frozen=True)
 class Implied:

@@ -1,6 +1,8 @@
 """Human-readable views of a fuzzy system: the rule grid of a two-input system, rule lines."""
 from __future__ import annotations
 
+__all__ = ["rule_grid", "rule_lines", "rule_markdown"]
+
 
 def rule_grid(fis):
     """``(header, rows)`` of a two-input, one-output table of plain AND rules, else ``None``.

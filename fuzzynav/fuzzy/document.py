@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import json
 
+__all__ = ["FORMAT", "VERSION", "OPTIONAL_OBJECTS", "to_dict"]
+
 FORMAT = "fuzzynav-fis"
 VERSION = 1
 #: optional top-level objects, carried verbatim (the engine does not interpret them)

@@ -17,6 +17,8 @@ from fuzzynav.fuzzy.system import Antecedent, FuzzySystem, Operators, Rule, Term
 from fuzzynav.fileio import write_text_atomic
 from fuzzynav.fuzzy.textio import read_text
 
+__all__ = ["read_matlab_fis", "dropped_fields", "matlab_text", "v_index", "write_matlab_fis"]
+
 _FROM_MATLAB = {s.matlab: s.name for s in SHAPES.values() if s.matlab}
 _KNOWN_SYSTEM_KEYS = {"Name", "Type", "Version", "NumInputs", "NumOutputs", "NumRules",
                       "AndMethod", "OrMethod", "ImpMethod", "AggMethod", "DefuzzMethod",

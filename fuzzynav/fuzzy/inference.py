@@ -20,6 +20,9 @@ from fuzzynav.fuzzy.compiled_layout import CLAMPED, NAN_INPUT, NO_RULE
 from fuzzynav.fuzzy.membership import evaluate_mf
 from fuzzynav.fuzzy.quadrature import curved_defuzz
 
+__all__ = ["EvalInfo", "clamp", "firing_strengths", "consequents", "sugeno_output", "term_levels",
+           "output_values", "finish_outputs", "python_exact"]
+
 @dataclass(frozen=True)
 class EvalInfo:
     """What happened during one ``evaluate`` call.

@@ -16,6 +16,8 @@ from fuzzynav.fuzzy.membership import CONSTANT, mf_scalar
 from fuzzynav.fuzzy.probor_kernels import probor_defuzz
 from fuzzynav.fuzzy.pwl_kernels import build_piece, envelope_defuzz, merge
 
+__all__ = ["eval_compiled", "eval_compiled_into", "eval_compiled_batch", "eval_compiled_parallel"]
+
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
 def _clamp_inputs(fp, ip, x, work):

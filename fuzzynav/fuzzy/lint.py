@@ -11,6 +11,8 @@ import numpy as np
 
 from fuzzynav.fuzzy.membership import evaluate_mf
 
+__all__ = ["advisories"]
+
 _GRID = 2001
 
 

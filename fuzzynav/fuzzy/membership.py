@@ -33,6 +33,9 @@ import numpy as np
 
 from fuzzynav.fuzzy._where import fail
 
+__all__ = ["Shape", "SHAPES", "FUZZY_SHAPES", "SUGENO_SHAPES", "check_params", "evaluate_mf",
+           "mf_scalar", "knots", "peak_interval"]
+
 # kernel codes (stored in the compiled iparams; never renumber, only append)
 TRI, TRAP, GAUSS, GAUSS2, GBELL, SIGMOID, SMF, ZMF, PIMF, SINGLETON = range(1, 11)
 CONSTANT, LINEAR = 20, 21

@@ -24,6 +24,8 @@ import math
 from fuzzynav.fuzzy._where import fail, located
 from fuzzynav.fuzzy.system import Term
 
+__all__ = ["standard_labels", "triangular_partition"]
+
 _SIGNED = ("NS", "NM", "NB", "NVB")
 _MAGNITUDE = ("S", "XS", "XXS", "XXXS")
 

@@ -16,6 +16,8 @@ import numba
 from fuzzynav.fuzzy.compiled_layout import DEF_CENTROID, DEF_LOM, DEF_MOM, DEF_SOM
 from fuzzynav.fuzzy.pwl_kernels import maximum_threshold, point_maxima, vertex_limits
 
+__all__ = ["probor_defuzz"]
+
 
 @numba.njit(cache=True, error_model="numpy")
 def _probor_prepare(work, pieces, npieces, stride, x0, x1, ab):

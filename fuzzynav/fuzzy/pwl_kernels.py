@@ -27,6 +27,9 @@ from fuzzynav.fuzzy.compiled_layout import (AGG_MAX, AGG_SUM, DEF_BISECTOR, DEF_
                                    DEF_MOM, DEF_SOM, GAP_RTOL, IMP_MIN, MAX_RTOL)
 from fuzzynav.fuzzy.membership import TRAP
 
+__all__ = ["vertex_limits", "build_piece", "merge", "linear_centroid", "linear_bisector",
+           "maximum_threshold", "point_maxima", "linear_maxima", "envelope_defuzz"]
+
 
 # ----------------------------------------------------------------------------- pieces
 @numba.njit(cache=True, inline="always", error_model="numpy")

@@ -22,6 +22,8 @@ from fuzzynav.fuzzy.defuzz import aggregate
 from fuzzynav.fuzzy.compiled_layout import MAX_RTOL
 from fuzzynav.fuzzy.membership import evaluate_mf, knots, peak_interval
 
+__all__ = ["QUAD_RTOL", "curved_maxima", "curved_defuzz"]
+
 #: documented bound: centroid error / range width, bisector area split (relative)
 QUAD_RTOL = 1e-9
 _PIECE_RTOL = 1e-12

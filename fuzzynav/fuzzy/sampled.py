@@ -21,6 +21,8 @@ from fuzzynav.fuzzy.inference import (clamp, consequents, finish_outputs,
                                       firing_strengths, output_values)
 from fuzzynav.fuzzy.membership import evaluate_mf
 
+__all__ = ["sampled_aggregate", "sampled_defuzz", "sampled_evaluate"]
+
 _CHUNK = 8192
 
 

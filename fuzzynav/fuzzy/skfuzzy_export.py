@@ -14,6 +14,8 @@ import numpy as np
 from fuzzynav.fuzzy._where import FisError
 from fuzzynav.fuzzy.membership import evaluate_mf
 
+__all__ = ["to_skfuzzy"]
+
 
 def _refuse(where: str, what: str):
     raise FisError(None, where, f"scikit-fuzzy export: {what}")

@@ -18,6 +18,9 @@ from fuzzynav.fuzzy.document import to_dict
 from fuzzynav.fuzzy.membership import SHAPES, check_params
 from fuzzynav.fuzzy.validation import check_system
 
+__all__ = ["NAME_RE", "MAMDANI_OPERATORS", "SUGENO_OPERATORS", "Term", "Variable", "Antecedent",
+           "Rule", "Operators", "FuzzySystem"]
+
 NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,63}$")
 
 #: allowed operator names, per system type

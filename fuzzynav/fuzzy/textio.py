@@ -7,6 +7,8 @@ from pathlib import Path
 from fuzzynav.errors import DataMissingError
 from fuzzynav.fuzzy._where import FisError
 
+__all__ = ["MAX_FILE_BYTES", "read_text"]
+
 #: larger files are refused before parsing
 MAX_FILE_BYTES = 8 * 1024 * 1024
 

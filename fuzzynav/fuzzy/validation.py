@@ -8,6 +8,8 @@ from __future__ import annotations
 from fuzzynav.fuzzy._where import fail, located, unique
 from fuzzynav.fuzzy.membership import FUZZY_SHAPES, SUGENO_SHAPES, check_params
 
+__all__ = ["check_system"]
+
 
 def check_system(fis) -> None:
     """Raise :class:`FisError` at the first inconsistency of ``fis``."""

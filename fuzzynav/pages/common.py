@@ -11,6 +11,9 @@ from pathlib import Path
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.fileio import write_text_atomic
 
+__all__ = ["REPO_ROOT", "PageContext", "machine", "stopped_early", "markers", "replace_section",
+           "write_section"]
+
 #: the repository root (docs/, rules/, studies/ live here in a source checkout)
 REPO_ROOT = Path(__file__).resolve().parents[2]
 

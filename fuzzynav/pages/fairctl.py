@@ -23,6 +23,8 @@ from fuzzynav.pages import science as sr
 from fuzzynav.pages import scores as sc
 from fuzzynav.pages.common import REPO_ROOT as ROOT
 
+__all__ = ["STUDY", "PARAMS", "tune", "main"]
+
 STUDY = ROOT / "studies" / "paper000_fair_ctl.toml"
 PARAMS = ROOT / "studies" / "paper000_baselines.json"
 

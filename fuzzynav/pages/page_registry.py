@@ -19,6 +19,8 @@ from pathlib import Path
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.pages.common import REPO_ROOT, PageContext, write_section
 
+__all__ = ["BUDGETS", "Page", "PAGES", "get_page", "regenerate", "regenerate_parts"]
+
 BUDGETS = ("small", "full")
 
 

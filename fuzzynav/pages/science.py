@@ -58,6 +58,9 @@ from fuzzynav.pages.scores import (
     verdict,
 )
 
+__all__ = ["DESIGNS", "params_lines", "summary_lines", "page_text", "closing_lines",
+           "design_table", "cpu_minutes", "build", "regenerate_parts"]
+
 DESIGNS = (FUZZY, *SUPERVISOR_STUDIES)
 
 

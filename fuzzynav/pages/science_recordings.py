@@ -33,6 +33,11 @@ import pandas as pd
 
 from fuzzynav.pages.common import REPO_ROOT as ROOT
 
+__all__ = ["DATA_ENV", "SPLIT_SEED0", "CAR_FILTERS", "CAR_METRICS", "SIM_FUZZY", "data_root",
+           "car_table", "car_section", "split_section", "auv_section", "tuning_rows",
+           "splice_rows", "recordings_section", "AUV_HEADING", "AUV_END", "splice", "RERUN_MARK",
+           "note_rerun", "SPLIT_HEADING", "PARTS", "regenerate_held_out"]
+
 DATA_ENV = "FUZZYNAV_DATA"
 #: the first noise seed on the car drive's held-out half (its training used seeds 0-2)
 SPLIT_SEED0 = 100

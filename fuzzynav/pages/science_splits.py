@@ -25,6 +25,10 @@ import pandas as pd
 from fuzzynav.pages.common import REPO_ROOT as ROOT
 from fuzzynav.report import diff_cell
 
+__all__ = ["SPLIT_METRICS", "UNTUNED", "Split", "CAR_SPLIT", "AKIT_FOLDS", "split_specs",
+           "pair_ids", "held_out_runs", "split_frame", "comparison", "score_table", "splits_lines",
+           "missing_note"]
+
 #: the studies' objective (weights pos 1, vel 1; recordings score no attitude)
 SPLIT_METRICS = ("rms_pos_m", "rms_vel_mps")
 #: untuned classical filters run beside the tuned ones (their defaults: zero budget)

@@ -11,6 +11,10 @@ from fuzzynav.errors import InputFileError
 from fuzzynav.metrics import mean_ci
 from fuzzynav.report import ci_cell, diff_cell
 
+__all__ = ["FUZZY", "NOT_CLASSICAL", "MIN_EFFECT", "METRICS", "scores_to", "cell", "ratio_table",
+           "is_classical", "best_classical", "best_on_training", "paired", "verdict", "sentence",
+           "comparison_lines"]
+
 FUZZY = "fuzzy-tuned"
 REF, ORACLE = "ekf-tuned", "ekf-true"
 #: filters that are neither fuzzy nor told the truth: the "best classical baseline" pool

@@ -11,6 +11,8 @@ from dataclasses import dataclass, field
 
 from fuzzynav.registry import Registry
 
+__all__ = ["PaperClaims", "CLAIMS", "register", "find_claims", "claims_for", "rows_for"]
+
 
 @dataclass(frozen=True)
 class PaperClaims:

@@ -14,6 +14,8 @@ import pandas as pd
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.runpath import check_outcomes
 
+__all__ = ["POOLED", "text_summary", "json_summary", "run_akit"]
+
 POOLED = "all"
 
 

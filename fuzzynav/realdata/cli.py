@@ -15,6 +15,9 @@ from pathlib import Path
 
 from fuzzynav.errors import FuzzynavError
 
+__all__ = ["add_arguments", "given_settings", "refuse_unused_options", "settings_from",
+           "load_recording", "streaming_of", "run_recording", "text_summary", "json_summary"]
+
 #: option dest -> ProtocolSettings field (None on the command line = the settings' default)
 _SETTINGS = {"noise": "noise_pos_m", "vel_noise": "noise_vel_mps",
              "outage_period": "outage_period_s", "outage_duration": "outage_duration_s",

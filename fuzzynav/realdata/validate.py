@@ -21,6 +21,10 @@ from fuzzynav.realdata.session import (GnssSource, Start, constraints_for, conte
 from fuzzynav.runpath import RunOutcome, check_outcomes, run
 from fuzzynav.sim.sensor_log import check_seed
 
+__all__ = ["FEEDS", "FeedRun", "Validation", "validate", "prepare_feeds", "fed_sigma",
+           "metrics_table", "POSITION_METRICS", "VELOCITY_METRICS", "DRIFT_METRICS",
+           "required_names", "check_finite"]
+
 #: feed name -> label in tables and figures
 FEEDS = {"gnss": "GNSS throughout", "outages": "with outages"}
 

@@ -34,6 +34,9 @@ from fuzzynav.sim.segments import SEGMENT_KINDS, Profile, Segment
 from fuzzynav.sim.sensors import spec_class
 from fuzzynav.sim.tomltable import Table, parse_toml, read_toml, with_path
 
+__all__ = ["DEFAULT_UTC", "Scenario", "scenario_from_dict", "builtin_files", "list_scenarios",
+           "merge_tables", "read_file", "merge_base", "load_scenario"]
+
 _SENSOR_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]{0,39}$")
 #: a scenario name is printed in one-line messages and tables and becomes part of file
 #: names: printable, without path separators, and short

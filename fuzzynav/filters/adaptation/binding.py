@@ -32,6 +32,9 @@ from fuzzynav.errors import MAX_QUOTE, InputFileError, brief
 from fuzzynav.filters import adaptation, measurements
 from fuzzynav.filters.adaptation import context, window
 
+__all__ = ["WINDOW_RANGE", "DEFAULT_WINDOW", "BankController", "BANK_CONTROLLERS", "InputBinding",
+           "OutputBinding", "Binding", "known_channels", "parent_constants"]
+
 #: the DoM/ROR window in epochs, inclusive bounds
 WINDOW_RANGE = (1, 10000)
 DEFAULT_WINDOW = 10

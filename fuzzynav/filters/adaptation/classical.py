@@ -24,6 +24,10 @@ import numpy as np
 from fuzzynav.filters.adaptation import ADAPT_SIG, Adapter, register
 from fuzzynav.filters.numba_lazy import njit_signature
 
+__all__ = ["MAX_ROWS", "constant_kernel", "ConstantScale", "sage_husa_step", "sage_husa_kernel",
+           "SageHusa", "huber_step", "huber_kernel", "Huber", "fading_kernel", "FadingMemory",
+           "vb_step", "vb_kernel", "VariationalBayes"]
+
 MAX_ROWS = 16
 
 

@@ -37,6 +37,8 @@ from fuzzynav.filters.adaptation import window
 from fuzzynav.nav.earth import gravity_nb
 from fuzzynav.nav.state_layout import NAV_H, NAV_LAT, NAV_VEL
 
+__all__ = ["MOTION", "CLAIM", "QUALITY", "STATISTICS", "size", "fill", "statistic"]
+
 CTX_SPEED, CTX_RATE, CTX_FORCE, CTX_M, CTX_R = 0, 1, 2, 3, 4
 
 #: motion-state statistics -> kernel code (channel ``all``)

@@ -37,6 +37,8 @@ from fuzzynav.filters.adaptation import ADAPTERS, N_DIAG, Adapter, context
 from fuzzynav.filters.adaptation.binding import BANK_CONTROLLERS, Binding
 from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
 
+__all__ = ["CONTEXT_KEYS", "EpochStep", "EpochPolicy"]
+
 #: context keys -> (rule-file statistic, slot of the loop's ``ctx``); ``fix_type`` and
 #: ``n_sat`` go to the measurement model's quality columns of the data row
 CONTEXT_KEYS = {"speed_m_s": ("speed", context.CTX_SPEED),

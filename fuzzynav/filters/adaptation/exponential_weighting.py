@@ -25,6 +25,8 @@ from fuzzynav.filters.adaptation.fuzzy_common import IP_OUT, evaluate, log_input
 from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
 from fuzzynav.filters.numba_lazy import njit_signature
 
+__all__ = ["ALPHA_MIN", "alpha_kernel", "FuzzyExponentialWeighting"]
+
 
 #: lowest fading factor the kernel applies (an output below is raised to it)
 ALPHA_MIN = 0.1

@@ -17,6 +17,8 @@ import numpy as np
 from fuzzynav.filters.adaptation import context, window
 from fuzzynav.fuzzy.kernels import eval_compiled
 
+__all__ = ["IP_HEADER", "N_WINDOW_STATS", "N_SCALARS", "pack", "evaluate", "scalars", "log_inputs"]
+
 IP_NIN, IP_NOUT, IP_NCHAN, IP_WIN, IP_OUT, IP_FIS = 0, 1, 2, 3, 4, 5
 IP_HEADER = 8
 #: statistic codes below this come from the innovation window, the others from ``ctx``

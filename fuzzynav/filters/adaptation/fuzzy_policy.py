@@ -5,6 +5,8 @@ from fuzzynav.filters.adaptation import Adapter
 from fuzzynav.filters.adaptation.binding import Binding
 from fuzzynav.filters.adaptation.fuzzy_common import pack
 
+__all__ = ["FuzzyPolicy"]
+
 
 class FuzzyPolicy(Adapter):
     """A fuzzy system driving an adaptation, configured by its rule file's ``binding``.

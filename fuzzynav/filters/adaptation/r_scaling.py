@@ -22,6 +22,8 @@ from fuzzynav.filters.adaptation.fuzzy_common import (IP_OUT, IP_WIN, evaluate, 
 from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
 from fuzzynav.filters.numba_lazy import njit_signature
 
+__all__ = ["R_STEP_FLOATS", "r_step", "rscale_kernel", "FuzzyRScaling"]
+
 #: default bounds of the running factor ``s``
 S_MIN, S_MAX = 1e-3, 1e3
 #: where :func:`r_step` reads its constants in ``fp`` (the policy floats): the bounds of

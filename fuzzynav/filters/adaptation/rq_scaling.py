@@ -18,6 +18,8 @@ from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
 from fuzzynav.filters.adaptation.r_scaling import R_STEP_FLOATS, S_MAX, S_MIN, r_step
 from fuzzynav.filters.numba_lazy import njit_signature
 
+__all__ = ["IP_QOUT", "rq_kernel", "FuzzyRQScaling"]
+
 #: bounds of the process-noise level
 Q_MIN, Q_MAX = 1e-2, 1e2
 #: the free ``ip`` header slot holding the q output's index (-1: none)

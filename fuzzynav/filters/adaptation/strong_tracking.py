@@ -29,6 +29,8 @@ import numpy as np
 from fuzzynav.filters.adaptation import ADAPT_SIG, Adapter, register
 from fuzzynav.filters.numba_lazy import njit_signature
 
+__all__ = ["strong_tracking_kernel", "StrongTracking"]
+
 _MAXROWS = 16
 #: fp layout: rho, beta, lam_max, then H Q H^T per measurement channel
 _FP_HQH = 3

@@ -36,6 +36,9 @@ from fuzzynav.filters.adaptation.fuzzy_common import IP_OUT, evaluate, log_input
 from fuzzynav.filters.adaptation.fuzzy_policy import FuzzyPolicy
 from fuzzynav.filters.numba_lazy import njit_signature
 
+__all__ = ["SH_STATE", "SH_EXTRA", "VB_EXTRA", "B_MAX", "fuzzy_sage_husa_kernel",
+           "fuzzy_vb_kernel", "fuzzy_huber_kernel", "FuzzySageHusa", "FuzzyVB", "FuzzyHuber"]
+
 #: Sage-Husa parent state (k, estimates) then the supervisor's b_0, d_(k-1), varied flag
 SH_STATE = 1 + MAX_ROWS
 SH_EXTRA = SH_STATE + 3

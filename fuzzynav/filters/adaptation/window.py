@@ -23,6 +23,9 @@ from __future__ import annotations
 
 import numba as nb
 
+__all__ = ["window_size", "push", "trace_actual", "trace_theory", "nis_now", "trend",
+           "statistic_of", "statistic", "STATISTICS", "DOM_NORMALISATIONS"]
+
 # push, trace_* and statistic* are inline="always": called once per epoch and statistic,
 # their call overhead cost more than their few additions (same bits either way).
 

@@ -6,4 +6,6 @@ from dataclasses import replace
 from fuzzynav.filters.measurements import register
 from fuzzynav.filters.measurements.gnss import MODEL as GNSS_MODEL
 
+__all__ = ["MODEL"]
+
 MODEL = register(replace(GNSS_MODEL, kind="bds"))

@@ -35,6 +35,8 @@ from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.nav.state_layout import NAV_VEL
 
+__all__ = ["DVL_BLOCKS", "dvl_kernel", "pack", "MODEL"]
+
 #: state blocks this model can use, in the order of their starts in ``par[3:6]``
 DVL_BLOCKS = ("dvl_scale", "dvl_misalignment", "lever_arm")
 

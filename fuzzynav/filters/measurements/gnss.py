@@ -25,6 +25,8 @@ from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, default_ro
 from fuzzynav.nav.earth import radii_nb
 from fuzzynav.nav.state_layout import NAV_H, NAV_LAT, NAV_LON, NAV_VEL
 
+__all__ = ["gnss_kernel", "QUALITY", "MODEL"]
+
 
 @njit_signature(MEAS_SIG)
 def gnss_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):

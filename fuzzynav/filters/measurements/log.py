@@ -33,6 +33,8 @@ from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.nav.state_layout import NAV_VEL
 
+__all__ = ["LOG_STATES", "log_kernel", "MODEL"]
+
 register_block("log_bias", 1, COUPLE_NONE)
 register_block("water_current", 2, COUPLE_NONE, axes="en")
 

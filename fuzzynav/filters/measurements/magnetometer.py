@@ -35,6 +35,8 @@ from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.filters.measurements.polarization import euler_jacobian
 
+__all__ = ["MODES", "magnetometer_kernel", "MODEL"]
+
 MODES = {"heading": 0, "vector": 1}
 CH_HEADING, CH_FIELD = 0, 1
 

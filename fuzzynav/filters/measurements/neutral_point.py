@@ -25,6 +25,8 @@ from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.nav.neutral_points import pair_beta
 
+__all__ = ["neutral_point_kernel", "MODEL"]
+
 _STEP = 1e-6
 
 

@@ -20,6 +20,8 @@ from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.filters.measurements import MEAS_SIG, MeasurementModel, register
 from fuzzynav.nav.state_layout import NAV_VEL
 
+__all__ = ["nhc_kernel", "MODEL"]
+
 
 @njit_signature(MEAS_SIG)
 def nhc_kernel(nav, C_bn, aux, row, par, dt_back, z, H, R, chan):

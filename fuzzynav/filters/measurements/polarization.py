@@ -45,6 +45,8 @@ from fuzzynav.nav.polarization_geometry import TWO_PI, fold_half_pi
 from fuzzynav.filters.measurements.polarization_rows import fill_extra, rows
 from fuzzynav.nav.polarization_imaging import FRAME, imaging_fit_sun, view_frames
 
+__all__ = ["MODES", "euler_jacobian", "euler_rows", "polarization_kernel", "MODEL"]
+
 MODES = {"angles": 0, "aop": 1}
 CH_HEADING, CH_PITCH, CH_AOP = 0, 1, 2
 #: largest attitude variance an imaging fix may claim and still be used [rad^2] (~6 deg)

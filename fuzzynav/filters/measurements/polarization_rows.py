@@ -27,6 +27,8 @@ from fuzzynav.filters.numba_lazy import njit_signature
 from fuzzynav.live_cache import LiveCache
 from fuzzynav.nav.polarization_imaging import aop_trig, sun_from_aops, view_frames
 
+__all__ = ["extra_columns", "extra_start", "fill_extra", "imaging_columns", "rows"]
+
 
 def extra_columns(k: int) -> int:
     """Columns an imaging row carries after ``[z, sigma]`` for ``k`` views."""

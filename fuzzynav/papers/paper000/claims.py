@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from fuzzynav.papers.claims import PaperClaims, register
 
+__all__ = ["PAPER000_TABLE2"]
+
 #: Paper 000, Table 2 (RMS, EKF -> FAKF).  Roll is not simulated there.
 PAPER000_TABLE2 = {
     "rms_pos_e_m": (5.7305, 2.4751, 56.81),

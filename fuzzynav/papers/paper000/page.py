@@ -13,6 +13,9 @@ from fuzzynav.pages.best_classical import further_runs, labelled, paper_lines, p
 from fuzzynav.pages.common import machine, stopped_early
 from fuzzynav.report import NAV_ROWS, ci_cell, improvement_cell, ratio_table, render
 
+__all__ = ["R", "BASELINES", "FILTERS", "DESIGNS", "POOL", "DESIGN_FILES", "EQUAL_TUNING",
+           "STUDIES", "METRICS", "table2", "build", "tuned_lines", "tunings_part"]
+
 R = "rules/"
 BASELINES = "studies/paper000_baselines.json"
 FILTERS = {  # short label -> filter spec

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from fuzzynav.papers.claims import PaperClaims, register
 
+__all__ = ["PAPER001_COMBINED", "PAIRWISE"]
+
 #: the combined solution's errors [m]
 PAPER001_COMBINED = {"rms_pos_e_m": 3.2305, "rms_pos_n_m": 3.7419}
 #: the pairwise statement, on the rows it is about

@@ -27,6 +27,9 @@ from fuzzynav.filters.bank_named import bank_rule_files, bank_setup
 from fuzzynav.filters.catalog import bind_rule_files
 from fuzzynav.filters.named import FilterContext, FilterSetup, get_filter, register_filter
 
+__all__ = ["PAPER001_MAG_RULES", "LOCAL_GROUPS", "PAIRS", "register_subset", "PAPER001_BETA",
+           "PAPER001_BETA_RULES", "p001_bank"]
+
 #: the magnetometer controller the ``fuzzy-*`` subsets use without ``--rules``
 PAPER001_MAG_RULES = "paper001_mag.json"
 

@@ -26,6 +26,9 @@ from fuzzynav.report import ci_cell, render
 from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.sim.scenario import load_scenario
 
+__all__ = ["TUNED", "HAND_BANK", "FILTERS", "VARIANTS", "ZONE_S", "run_family", "main_table",
+           "variant_table", "heading_figure", "shares_figure", "build"]
+
 TUNED = "rules/paper001_mag_tuned.json"
 HAND_BANK = ("rules/paper001_beta.json", "rules/paper001_mag.json")
 FILTERS = {  # short label -> filter spec; the first is the reference of the ratio table

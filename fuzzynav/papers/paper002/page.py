@@ -27,6 +27,8 @@ from fuzzynav.papers.paper002.page_text import TUNED, page
 from fuzzynav.papers.paper002.page_tuned import BASELINES, CLASSICAL
 from fuzzynav.report import comparison_rows, render
 
+__all__ = ["FILTERS", "VARIANTS", "results", "table", "never", "figure", "build"]
+
 FILTERS = ["align-kf", "align-kf12", "align-fuzzy", "align-fuzzy-fast"]
 VARIANTS = ["paper002-rmismatch", "paper002-sway", "paper002-gusts", "paper002-mems"]
 

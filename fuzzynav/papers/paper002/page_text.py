@@ -10,6 +10,8 @@ import json
 from fuzzynav.papers.paper002.page_tuned import BASELINES, CLASSICAL, TUNED, finding, section
 from fuzzynav.report import ci_cell
 
+__all__ = ["HEAD", "page"]
+
 
 
 def _m(runs, scn, f, key, fmt=".0f"):

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from fuzzynav.papers.claims import PaperClaims, register
 
+__all__ = ["PAPER003"]
+
 PAPER003 = {
     "rms_heading_deg": "0.6 (settled)",
     "rms_vel_h_mps": "< 0.7",

@@ -5,6 +5,8 @@ from fuzzynav.filters.catalog import bind_rule_files
 from fuzzynav.filters.named import FilterContext, FilterSetup, base_config, \
     register_filter
 
+__all__ = ["PAPER003_RULES"]
+
 #: fuzzy R-scaling (paper 002's ROR -> t scheme) of the neutral-point heading and of the log
 PAPER003_RULES = ("paper003_pol_rscale.json", "paper003_log_rscale.json")
 

@@ -25,6 +25,9 @@ from fuzzynav.report import ci_cell, ratio_table, render
 from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.sim.scenario import load_scenario
 
+__all__ = ["TUNED", "BASELINES", "FILTERS", "DESIGNS", "POOL", "SCORE_METRICS", "SCORE_WEIGHTS",
+           "EQUAL_TUNING", "ROWS", "VARIANTS", "family_table", "figures", "tunings_part", "build"]
+
 TUNED = ("rules/paper003_rscale_tuned_pol.json", "rules/paper003_rscale_tuned_log.json")
 BASELINES = "studies/paper003_baselines.json"
 FILTERS = {  # short label -> filter spec

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from fuzzynav.papers.claims import PaperClaims, register
 
+__all__ = ["PAPER004_LAKE", "PAPER004_IMPROVEMENT"]
+
 #: lake test: (KF, Huber, APSO) horizontal error [m]
 PAPER004_LAKE = {
     "mean_pos_h_m": (3.30, 2.65, 1.67),

@@ -27,6 +27,10 @@ from fuzzynav.report import ci_cell, improvement_cell, pooled_rows, render
 from fuzzynav.sim.sensor_log import simulate
 from fuzzynav.sim.scenario import load_scenario
 
+__all__ = ["R", "FILTERS", "SCENARIOS", "APSO", "REAL_FILTERS", "simulate_family", "paper_table",
+           "family_table", "real_data", "real_table", "sim_figures", "akit_figures", "REAL_HEAD",
+           "sim_part", "kept_sim_part", "require_recordings", "real_part", "build"]
+
 R = "rules/"
 FILTERS = {  # label -> filter spec (options below)
     "KF (EKF)": "ekf",

@@ -26,6 +26,10 @@ from fuzzynav.pages.science_splits import AKIT_FOLDS, SPLIT_METRICS, split_frame
 from fuzzynav.realdata.dataspec import parse_recording_spec
 from fuzzynav.report import diff_cell, improvement_cell, pooled_rows, render
 
+__all__ = ["TUNED_LABEL", "APSO_LABEL", "BEST_LABEL", "TUNED", "fold_frame", "best_tuned",
+           "with_best", "heldout_table", "fold_table", "heldout_frame", "paired_best",
+           "tunings_lines", "apso_vs_ekf_lines", "apso_bounds_lines", "section"]
+
 TUNED_LABEL = "fuzzy R-scaling (tuned on the other four)"
 APSO_LABEL = "APSO Q/R (tuned on the other four)"
 BEST_LABEL = "best equally tuned classical (per fold)"
