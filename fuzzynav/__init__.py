@@ -29,8 +29,11 @@ cli
     The ``fuzzynav`` command.
 
 Top-level modules: ``runpath`` (the one run path: a source, a named filter, one run),
-``experiment`` (simulate, run named filters on scenarios, score), ``metrics``,
-``report``, ``plots``, and ``errors``, ``units``, ``fileio``, ``registry``,
+``experiment`` (simulate, run named filters on scenarios, score), ``simsource`` (a
+simulated log as a run source), ``streamrun`` and ``streamtrace`` (runs simulated and
+filtered chunk by chunk, and what they keep for figures), ``metrics``, ``metrics_rscale``
+(a sensor's R use) and ``metrics_segments`` (errors per motion segment), ``report``,
+``plots``, and ``errors``, ``units``, ``fileio``, ``registry``, ``live_cache``,
 ``compile_notice`` used by every layer.
 """
 import warnings as _warnings
