@@ -16,13 +16,13 @@ from fuzzynav.filters.named import FilterContext, FilterSetup
 from fuzzynav.metrics import (StreamingRms, errors_vs_trajectory, improvement_ci, mean_ci,
                               rms_metrics)
 from fuzzynav.metrics_rscale import usage_metrics
-from fuzzynav.metrics_segments import SegmentRms, scenario_edges_s, segment_metrics
+from fuzzynav.metrics_segments import for_scenario, scenario_edges_s, segment_metrics
 from fuzzynav.runpath import RunInputs, RunOutcome, check_outcomes, make_setup, run
 from fuzzynav.simsource import OnSimulatedLog, perturbed_initial_state  # noqa: F401 (API)
 from fuzzynav.sim.sensor_log import SensorLog, simulate
 from fuzzynav.sim.scenario import Scenario, load_scenario
 
-__all__ = ["SimulatedSource", "segment_scorer", "as_source", "filter_context", "setup_for",
+__all__ = ["SimulatedSource", "as_source", "filter_context", "setup_for",
            "run_on_log", "monte_carlo", "streamed_run", "streamed_source", "summary_table"]
 
 
@@ -60,7 +60,7 @@ class SimulatedSource(OnSimulatedLog):
 
     def streaming_scorer(self) -> StreamingRms:
         """A streaming form of :meth:`score`: fed each chunk of the result."""
-        return StreamingRms(self.t_start_s, self.log.truth, segment_scorer(
+        return StreamingRms(self.t_start_s, self.log.truth, for_scenario(
             self.log.scenario, self.t_start_s) if self.segments else None)
 
     def score_streamed(self, result, scorer: StreamingRms) -> dict:
@@ -70,11 +70,6 @@ class SimulatedSource(OnSimulatedLog):
         metrics.update(usage_metrics(result, self.log.sensors))
         return metrics
 
-
-
-def segment_scorer(scenario, t_start_s: float = 0.0) -> SegmentRms:
-    """The per-segment metrics of a run on ``scenario``, accumulated chunk by chunk."""
-    return SegmentRms(scenario_edges_s(scenario), t_start_s)
 
 
 def as_source(log, t_start_s: float = 0.0, segments: bool = False):
@@ -213,8 +208,7 @@ def streamed_run(scn, seed, name, opts, t_start_s, streaming, cache_dir,
         out_dir = f"{out_dir}/{safe_stem(name)}-seed{int(seed)}"
     return run_streamed(scn, seed, name, opts, chunk_samples=kw.pop(
         "chunk_samples", DEFAULT_CHUNK_SAMPLES), t_start_s=t_start_s, output_dir=out_dir,
-        cache_dir=cache_dir, setup=setup,
-        segments=segment_scorer(scn, t_start_s) if segments else None, **kw)
+        cache_dir=cache_dir, setup=setup, segments=segments, **kw)
 
 
 def streamed_source(scn, seed: int, chunk_samples: int):

@@ -19,7 +19,8 @@ import numpy as np
 
 from fuzzynav.metrics import NavErrors
 
-__all__ = ["SEGMENT_METRICS", "key", "scenario_edges_s", "SegmentRms", "segment_metrics"]
+__all__ = ["SEGMENT_METRICS", "key", "scenario_edges_s", "SegmentRms", "segment_metrics",
+           "for_scenario"]
 
 #: metric -> description (SI, units in names): what each segment reports
 SEGMENT_METRICS = {
@@ -112,3 +113,8 @@ def segment_metrics(err: NavErrors, edges_s, t_start_s: float = 0.0) -> dict:
     acc = SegmentRms(edges_s, t_start_s)
     acc.add(err)
     return acc.metrics()
+
+
+def for_scenario(scenario, t_start_s: float = 0.0) -> SegmentRms:
+    """The per-segment metrics of a run on ``scenario``, to be fed chunk by chunk."""
+    return SegmentRms(scenario_edges_s(scenario), t_start_s)

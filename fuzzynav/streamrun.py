@@ -30,6 +30,7 @@ from fuzzynav.filters.sensor_tables import concat_event_logs
 from fuzzynav.fileio import write_npz
 from fuzzynav.metrics import StreamingRms
 from fuzzynav.metrics_rscale import KIND as USAGE_KIND, usage_metrics
+from fuzzynav.metrics_segments import for_scenario
 from fuzzynav.runpath import RunOutcome, keep_every, make_setup, nonfinite
 from fuzzynav.sim import budget
 from fuzzynav.sim.sensors import SensorData
@@ -125,7 +126,7 @@ class _Usage:
 def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None,
                  chunk_samples: int = DEFAULT_CHUNK_SAMPLES, output_rate_hz: float | None = None,
                  t_start_s: float = 0.0, output_dir=None, keep_events: bool = False,
-                 cache_dir=None, trace: bool = False, start=None, segments=None):
+                 cache_dir=None, trace: bool = False, start=None, segments: bool = False):
     """Simulate ``(scenario, seed)`` chunk by chunk and run one named filter on it.
 
     Parameters
@@ -161,10 +162,9 @@ def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None
         plus an error from P0 (``run --align``: behind an alignment on the opening chunks,
         :func:`fuzzynav.align.chain.run_aligned_streamed`); ``chunks`` is the iterator of
         the run's chunks, of which it may take the first few.
-    segments : SegmentRms, optional
-        Fed every chunk's errors too: the run's per-segment metrics join its metrics
-        (:class:`fuzzynav.metrics_segments.SegmentRms`, :func:`fuzzynav.experiment.
-        segment_scorer`).
+    segments : bool
+        Score each motion segment of the scenario too: the run's per-segment metrics
+        (:mod:`fuzzynav.metrics_segments`) join its metrics.
 
     Returns
     -------
@@ -193,7 +193,8 @@ def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None
     keep = 1 if output_rate_hz is None else keep_every(config.out_rate_hz, output_rate_hz)
     header = setup.sensors_for(chunks.header)
     names = sorted(header)
-    scorer = StreamingRms(t_start_s, None, segments)
+    scorer = StreamingRms(t_start_s, None,
+                          for_scenario(scenario, t_start_s) if segments else None)
     usage = _Usage([nm for nm in names if header[nm].kind == USAGE_KIND
                     and "deflection_rad" in header[nm].meta][:1])
     out_dir = None if output_dir is None else Path(output_dir)
