@@ -38,7 +38,10 @@ from fuzzynav.errors import FuzzynavError, OutputRateError, RunDivergedError
 from fuzzynav.filters.named import FilterContext, FilterSetup, get_filter, parse_filter_spec
 from fuzzynav.filters.runner import InitialState, run_filter
 from fuzzynav.filters.sensor_states import with_sensor_states
-from fuzzynav.sim.budget import check_run_outputs
+from fuzzynav.sim.budget import DEFAULT_CHUNK_SAMPLES, check_run_outputs
+
+#: bytes of one increment held: its time and its angle and velocity increments, float64
+BYTES_PER_INCREMENT = 8 * 7
 
 __all__ = ["RUN_SETTINGS", "STREAMING_SETTINGS", "RunInputs", "RunOutcome", "Source",
            "check_outcomes", "keep_every", "make_setup", "nonfinite", "refuse_settings", "run",
@@ -208,7 +211,9 @@ def run(source: Source, filter_spec: str, options=None,
             raise OutputRateError(f"{source.KIND} score their whole result, so their "
                                   "output cannot be decimated")
         scorer = source.streaming_scorer()
-    _check_outputs(source, inp.imu, sensors, config, keep)
+    if hasattr(inp.imu, "chunks") and chunk_samples is None:  # read from a file
+        chunk_samples = DEFAULT_CHUNK_SAMPLES
+    _check_outputs(source, inp.imu, sensors, config, keep, chunk_samples)
     res = run_filter(inp.imu, sensors, inp.init, config, setup.adapters,
                      _merged(setup.sensor_options, inp.sensor_options),
                      chunk_samples=chunk_samples, keep_every=keep,
@@ -219,16 +224,23 @@ def run(source: Source, filter_spec: str, options=None,
                       nonfinite(source, metrics))
 
 
-def _check_outputs(source, imu, sensors: dict, config, keep: int) -> None:
+def _check_outputs(source, imu, sensors: dict, config, keep: int, chunk_samples) -> None:
     """:func:`fuzzynav.sim.budget.check_run_outputs` of a run about to be filtered: the
     solution rows it will keep (one per output period, every ``keep``-th), the epochs its
-    event logs record, beside the IMU and sensor arrays it is given."""
-    n = int(np.size(imu.time_s))
+    event logs record, beside the IMU and sensor arrays it is given (of increments made
+    chunk by chunk, one chunk)."""
+    if hasattr(imu, "chunks"):
+        n, (t0, t1) = imu.n_samples + 1, imu.span_s
+        held = min(n, int(chunk_samples) + 1) * BYTES_PER_INCREMENT
+    else:
+        n, t0, t1 = int(np.size(imu.time_s)), None, None
+        held = sum(getattr(imu, f).nbytes for f in ("time_s", "dtheta_b", "dv_b"))
     if n < 2:
         return
-    dt = float(imu.time_s[-1] - imu.time_s[0]) / (n - 1)
+    if t0 is None:
+        t0, t1 = imu.time_s[0], imu.time_s[-1]
+    dt = float(t1 - t0) / (n - 1)
     stride = max(1, round(1.0 / (config.out_rate_hz * dt))) if dt > 0 else 1
-    held = sum(getattr(imu, f).nbytes for f in ("time_s", "dtheta_b", "dv_b"))
     held += sum(d.time_s.nbytes + d.z.nbytes + d.sigma.nbytes for d in sensors.values())
     epochs = sum(d.time_s.size for d in sensors.values())
     check_run_outputs(source.name, held, n / stride / keep, epochs)

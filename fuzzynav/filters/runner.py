@@ -71,7 +71,12 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
     ----------
     imu : object
         With ``time_s`` (N+1,), ``dtheta_b`` (N, 3) [rad] and ``dv_b`` (N, 3) [m/s]
-        (a :class:`~fuzzynav.sim.trajectory.Trajectory` or a simulated/real IMU log).
+        (a :class:`~fuzzynav.sim.trajectory.Trajectory` or a simulated/real IMU log); or
+        increments made chunk by chunk: an object with ``chunks(n)`` yielding such
+        objects of ``n`` increments each, consecutive, and ``dt_nom_s``, the nominal
+        interval [s] (a recording read from its file,
+        :class:`~fuzzynav.realdata.loaders.imu_file.ImuCut`), which needs
+        ``chunk_samples``.
     sensors : mapping name -> SensorData
         Aiding measurements; each kind needs a registered measurement model.
     init : InitialState
@@ -93,6 +98,15 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
     -------
     FilterResult
     """
+    if hasattr(imu, "chunks"):
+        if chunk_samples is None or int(chunk_samples) < 1:
+            raise FuzzynavError("increments made chunk by chunk need chunk_samples >= 1, "
+                                f"got {chunk_samples}")
+        fr = FilterRun(sensors, init, config, adapters, sensor_options, imu.dt_nom_s,
+                       keep_every, on_chunk)
+        for piece in imu.chunks(int(chunk_samples)):
+            fr.feed(piece)
+        return fr.result()
     time_s, dth, dv, dt_nom = _imu_arrays(imu)
     fr = FilterRun(sensors, init, config, adapters, sensor_options, dt_nom, keep_every,
                    on_chunk)

@@ -102,8 +102,9 @@ def _span(text):
     return a, b
 
 
-def load_recording(spec, args):
-    """Parse ``--data`` and load the recording with the loader options of ``args``."""
+def load_recording(spec, args, streamed: bool = False):
+    """Parse ``--data`` and load the recording with the loader options of ``args``
+    (``streamed``: its IMU read from the file chunk by chunk, where its kind can)."""
     from fuzzynav.realdata.sources import data_options, parse_data_spec, resolve_mounting
 
     source, directory, session = parse_data_spec(spec)
@@ -112,7 +113,8 @@ def load_recording(spec, args):
     kw = {} if options is None else {"options": options}  # loaders without options still load
     return source.load(directory, mounting=mounting,
                        imu_delay_s=getattr(args, "imu_delay", None),
-                       span_s=_span(getattr(args, "span", None)), session=session, **kw)
+                       span_s=_span(getattr(args, "span", None)), session=session,
+                       streamed=streamed, **kw)
 
 
 def streaming_of(streaming, rec) -> dict:
@@ -123,9 +125,7 @@ def streaming_of(streaming, rec) -> dict:
     ``streaming``."""
     if streaming is None:
         return {}
-    from fuzzynav.sim.imu import rate_hz_of
-
-    return streaming(rate_hz_of((rec[0] if isinstance(rec, list) else rec).imu))
+    return streaming((rec[0] if isinstance(rec, list) else rec).imu.rate_hz)
 
 
 def run_recording(spec, filter_name, options, args, streaming=None) -> int:
@@ -140,8 +140,10 @@ def run_recording(spec, filter_name, options, args, streaming=None) -> int:
 
     refuse_unused_options(spec, args)
     settings = settings_from(args)
-    rec = load_recording(spec, args)
-    span = max(float(r.imu.time_s[-1] - r.imu.time_s[0])
+    # streamed runs (--output-rate, --chunk) read an rtklib IMU from its file chunk by chunk
+    streamed = any(getattr(args, k, None) is not None for k in ("output_rate", "chunk"))
+    rec = load_recording(spec, args, streamed)
+    span = max(r.imu.span_s[1] - r.imu.span_s[0]
                for r in (rec if isinstance(rec, list) else [rec]))
     if getattr(args, "t_start", 0.0) and not args.t_start < span:
         raise FuzzynavError(f"--t-start {args.t_start:g} s: the recording runs {span:.0f} s; "
@@ -195,7 +197,7 @@ def _describe(spec, rec, v) -> list:
     n_done = sum(d.complete for d in v.runs["outages"].drifts)
     out = (f"outages {s.outage_duration_s:g} s every {s.outage_period_s:g} s from "
            f"{v.windows[0, 0]:.1f} s ({n_done} complete)" if len(v.windows) else "no outages")
-    return [f"recording {spec}: {rec.imu.time_s[0]:.1f}-{rec.imu.time_s[-1]:.1f} s, filter "
+    return [f"recording {spec}: {rec.imu.span_s[0]:.1f}-{rec.imu.span_s[1]:.1f} s, filter "
             f"starts at {v.start.init.time_s:.1f} s (rest {st.rest_s[0]:.1f}-{st.rest_s[1]:.1f}"
             f" s, heading {math.degrees(st.att[2]):.1f} deg by {st.method}"
             + (f": {st.heading_check})" if st.heading_check else ")"),

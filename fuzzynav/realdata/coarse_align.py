@@ -43,7 +43,7 @@ from fuzzynav.realdata import start_check
 
 __all__ = ["StartEstimate", "opening_rest", "level", "relative_attitude",
            "heading_from_course", "heading_from_track", "heading_from_specific_force",
-           "initial_state"]
+           "initial_state", "reads_until_s"]
 
 
 @dataclass(frozen=True)
@@ -336,3 +336,20 @@ def initial_state(imu, gnss, heading_rad=None, forward_known=False, options=None
     return StartEstimate(time_s=t1, lla=g[:3], vel_n=g[3:], att=att, gyro_bias_rps=w - w_ie_b,
                         f_rest_mps2=float(np.linalg.norm(f)), rest_s=(t0, t1), method=method,
                         heading_check=check)
+
+
+def reads_until_s(span_s, gnss, options=None) -> float:
+    """The latest time [s] up to which :func:`initial_state` reads increments: the first
+    GNSS epoch faster than the rest speed (the rest ends before it), the longest heading
+    window after it and a second to spare (the window's last fix and the sample after
+    it); the end of ``span_s`` (the IMU's first and last time) when the fixes never move.
+    A recording read from its file (:mod:`fuzzynav.realdata.loaders.imu_file`) is held
+    only that far for its start."""
+    options = StartOptions() if options is None else options
+    t0, t_end = span_s
+    speed = _speed(gnss)
+    moving = (gnss.time_s >= t0) & np.isfinite(speed) & (speed > options.rest_speed_mps)
+    if not moving.any():
+        return float(t_end)
+    window = max(options.window_for(m) for m in ("course", "track", "specific-force"))
+    return min(float(t_end), float(gnss.time_s[moving][0]) + window + 1.0)

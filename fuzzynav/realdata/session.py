@@ -19,6 +19,7 @@ from fuzzynav.errors import InputFileError, OutputRateError
 from fuzzynav.filters.named import FilterContext
 from fuzzynav.filters.runner import InitialState
 from fuzzynav.nav import attitude, earth
+from fuzzynav.realdata.loaders.imu_file import ImuCut
 from fuzzynav.realdata.mems import CONSUMER_MEMS, MemsModel
 from fuzzynav.realdata.reference_scoring import ReferenceScoring
 from fuzzynav.runpath import RUN_SETTINGS, RunInputs
@@ -38,8 +39,10 @@ class Start:
 
     Attributes
     ----------
-    imu : ImuData
-        The increments from the start on, the rest gyro bias removed.
+    imu : ImuData or ImuCut
+        The increments from the start on, the rest gyro bias removed (an
+        :class:`~fuzzynav.realdata.loaders.imu_file.ImuCut`, read from the file chunk by
+        chunk, for a recording loaded ``streamed``).
     init : InitialState
         The navigation state at ``imu.time_s[0]`` (IMU position).
     coarse : coarse_align.StartEstimate
@@ -61,20 +64,26 @@ def start_from(imu, fixes, mounting_known: bool, lever_arm_b=(0.0, 0.0, 0.0),
     InputFileError
         When the recording has no opening rest or no motion to find the heading.
     """
-    s = coarse_align.initial_state(imu, fixes, forward_known=mounting_known, options=options)
-    k = int(np.searchsorted(imu.time_s, s.time_s - 1e-9))
-    if k >= imu.time_s.size - 2:
+    held = imu.window(imu.span_s[0], coarse_align.reads_until_s(imu.span_s, fixes, options)) \
+        if hasattr(imu, "window") else imu  # a recording read from its file: its opening
+    s = coarse_align.initial_state(held, fixes, forward_known=mounting_known, options=options)
+    k = int(np.searchsorted(held.time_s, s.time_s - 1e-9))
+    if k >= imu.n_samples - 1:
         raise InputFileError(None, "initialisation", f"the opening rest ends at "
                              f"{s.time_s:.2f} s, at the end of the IMU data")
-    t = imu.time_s[k:]
-    dth = imu.dtheta_b[k:] - s.gyro_bias_rps * np.diff(t)[:, None]
-    cut = ImuData(time_s=t, dtheta_b=dth, dv_b=imu.dv_b[k:], meta=dict(imu.meta))
+    t0 = float(held.time_s[k])
+    if hasattr(imu, "window"):
+        cut = ImuCut(imu, k, s.gyro_bias_rps, t0)
+    else:
+        t = imu.time_s[k:]
+        dth = imu.dtheta_b[k:] - s.gyro_bias_rps * np.diff(t)[:, None]
+        cut = ImuData(time_s=t, dtheta_b=dth, dv_b=imu.dv_b[k:], meta=dict(imu.meta))
     q_bn = attitude.euler_to_quat(s.att)
     # the fixes are the antenna's; the state is the IMU's
     l_n = attitude.quat_to_dcm(q_bn) @ np.asarray(lever_arm_b, float)
     dlat, dlon, dh = earth.enu_to_delta_lla(l_n, s.lla[0], s.lla[2])
     lla = s.lla - np.array([dlat, dlon, dh])
-    return Start(cut, InitialState(float(t[0]), lla, np.asarray(s.vel_n, float), q_bn), s)
+    return Start(cut, InitialState(t0, lla, np.asarray(s.vel_n, float), q_bn), s)
 
 
 def constraints_for(start: Start, sigma_mps: float, rate_hz: float):
@@ -83,7 +92,8 @@ def constraints_for(start: Start, sigma_mps: float, rate_hz: float):
         return None
     from fuzzynav.sim.sensors import SensorData
 
-    t = np.arange(start.imu.time_s[0] + 1.0 / rate_hz, start.imu.time_s[-1], 1.0 / rate_hz)
+    t0, t1 = start.imu.span_s
+    t = np.arange(t0 + 1.0 / rate_hz, t1, 1.0 / rate_hz)
     return SensorData("nhc", t, np.zeros((t.size, 2)), np.full((t.size, 2), float(sigma_mps)))
 
 

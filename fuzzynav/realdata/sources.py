@@ -36,9 +36,11 @@ class DataSource:
         One line for ``fuzzynav scenarios``.
     load : callable
         ``load(directory, mounting="auto", imu_delay_s=None, span_s=None, session=None,
-        options=None) -> Recording``; ``None`` leaves a loader's own default (``session``:
-        which recording of a directory that holds several; ``options``: the
-        :class:`~fuzzynav.realdata.start_options.StartOptions` of a ``?key=value`` suffix).
+        options=None, streamed=False) -> Recording``; ``None`` leaves a loader's own
+        default (``session``: which recording of a directory that holds several;
+        ``options``: the :class:`~fuzzynav.realdata.start_options.StartOptions` of a
+        ``?key=value`` suffix; ``streamed``: keep the IMU in its file and read it chunk by
+        chunk when run, where the kind can — rtklib; A-KIT trajectories are held).
     split : callable or None
         ``split(session) -> [session, ...]`` for a kind whose ``SESSION`` may name several
         recordings (A-KIT ``1-4``); a study runs each separately.
@@ -76,13 +78,13 @@ def register_source(kind: str, description: str, split: Callable | None = None,
 @register_source("rtklib", "RTKLIB car recording: imu_<id>.csv + .tag + gnss_<id>*.pos "
                            "(e.g. --data rtklib-drive, after fuzzynav data fetch rtklib-drive)")
 def _load_rtklib(directory, mounting="auto", imu_delay_s=None, span_s=None, session=None,
-                 options=None):
+                 options=None, streamed=False):
     from fuzzynav.realdata.loaders.rtklib import load_rtklib
 
     kw = {} if imu_delay_s is None else {"imu_delay_s": float(imu_delay_s)}
     # velocities are loaded as recorded; the protocol decides what to do with their lag
     return load_rtklib(directory, mounting=mounting, span_s=span_s, session=session,
-                       start=options, **kw)
+                       start=options, streamed=streamed, **kw)
 
 
 def _akit_split(session):
@@ -96,7 +98,7 @@ def _akit_split(session):
                          "fuzzynav data fetch akit)",
                  split=_akit_split, run_source="fuzzynav.realdata.akit:AkitSource")
 def _load_akit(directory, mounting="auto", imu_delay_s=None, span_s=None, session=None,
-               options=None):
+               options=None, streamed=False):  # held: a trajectory's files are small
     from fuzzynav.realdata.akit import AkitSource
     from fuzzynav.runpath import refuse_settings
     from fuzzynav.realdata.loaders.akit_recording import load_akit

@@ -122,7 +122,7 @@ def validate(rec, filter_name: str, settings: ProtocolSettings = ProtocolSetting
     feeds, windows, start, lever = prepare_feeds(rec, settings, seed)
     sigma0 = fed_sigma(rec, settings)
     t0 = max(settings.t_start_s, start.init.time_s)
-    check_scored(rec.reference, t0, float(rec.imu.time_s[-1]),
+    check_scored(rec.reference, t0, rec.imu.span_s[1],
                  f"recording {getattr(rec, 'directory', '')}")
     runs = {}
     nhc = constraints_for(start, settings.nhc_sigma_mps, settings.nhc_rate_hz)
@@ -164,7 +164,7 @@ def prepare_feeds(rec, settings: ProtocolSettings, seed: int):
     known = rec.mounting is not None
     # the windows follow the start, and the start is found on what the filter is fed
     first = _start(rec, _for_alignment(noisy), known, lever)
-    windows = protocol.windows_after(first.init.time_s, float(rec.imu.time_s[-1]), settings)
+    windows = protocol.windows_after(first.init.time_s, rec.imu.span_s[1], settings)
     feeds = {"gnss": noisy, "outages": protocol.with_outages(noisy, windows)}
     start = _start(rec, _for_alignment(feeds["outages"]), known, lever)
     return feeds, windows, start, lever

@@ -182,6 +182,11 @@ class ImuData:
         return self.dtheta_b.shape[0]
 
     @property
+    def span_s(self) -> tuple:
+        """The first and last sample time [s]."""
+        return float(self.time_s[0]), float(self.time_s[-1])
+
+    @property
     def rate_hz(self) -> float:
         """Nominal rate: the inverse of the median interval [Hz]."""
         return float(1.0 / np.median(np.diff(self.time_s)))

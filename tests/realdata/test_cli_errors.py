@@ -107,9 +107,9 @@ def test_an_akit_run_with_non_finite_metrics_prints_nothing_and_exits_3(monkeypa
 
     class _Rec:
         trajectory = 3
-        imu = type("I", (), {"time_s": __import__("numpy").array([0.0, 400.0])})()
+        imu = type("I", (), {"span_s": (0.0, 400.0), "rate_hz": 200.0})()
 
-    monkeypatch.setattr(rcli, "load_recording", lambda spec, args: [_Rec()])
+    monkeypatch.setattr(rcli, "load_recording", lambda spec, args, streamed=False: [_Rec()])
     monkeypatch.setattr(rcli, "refuse_unused_options", lambda spec, args: None)
     metrics = {"rms_pos_h_m": math.nan, "rms_vel_h_mps": 0.1, "distance_m": 600.0,
                "completed": 1.0}

@@ -25,7 +25,7 @@ __all__ = ["IMU_RATE_RANGE_HZ", "MAX_IMU_GAP_S", "MIN_IMU_SAMPLES", "CLOCK_RATE_
            "MAX_STRETCH_S", "GRAVITY_BAND", "GYRO_REST_MAX_RPS", "GYRO_MAX_RPS",
            "ACCEL_MAX_MPS2", "GYRO_COURSE_GAIN_RANGE", "REST_BLOCK_S", "MIN_FIXED_EPOCHS",
            "MIN_OVERLAP_FRACTION", "Limits", "DEFAULT_LIMITS", "imu_ticks", "clock_rate",
-           "ImuColumns", "imu_physics", "gyro_scale", "gnss_overlap"]
+           "ImuColumns", "PhysicsScan", "imu_physics", "gyro_scale", "gnss_overlap"]
 
 #: plausible IMU sample rates [Hz]: MEMS and FOG IMUs log at 1 Hz (slow AHRS) to 2 kHz
 IMU_RATE_RANGE_HZ = (1.0, 2000.0)
@@ -179,21 +179,83 @@ def clock_rate(csv_path, tag_path, tag, method: str, rate: float, csv_bytes: int
 
 
 # -- physics ------------------------------------------------------------------------------------
-def _rest(acc_g, gyro_dps, rate_hz):
-    """Mean specific force [g] and angular rate [deg/s] vectors over the quietest blocks.
+def _block_stats(acc_g, gyro_dps, n: int) -> np.ndarray:
+    """Per block of ``n`` rows: the spread of |f| and the mean specific force [g] and angular
+    rate [deg/s] vectors, (k, 7); the rows must be whole blocks."""
+    k = acc_g.shape[0] // n
+    acc = acc_g[:k * n].reshape(k, n, 3)
+    gyro = gyro_dps[:k * n].reshape(k, n, 3)
+    return np.column_stack([np.linalg.norm(acc, axis=2).std(axis=1), acc.mean(axis=1),
+                            gyro.mean(axis=1)])
+
+
+def _rest(stats):
+    """Mean specific force [g] and angular rate [deg/s] over the quietest blocks.
 
     The blocks whose |f| varies least (a tenth of them, at least one) are taken as rest: a
     car at a standstill, or at worst cruising smoothly, where |f| is still gravity.
     """
-    n = max(1, int(round(REST_BLOCK_S * rate_hz)))
-    k = max(1, acc_g.shape[0] // n)
-    n = min(n, acc_g.shape[0])
-    acc = acc_g[:k * n].reshape(k, n, 3)
-    gyro = gyro_dps[:k * n].reshape(k, n, 3)
-    quiet = np.argsort(np.linalg.norm(acc, axis=2).std(axis=1))[:max(1, k // 10)]
-    f = float(np.median(np.linalg.norm(acc[quiet].mean(axis=1), axis=1)))
-    w = float(np.median(np.linalg.norm(gyro[quiet].mean(axis=1), axis=1)))
+    quiet = np.argsort(stats[:, 0])[:max(1, stats.shape[0] // 10)]
+    f = float(np.median(np.linalg.norm(stats[quiet, 1:4], axis=1)))
+    w = float(np.median(np.linalg.norm(stats[quiet, 4:7], axis=1)))
     return f, w
+
+
+class PhysicsScan:
+    """What :func:`imu_physics` checks, gathered over consecutive blocks of rows (a file
+    read a block at a time): the rest statistics of each :data:`REST_BLOCK_S` block and
+    the largest magnitudes with their lines.  One block of every row is the whole check.
+
+    Parameters
+    ----------
+    rate_hz : float
+        Nominal sample rate (sets the rest block's length in rows).
+    """
+
+    def __init__(self, rate_hz: float):
+        self.n = max(1, int(round(REST_BLOCK_S * rate_hz)))
+        self.stats, self.left = [], None  # rows not yet in a whole block
+        self.biggest = {}  # "gyro"/"acc" -> (magnitude, line)
+
+    def add(self, acc_g, gyro_dps, lineno) -> None:
+        """The next rows: accelerometer [g], gyro [deg/s] (K, 3), their 1-based lines."""
+        for name, data, scale in (("gyro", gyro_dps, units.DPS), ("acc", acc_g, units.G0)):
+            mag = np.linalg.norm(data, axis=1) * scale
+            k = int(np.argmax(mag))
+            if name not in self.biggest or mag[k] > self.biggest[name][0]:
+                self.biggest[name] = (float(mag[k]), int(lineno[k]))
+        rows = np.column_stack([acc_g, gyro_dps])
+        if self.left is not None:
+            rows = np.concatenate([self.left, rows])
+        whole = rows.shape[0] // self.n * self.n
+        if whole:
+            self.stats.append(_block_stats(rows[:whole, :3], rows[:whole, 3:], self.n))
+        self.left = rows[whole:]
+
+    def rest(self):
+        """:func:`_rest` of the blocks (a file shorter than a block is one block)."""
+        if self.stats:
+            return _rest(np.concatenate(self.stats))
+        return _rest(_block_stats(self.left[:, :3], self.left[:, 3:], self.left.shape[0]))
+
+    def check(self, path, limits: Limits = DEFAULT_LIMITS, cols=None) -> None:
+        """Raise the first failure (:func:`imu_physics`)."""
+        cols = ImuColumns() if cols is None else cols
+        f_g, w_dps = self.rest()
+        _gravity(path, f_g, w_dps, limits, cols)
+        if w_dps * units.DPS > limits.gyro_rest_max_rps:
+            raise InputFileError(path, f"columns {cols.gyro}", f"at rest they read {w_dps:.4g}"
+                                 f" deg/s, over {np.rad2deg(limits.gyro_rest_max_rps):.3g} "
+                                 f"deg/s (gyro_rest_max_rps): not {cols.gyro_unit}, or not "
+                                 "a gyro")
+        for label, name, limit, unit, key in (
+                (cols.gyro, "gyro", limits.gyro_max_rps, "rad/s", "gyro_max_rps"),
+                (cols.acc, "acc", limits.accel_max_mps2, "m/s^2", "accel_max_mps2")):
+            mag, line = self.biggest[name]
+            if mag > limit:
+                raise InputFileError(path, f"line {line}, columns {label}",
+                                     f"magnitude {mag:.4g} {unit} exceeds {limit:.4g} {unit} "
+                                     f"({key})")
 
 
 @dataclass(frozen=True)
@@ -250,21 +312,9 @@ def imu_physics(path, acc_g, gyro_dps, lineno, rate_hz, limits: Limits = DEFAULT
         The file's column labels and units (default: the rtklib logger's, g and deg/s), for
         the messages; the data come in g and deg/s whatever the file holds.
     """
-    f_g, w_dps = _rest(acc_g, gyro_dps, rate_hz)
-    _gravity(path, f_g, w_dps, limits, cols)
-    if w_dps * units.DPS > limits.gyro_rest_max_rps:
-        raise InputFileError(path, f"columns {cols.gyro}", f"at rest they read {w_dps:.4g} "
-                             f"deg/s, over {np.rad2deg(limits.gyro_rest_max_rps):.3g} deg/s "
-                             f"(gyro_rest_max_rps): not {cols.gyro_unit}, or not a gyro")
-    for label, data, scale, limit, unit, name in (
-            (cols.gyro, gyro_dps, units.DPS, limits.gyro_max_rps, "rad/s", "gyro_max_rps"),
-            (cols.acc, acc_g, units.G0, limits.accel_max_mps2, "m/s^2", "accel_max_mps2")):
-        mag = np.linalg.norm(data, axis=1) * scale
-        k = int(np.argmax(mag))
-        if mag[k] > limit:
-            raise InputFileError(path, f"line {lineno[k]}, columns {label}",
-                                 f"magnitude {mag[k]:.4g} {unit} exceeds {limit:.4g} {unit} "
-                                 f"({name})")
+    scan = PhysicsScan(rate_hz)
+    scan.add(acc_g, gyro_dps, lineno)
+    scan.check(path, limits, cols)
 
 
 def gyro_scale(path, imu, fixes, limits: Limits = DEFAULT_LIMITS) -> None:

@@ -17,7 +17,7 @@ from fuzzynav.errors import InputFileError
 from fuzzynav.realdata.loaders import chunked
 from fuzzynav.realdata.loaders.chunked import DEFAULT_CHUNK_ROWS
 
-__all__ = ["read_imu_csv", "HELD_BYTES_PER_LINE", "BLOCK_BYTES_PER_LINE"]
+__all__ = ["read_imu_csv", "parsed_blocks", "HELD_BYTES_PER_LINE", "BLOCK_BYTES_PER_LINE"]
 
 #: peak memory of loading a recording per line of its IMU CSV beyond its parse block
 #: [bytes]: measured 170 and 198 (the growth of the peak tracemalloc traces over
@@ -100,16 +100,28 @@ def _parse_block(path, lines, rows) -> np.ndarray:
 _ERROR_ORDER = ("line", "csv", "tick")
 
 
-def read_imu_csv(path, chunk_rows=DEFAULT_CHUNK_ROWS):
+def read_imu_csv(path, chunk_rows=DEFAULT_CHUNK_ROWS, columns=slice(None),
+                 held_bytes_per_line=HELD_BYTES_PER_LINE):
     """Rows of an IMU CSV with partial first/last lines, blank and comment lines dropped.
 
     The file is read ``chunk_rows`` lines at a time (:mod:`.chunked`; ``None``: at once):
     each block's lines are parsed and checked, the tick order across block boundaries too;
     every block size gives the same arrays and the same error.
 
+    Parameters
+    ----------
+    path : path-like
+    chunk_rows : int or None
+    columns : slice or int, optional
+        The columns of the rows kept (default all; ``6``: the ticks alone, what the timing
+        of a recording read again later needs, :mod:`.imu_file`).
+    held_bytes_per_line : float
+        Memory held per line of the file once read, for the size check before reading
+        (:func:`~.chunked.counted_lines`).
+
     Returns
     -------
-    data : ndarray, shape (K, 7)
+    data : ndarray, shape (K, 7), or the kept ``columns`` of it
     kept : ndarray of int, shape (K,)
         0-based line index of each row in the file.
     line_lengths : ndarray of int
@@ -118,39 +130,56 @@ def read_imu_csv(path, chunk_rows=DEFAULT_CHUNK_ROWS):
     """
     path = Path(path)
     chunk_rows = chunked.check_chunk_rows(chunk_rows)
-    errors = chunked.FirstErrors(_ERROR_ORDER)
-    n = chunked.counted_lines(path, HELD_BYTES_PER_LINE, block_lines=chunk_rows,
+    n = chunked.counted_lines(path, held_bytes_per_line, block_lines=chunk_rows,
                               bytes_per_block_line=BLOCK_BYTES_PER_LINE)
     # every line's length, the data lines' indices and rows: at most one per line
     lengths, kept_rows = (chunked.Rows(path, n, None, np.int64) for _ in range(2))
-    data_rows = chunked.Rows(path, n, _CSV_COLUMNS)
+    width = np.empty(_CSV_COLUMNS)[columns].size
+    data_rows = chunked.Rows(path, n, width if isinstance(columns, slice) else None)
+    for lines, first, rows, data in parsed_blocks(path, chunk_rows):
+        lengths.add([len(x) - x.endswith(b"\n") for x in lines])
+        kept_rows.add(rows + first)
+        if data is not None:
+            data_rows.add(data[:, columns])
+    kept = kept_rows.array()
+    return data_rows.array(), kept, lengths.array(), path.stat().st_size
+
+
+def parsed_blocks(path, chunk_rows=DEFAULT_CHUNK_ROWS):
+    """Yield ``(lines, first, rows, data)`` for each block of an IMU CSV: its lines, the index
+    of its first line, the positions of its data lines and their parsed numbers (K, 7), or
+    ``None`` once a line failed (then only the lines are counted).
+
+    The checks run as the blocks are read (fields, numbers, ticks increasing, also across
+    blocks); the first error of each kind is raised, in the whole read's order, after the
+    last block (:class:`~.chunked.FirstErrors`), or at once if the file holds fewer than two
+    sample lines.
+    """
+    errors = chunked.FirstErrors(_ERROR_ORDER)
     last = None  # (tick, line number) of the previous block's last row
+    n_rows = 0
     with open(path, "rb") as f:
         for first, lines in chunked.line_blocks(f, chunk_rows):
-            lengths.add([len(x) - x.endswith(b"\n") for x in lines])
             rows = _data_lines(lines, first)
-            kept_rows.add(rows + first)
-            if not rows.size or "line" in errors:  # past a bad line only lines are counted
-                continue
-            data = _parse_block(path, lines, rows)
-            if data is None:
+            n_rows += rows.size
+            data = None if not rows.size or "line" in errors else \
+                _parse_block(path, lines, rows)
+            if data is None and rows.size and "line" not in errors:
                 try:
                     for j in rows:
                         _refuse_line(path, first + j + 1, lines[j][:-1])  # without its "\n"
                     errors.note("csv", InputFileError(path, "", f"not a CSV of {_CSV_LAYOUT}"))
                 except InputFileError as exc:
                     errors.note("line", exc)
-                continue
-            lineno = rows + (first + 1)
-            tick = data[:, 6] if last is None else np.concatenate([[last[0]], data[:, 6]])
-            bad = _tick_error(path, tick, lineno if last is None else
-                              np.concatenate([[last[1]], lineno]))
-            if bad is not None:
-                errors.note("tick", bad)
-            last = (data[-1, 6], lineno[-1])
-            data_rows.add(data)
-    kept = kept_rows.array()
-    if kept.size < 2:
+            if data is not None:
+                lineno = rows + (first + 1)
+                tick = data[:, 6] if last is None else np.concatenate([[last[0]], data[:, 6]])
+                bad = _tick_error(path, tick, lineno if last is None else
+                                  np.concatenate([[last[1]], lineno]))
+                if bad is not None:
+                    errors.note("tick", bad)
+                last = (data[-1, 6], lineno[-1])
+            yield lines, first, rows, data
+    if n_rows < 2:
         raise InputFileError(path, "lines", "fewer than two complete sample lines")
     errors.raise_first()
-    return data_rows.array(), kept, lengths.array(), path.stat().st_size

@@ -31,7 +31,7 @@ second just before the first IMU sample, counted from 1970 in the GPS time scale
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -41,7 +41,9 @@ from fuzzynav.errors import DataMissingError, InputFileError
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.realdata.loaders import checks, increments, timetag
 from fuzzynav.realdata.loaders.chunked import DEFAULT_CHUNK_ROWS
-from fuzzynav.realdata.loaders.imu_csv import read_imu_csv
+from fuzzynav.realdata.loaders.imu_csv import parsed_blocks, read_imu_csv
+from fuzzynav.realdata.loaders.imu_file import SCAN_BYTES_PER_LINE, ImuFile, RowTimes, \
+    body_rates
 from fuzzynav.realdata.loaders.mounting import Mounting
 from fuzzynav.realdata.loaders.recording_files import find_files
 from fuzzynav.realdata.loaders.rtkpos import read_pos
@@ -97,8 +99,9 @@ class Recording:
         ``imu``, ``tag``, ``pos`` (and ``mounting`` if read) -> Path.
     epoch_gpst_s : int
         GPST (seconds since 1970, GPS scale) of ``t = 0``.
-    imu : ImuData
-        Increments in the body frame (the IMU frame without a mounting).
+    imu : ImuData or ImuFile
+        Increments in the body frame (the IMU frame without a mounting); an
+        :class:`~.imu_file.ImuFile` (read from the file when asked) if loaded ``streamed``.
     gnss : SensorData
         All fixes in the IMU's time span, kind ``gnss``, RTKLIB sigmas; ``meta``: ``q``,
         ``ns``, ``ratio``, ``age_s``, ``lever_arm_b``.
@@ -174,20 +177,11 @@ def _rates_of(data, mounting):
     """``rates(a, b)``: gyro [rad/s] and accelerometer [m/s^2] rates of rows ``a .. b-1``,
     in the body frame."""
     c = None if mounting is None else mounting.matrix
-
-    def rates(a, b):
-        rows = data[a:b]
-        out = np.column_stack([rows[:, 3:6] * units.DPS, rows[:, 0:3] * units.G0])
-        if c is not None:
-            out = np.column_stack([out[:, :3] @ c.T, out[:, 3:] @ c.T])
-        return out
-
-    return rates
+    return lambda a, b: body_rates(data[a:b], c)
 
 
-def _imu_data(data, t_s, mounting, resample_hz, span, block_rows=None):
-    """Increments in the body frame between the chosen boundaries (the rates made and
-    integrated ``block_rows`` samples at a time: :func:`~.increments.integrate_rates`)."""
+def _bounds_of(t_s, resample_hz, span):
+    """The increments' boundaries inside the span: the samples, or a grid of ``resample_hz``."""
     lo, hi = max(t_s[0], span[0]), min(t_s[-1], span[1])
     if resample_hz is None:
         bounds = t_s[(t_s >= lo) & (t_s <= hi)]
@@ -196,8 +190,43 @@ def _imu_data(data, t_s, mounting, resample_hz, span, block_rows=None):
     if bounds.size < 2:
         raise InputFileError(None, "span_s", f"leaves no IMU data (IMU covers {t_s[0]:.3f} "
                                              f"to {t_s[-1]:.3f} s)")
+    return bounds
+
+
+def _imu_data(data, t_s, mounting, resample_hz, span, block_rows=None):
+    """Increments in the body frame between the chosen boundaries (the rates made and
+    integrated ``block_rows`` samples at a time: :func:`~.increments.integrate_rates`)."""
+    bounds = _bounds_of(t_s, resample_hz, span)
     inc = increments.integrate_rates(t_s, _rates_of(data, mounting), bounds, block_rows)
     return ImuData(time_s=bounds, dtheta_b=inc[:, :3], dv_b=inc[:, 3:])
+
+
+def _imu_file(path, identity, t_s, clock, timing, base_s, mounting, resample_hz, span,
+              chunk_rows):
+    """The increments as an :class:`~.imu_file.ImuFile` (read from the file when asked)."""
+    bounds = _bounds_of(t_s, resample_hz, span)
+    times = RowTimes(p0_ms=clock.p0_ms, c0_ms=clock.c0_ms, period_ms=clock.period_ms,
+                     regular=clock.regular, time0_ms=float(clock.time_ms[0]),
+                     a_ms=timing.latency_ms, b=timing.clock_rate, delay_s=timing.imu_delay_s,
+                     base_s=base_s)
+    dt = float(np.median(np.diff(bounds)))
+    return ImuFile(path=path, identity=identity, times=times,
+                   matrix=None if mounting is None else mounting.matrix,
+                   grid_hz=resample_hz, span_s=(float(bounds[0]), float(bounds[-1])),
+                   n_samples=int(bounds.size - 1), dt_nom_s=dt, chunk_rows=chunk_rows)
+
+
+def _physics(path, data, kept, rate_hz, limits, chunk_rows):
+    """:func:`~.checks.imu_physics` on the held rows, or on the file read again in blocks
+    (``data`` None: only the ticks were kept)."""
+    if data is not None:
+        checks.imu_physics(path, data[:, 0:3], data[:, 3:6], kept + 1, rate_hz, limits)
+        return
+    scan = checks.PhysicsScan(rate_hz)
+    for _, first, rows, block in parsed_blocks(path, chunk_rows):
+        if block is not None and rows.size:
+            scan.add(block[:, 0:3], block[:, 3:6], rows + first + 1)
+    scan.check(path, limits)
 
 
 def _fixes(pos, epoch: int, t_lo: float, t_hi: float, lever_arm_b, fixed_only: bool,
@@ -220,7 +249,7 @@ def _fixes(pos, epoch: int, t_lo: float, t_hi: float, lever_arm_b, fixed_only: b
 def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
                 resample_hz="nominal", span_s=None, session=None,
                 gnss_velocity_lag_s=0.0, limits=None, start=None,
-                chunk_rows=DEFAULT_CHUNK_ROWS) -> Recording:
+                chunk_rows=DEFAULT_CHUNK_ROWS, streamed=False) -> Recording:
     """Load an RTKLIB-logged IMU + GNSS recording.
 
     Parameters
@@ -252,6 +281,13 @@ def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
     chunk_rows : int or None
         Lines of the IMU CSV parsed at a time (:func:`read_imu_csv`; ``None``: the whole
         file at once); the recording is the same whatever it is.
+    streamed : bool
+        Keep no IMU rows: the CSV is read once for the timing (its ticks and line
+        lengths), and its increments are read again from the file, a block of lines at a
+        time, whenever they are wanted (``imu`` is then an
+        :class:`~.imu_file.ImuFile`, :mod:`.imu_file`): memory bounded by the block, not
+        the recording, at the cost of a read of the file per use.  The increments, and
+        every check, are those of the held load.
 
     Returns
     -------
@@ -268,34 +304,50 @@ def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
     files = find_files(directory, session)
     mount = _resolve_mounting(mounting, directory, files)
     tag = timetag.read_timetag(files["tag"])
-    data, kept, lengths, size = read_imu_csv(files["imu"], chunk_rows)
+    path = files["imu"]
+    identity = ImuFile.identity_of(path)
+    if streamed:  # the ticks alone: the rows are read again when wanted
+        ticks, kept, lengths, size = read_imu_csv(path, chunk_rows, 6, SCAN_BYTES_PER_LINE)
+        data = None
+    else:
+        data, kept, lengths, size = read_imu_csv(path, chunk_rows)
+        ticks = data[:, 6]
     limits = checks.DEFAULT_LIMITS if limits is None else limits
-    rate_hz = checks.imu_ticks(files["imu"], data[:, 6], kept + 1, limits)
-    checks.imu_physics(files["imu"], data[:, 0:3], data[:, 3:6], kept + 1, rate_hz, limits)
-    clock = increments.regular_sample_times(data[:, 6])
+    rate_hz = checks.imu_ticks(path, ticks, kept + 1, limits)
+    _physics(path, data, kept, rate_hz, limits, chunk_rows)
+    clock = increments.regular_sample_times(ticks)
+    del ticks
     offset_s, timing = align_time(tag, clock, kept, lengths, size, imu_delay_s)
-    checks.clock_rate(files["imu"], files["tag"], tag, timing.method, timing.clock_rate, size,
+    checks.clock_rate(path, files["tag"], tag, timing.method, timing.clock_rate, size,
                       lengths.size, np.ptp(clock.time_ms) / 1000.0, limits)
+    del kept, lengths
     frac0 = tag.start_frac_s + offset_s[0]
     epoch = tag.start_int_s + int(np.floor(frac0))
-    t_s = (tag.start_frac_s - (epoch - tag.start_int_s)) + offset_s
+    base_s = tag.start_frac_s - (epoch - tag.start_int_s)
+    t_s = base_s + offset_s
+    del offset_s
     span = (-np.inf, np.inf) if span_s is None else (t_s[0] + span_s[0], t_s[0] + span_s[1])
     rate = round(1000.0 / clock.period_ms) if resample_hz == "nominal" else resample_hz
     try:
-        imu = _imu_data(data, t_s, mount, rate, span, chunk_rows)
+        imu = _imu_data(data, t_s, mount, rate, span, chunk_rows) if not streamed else \
+            _imu_file(path, identity, t_s, clock, timing, base_s, mount, rate, span,
+                      chunk_rows)
     except InputFileError as exc:  # a span outside the data
         raise InputFileError(directory, exc.where, exc.what) from None
+    del t_s, data
+    if streamed:  # the sample clock's times are not held either
+        timing = replace(timing, clock=replace(clock, time_ms=clock.time_ms[:1]))
     imu.meta.update(n_missing_samples=clock.n_missing, max_gap_s=clock.max_gap_ms / 1000.0,
-                    tick_jitter_ms=clock.jitter_ms, source=str(files["imu"]))
+                    tick_jitter_ms=clock.jitter_ms, source=str(path))
     pos = read_pos(files["pos"])
+    t_lo, t_hi = imu.span_s
     checks.gnss_overlap(files["pos"], pos.time_int_s + pos.time_frac_s, pos.columns["q"],
-                        (epoch + imu.time_s[0], epoch + imu.time_s[-1]), limits)
+                        (epoch + t_lo, epoch + t_hi), limits)
     start = StartOptions() if start is None else start
     lever = np.zeros(3) if mount is None else mount.gnss_lever_arm_b_m
     lever = lever if start.lever_arm_b_m is None else np.asarray(start.lever_arm_b_m, float)
-    t_lo, t_hi = imu.time_s[0], imu.time_s[-1]
     reference = _fixes(pos, epoch, t_lo, t_hi, lever, True)
-    checks.gyro_scale(files["imu"], imu, reference, limits)
+    checks.gyro_scale(path, imu, reference, limits)
     return Recording(directory=directory, files=files, epoch_gpst_s=int(epoch), imu=imu,
                      gnss=_fixes(pos, epoch, t_lo, t_hi, lever, False, gnss_velocity_lag_s),
                      reference=reference, mounting=mount, timing=timing,

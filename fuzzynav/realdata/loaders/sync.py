@@ -67,11 +67,28 @@ def gyro_course_gain(imu, gnss, min_speed_mps=3.0, min_turn_rad=np.pi / 2):
     intervals between consecutive chords while moving (regressing the course on the gyro
     leaves the course's position noise unbiased).  ``None`` when the car did not move or
     turn enough (fewer than 20 intervals, or less than ``min_turn_rad`` of turning).
+
+    ``imu`` is an :class:`~fuzzynav.sim.imu.ImuData` or a recording read from its file
+    (:class:`~fuzzynav.realdata.loaders.imu_file.ImuFile`): the increments are taken a
+    piece at a time (``imu.pieces()``), the angle integral carried across pieces.
     """
-    mid, ok, d_course, psi = _course_changes(imu, gnss, None, min_speed_mps, 0.0)
+    mid, course, speed, regular = _chord_courses(gnss)
+    t0, t1 = imu.span_s
+    ok = (regular[:-1] & regular[1:] & (speed[:-1] >= min_speed_mps)
+          & (speed[1:] >= min_speed_mps) & (mid[:-1] > t0) & (mid[1:] < t1))
+    d_course = np.diff(course)[ok]
     if ok.sum() < 20 or np.sum(np.abs(d_course)) < min_turn_rad:
         return None
-    d_psi = np.diff(np.interp(mid, imu.time_s, psi))[ok]
+    theta, up = np.zeros((mid.size, 3)), np.zeros(3)  # the angle integral at the midpoints
+    carry = np.zeros(3)
+    for p in (imu.pieces() if hasattr(imu, "pieces") else [imu]):
+        cum = carry + np.concatenate([np.zeros((1, 3)), np.cumsum(p.dtheta_b, axis=0)])
+        sel = (mid >= p.time_s[0]) & (mid <= p.time_s[-1])
+        theta[sel] = np.column_stack([np.interp(mid[sel], p.time_s, cum[:, j])
+                                      for j in range(3)])
+        up += p.dv_b.sum(0)  # up: the mean specific force
+        carry = cum[-1]
+    d_psi = np.diff(-(theta @ (up / np.linalg.norm(up))))[ok]
     den = float(np.sum(d_psi * d_psi))
     return float(np.sum(d_psi * d_course) / den) if den > 0.0 else float("inf")
 
