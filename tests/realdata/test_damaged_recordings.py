@@ -210,6 +210,21 @@ def test_damaged_recording_is_refused_in_one_line(drive, tmp_path, damage, name,
     assert str(d / name) in err and field in err, err
 
 
+_IMU_CASES = [c for c in CASES if c[2] in (CSV, TAG)]
+
+
+@pytest.mark.parametrize("damage", [c[1] for c in _IMU_CASES], ids=[c[0] for c in _IMU_CASES])
+def test_a_damaged_imu_read_from_its_file_is_refused_as_the_held_load(drive, tmp_path, damage):
+    """``--output-rate`` reads the IMU streamed (its rows read again per use,
+    :mod:`fuzzynav.realdata.loaders.imu_file`): the same checks, the same one line."""
+    d = tmp_path / "rec"
+    shutil.copytree(drive, d)
+    damage(d)
+    held = run_cli(d)
+    assert run_cli(d, "--output-rate", "1") == held
+    assert held[0] == 2
+
+
 # -- what is repaired, not refused ------------------------------------------------------------
 def _load(d, **kw):
     from fuzzynav.realdata.loaders.rtklib import load_rtklib

@@ -79,7 +79,7 @@ def count_lines(path, universal: bool = False) -> int:
 
 
 def counted_lines(path, bytes_per_line: float, universal: bool = False,
-                  block_lines=None, bytes_per_block_line: float = 0.0) -> int:
+                  block_lines=None, bytes_per_block_line: float = 0.0, hint: str = "") -> int:
     """:func:`count_lines` of ``path``, refusing, before a line is parsed, a file that is not
     text lines (a mean line over :data:`MAX_MEAN_LINE_BYTES`) or whose lines, held at
     ``bytes_per_line`` each once read, and its block of ``block_lines`` lines being parsed
@@ -87,7 +87,8 @@ def counted_lines(path, bytes_per_line: float, universal: bool = False,
     may use (:func:`fuzzynav.sim.budget.memory_limit`).
 
     Memory, not the file's size, is what limits a recording: it is read a block of lines
-    at a time and only its parsed rows are held.
+    at a time and only its parsed rows are held.  ``hint``, if given, ends the refusal
+    (how to read the file in less memory).
     """
     n = count_lines(path, universal)
     size = path.stat().st_size
@@ -101,7 +102,8 @@ def counted_lines(path, bytes_per_line: float, universal: bool = False,
     if need > limit:
         raise InputFileError(path, "", f"has {n} lines: read and held they need "
                                        f"~{budget.human_bytes(need)}; the limit is "
-                                       f"{budget.human_bytes(limit)} ({source})")
+                                       f"{budget.human_bytes(limit)} ({source})"
+                                       + (f"; {hint}" if hint else ""))
     return n
 
 

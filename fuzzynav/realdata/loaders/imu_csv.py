@@ -101,7 +101,7 @@ _ERROR_ORDER = ("line", "csv", "tick")
 
 
 def read_imu_csv(path, chunk_rows=DEFAULT_CHUNK_ROWS, columns=slice(None),
-                 held_bytes_per_line=HELD_BYTES_PER_LINE):
+                 held_bytes_per_line=HELD_BYTES_PER_LINE, hint: str = ""):
     """Rows of an IMU CSV with partial first/last lines, blank and comment lines dropped.
 
     The file is read ``chunk_rows`` lines at a time (:mod:`.chunked`; ``None``: at once):
@@ -117,7 +117,7 @@ def read_imu_csv(path, chunk_rows=DEFAULT_CHUNK_ROWS, columns=slice(None),
         of a recording read again later needs, :mod:`.imu_file`).
     held_bytes_per_line : float
         Memory held per line of the file once read, for the size check before reading
-        (:func:`~.chunked.counted_lines`).
+        (:func:`~.chunked.counted_lines`, whose refusal ends with ``hint``).
 
     Returns
     -------
@@ -131,7 +131,7 @@ def read_imu_csv(path, chunk_rows=DEFAULT_CHUNK_ROWS, columns=slice(None),
     path = Path(path)
     chunk_rows = chunked.check_chunk_rows(chunk_rows)
     n = chunked.counted_lines(path, held_bytes_per_line, block_lines=chunk_rows,
-                              bytes_per_block_line=BLOCK_BYTES_PER_LINE)
+                              bytes_per_block_line=BLOCK_BYTES_PER_LINE, hint=hint)
     # every line's length, the data lines' indices and rows: at most one per line
     lengths, kept_rows = (chunked.Rows(path, n, None, np.int64) for _ in range(2))
     width = np.empty(_CSV_COLUMNS)[columns].size

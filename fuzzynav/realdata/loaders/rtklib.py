@@ -50,9 +50,13 @@ from fuzzynav.realdata.loaders.rtkpos import read_pos
 from fuzzynav.sim.sensors import SensorData
 from fuzzynav.realdata.start_options import StartOptions
 
-__all__ = ["DEFAULT_IMU_DELAY_S", "TimeAlignment", "Recording", "read_imu_csv", "align_time",
+__all__ = ["STREAMED_HINT", "DEFAULT_IMU_DELAY_S", "TimeAlignment", "Recording", "read_imu_csv", "align_time",
            "load_rtklib"]
 
+#: how a recording too long to hold is read instead (the end of the held load's refusal)
+STREAMED_HINT = ("load it streamed, its IMU read from the file chunk by chunk "
+                 "(load_rtklib(streamed=True); fuzzynav run --data ... --output-rate HZ or "
+                 "--chunk S)")
 #: sample-to-fitted-arrival delay of the rtklib-drive IMU [s] (see the module docstring)
 DEFAULT_IMU_DELAY_S = 0.21
 
@@ -310,7 +314,7 @@ def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
         ticks, kept, lengths, size = read_imu_csv(path, chunk_rows, 6, SCAN_BYTES_PER_LINE)
         data = None
     else:
-        data, kept, lengths, size = read_imu_csv(path, chunk_rows)
+        data, kept, lengths, size = read_imu_csv(path, chunk_rows, hint=STREAMED_HINT)
         ticks = data[:, 6]
     limits = checks.DEFAULT_LIMITS if limits is None else limits
     rate_hz = checks.imu_ticks(path, ticks, kept + 1, limits)
