@@ -230,3 +230,27 @@ def test_outages_every_180_s():
     gaps = np.diff(d.time_s)
     assert np.sum(gaps > 1.0) == 5 and math.isclose(gaps.max(), 60.25)
     assert d.meta["lever_arm_b"].shape == (3,)
+
+
+def test_data_lines_found_on_the_bytes_are_those_line_by_line():
+    """The blank-line search over a block's bytes (no ``#`` in it) keeps the lines the
+    line-by-line definition keeps: ending with a newline, not blank by ``bytes.strip``,
+    not the file's first; random blocks of data, blanks of every ASCII whitespace and cut
+    last lines."""
+    import random
+
+    from fuzzynav.realdata.loaders.imu_csv import _data_lines
+
+    def by_line(lines, first):
+        return [j for j, x in enumerate(lines) if first + j >= 1 and x.endswith(b"\n")
+                and x.strip() and not x.lstrip().startswith(b"#")]
+
+    rnd = random.Random(7)
+    parts = [b"1,2,3", b"", b" ", b"\t", b"\r", b"x", b"\x0b", b"\x0c", b"  7 ", b"#"]
+    for _ in range(5000):
+        lines = [b"".join(rnd.choices(parts, k=rnd.randint(0, 3))) + rnd.choice([b"\n", b"\r\n"])
+                 for _ in range(rnd.randint(1, 6))]
+        if rnd.random() < 0.5:
+            lines[-1] = lines[-1].rstrip(b"\n") or b"z"
+        for first in (0, 3):
+            assert list(_data_lines(lines, first, b"".join(lines))) == by_line(lines, first)
