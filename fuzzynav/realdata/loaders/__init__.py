@@ -9,5 +9,7 @@ aiding-sensor data (:class:`fuzzynav.sim.sensors.SensorData`) on one time axis.
   checks in :mod:`.akit_checks`).
 
 Both read their files a block of lines at a time (:mod:`.chunked`; the car's IMU CSV in
-:mod:`.imu_csv`), with the same arrays and errors as a whole read.
+:mod:`.imu_csv`), with the same arrays and errors as a whole read.  A car recording loaded
+``streamed`` keeps no IMU rows: its increments are read again from the file, a block at a
+time, whenever they are used (:mod:`.imu_file`).
 """
