@@ -233,10 +233,10 @@ def test_outages_every_180_s():
 
 
 def test_data_lines_found_on_the_bytes_are_those_line_by_line():
-    """The blank-line search over a block's bytes (no ``#`` in it) keeps the lines the
-    line-by-line definition keeps: ending with a newline, not blank by ``bytes.strip``,
-    not the file's first; random blocks of data, blanks of every ASCII whitespace and cut
-    last lines."""
+    """The block-at-once shortcut (no ``#`` and no line starting with whitespace: every line
+    is data) keeps the lines the line-by-line definition keeps: ending with a newline, not
+    blank by ``bytes.strip``, not the file's first; random blocks of data, blanks of every
+    ASCII whitespace, comments and cut last lines."""
     import random
 
     from fuzzynav.realdata.loaders.imu_csv import _data_lines

@@ -36,9 +36,8 @@ _CSV_NAMES = ("acc x", "acc y", "acc z", "gyro x", "gyro y", "gyro z", "tick")
 _CSV_LAYOUT = "acc x,y,z [g], gyro x,y,z [deg/s], tick [ms]"
 
 
-#: bytes that are not ASCII whitespace (what ``bytes.strip`` removes), by byte value
-_CONTENT = np.ones(256, dtype=bool)
-_CONTENT[list(b" \t\n\r\x0b\x0c")] = False
+#: what a line that is blank by ``bytes.strip`` starts with: ASCII whitespace
+_BLANK_STARTS = tuple(bytes([c]) for c in b" \t\n\r\x0b\x0c")
 
 
 def _data_lines(lines, first: int, blob: bytes) -> np.ndarray:
@@ -48,24 +47,17 @@ def _data_lines(lines, first: int, blob: bytes) -> np.ndarray:
     The file's first line is dropped (logging started inside it), and its last unless it
     ends with a newline (only the last line can lack one).  Blank lines and whole-line ``#``
     comments (an edited or concatenated copy) are skipped; their bytes still count in the
-    offsets matched against the tag.  Without a ``#`` in the block the blank lines are found
-    on the bytes at once (the same lines as line by line, measured 3x faster).
+    offsets matched against the tag.  A block without a ``#`` and without a line that starts
+    with whitespace (which every blank line does) holds data on every line: that is found on
+    its bytes at once, the usual case, without looking at each line.
     """
-    if b"#" in blob:
+    if b"#" in blob or blob.startswith(_BLANK_STARTS) or \
+            any(b"\n" + c in blob for c in _BLANK_STARTS):
         return np.array([j for j, line in enumerate(lines)
                          if first + j >= 1 and line.endswith(b"\n") and line.strip()
                          and not line.lstrip().startswith(b"#")], dtype=np.int64)
-    a = np.frombuffer(blob, dtype=np.uint8)
-    if not a.size:
-        return np.zeros(0, dtype=np.int64)
-    ends = np.flatnonzero(a == 10)  # each line's "\n": every line has one but maybe the last
-    starts = np.concatenate([[0], ends + 1])
-    starts = starts[starts < a.size]
-    keep = np.add.reduceat(_CONTENT[a], starts).astype(bool)  # any non-blank byte
-    if a[-1] != 10:  # the last line, cut: not data
-        keep[-1] = False
-    rows = np.flatnonzero(keep)
-    return rows[rows >= 1 - first] if first == 0 else rows
+    rows = np.arange(len(lines) - (not lines[-1].endswith(b"\n")), dtype=np.int64)
+    return rows[1:] if first == 0 else rows
 
 
 def _refuse_line(path, lineno: int, line: bytes):

@@ -32,9 +32,10 @@ __all__ = ["SCAN_BYTES_PER_LINE", "body_rates", "RowTimes", "ImuFile", "ImuCut"]
 
 #: peak memory per line of the CSV of a streamed load beyond its parse block [bytes]: the
 #: ticks, the lines' lengths and indices (24) held for the clock fits, and the fits' working
-#: arrays; measured 138 at the tag fit's peak (tracemalloc, a synthetic drive of 266 801
-#: lines in blocks of 4 096), rounded up.  Released once the load returns
-SCAN_BYTES_PER_LINE = 160
+#: arrays; measured 91 at the fits' peak (tracemalloc, synthetic drives of 86 801 and
+#: 266 801 lines in blocks of 4 096; tests/realdata/test_imu_file.py), rounded up.
+#: Released once the load returns
+SCAN_BYTES_PER_LINE = 128
 
 
 def body_rates(rows, matrix=None) -> np.ndarray:

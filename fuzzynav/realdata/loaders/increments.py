@@ -66,9 +66,11 @@ def regular_sample_times(tick_ms) -> SampleClock:
     p0 = float(np.median(step))
     counts = np.maximum(np.rint(step / p0), 1.0)
     n = np.concatenate([[0.0], np.cumsum(counts)])
+    del step, counts  # a recording of a day has millions of ticks: hold no more than needed
     period, c0 = np.polyfit(n, tick, 1)
     resid = tick - (c0 + period * n)
     jitter = float(np.max(np.abs(resid)))
+    del resid
     regular = jitter < 0.5 * period
     times = c0 + period * n if regular else tick
     return SampleClock(time_ms=times, period_ms=float(period),

@@ -142,15 +142,22 @@ class Recording:
 
 
 # -- time alignment -----------------------------------------------------------------------------
-def align_time(tag, clock, kept, line_lengths, file_size, imu_delay_s):
-    """GPST offset [s] from tag start of every kept sample, and the :class:`TimeAlignment`."""
+def align_time(tag, clock, matched, imu_delay_s):
+    """GPST offset [s] from tag start of every kept sample, and the :class:`TimeAlignment`.
+
+    ``matched`` is :func:`~.timetag.kept_arrivals`' result (``None``: the tag does not fit
+    the file, the samples are stretched over it).  The fit is a load's peak of memory (a
+    recording of a day has millions of points): no copy is made that it does not need.
+    """
     x_ms = clock.time_ms - clock.time_ms[0]
-    matched = timetag.logged_line_ends(tag, line_lengths, file_size)
     if matched is not None:
-        ends, crlf = matched
-        arrival = timetag.arrival_ticks(tag, ends[kept])
+        arrival, crlf = matched
         ok = arrival >= 0
-        a, b, sd, _ = timetag.fit_clock(x_ms[ok], arrival[ok])
+        # all arrived (the usual case): the arrays whole, the same numbers as selected
+        x, y = (x_ms, arrival.astype(float)) if ok.all() else (x_ms[ok], arrival[ok])
+        del ok
+        a, b, sd, _ = timetag.fit_clock(x, y)
+        del x, y
         method = "tag-fit"
     else:
         a, b, sd, crlf, method = 0.0, float(tag.tick_ms[-1]) / x_ms[-1], float("nan"), \
@@ -321,10 +328,13 @@ def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
     _physics(path, data, kept, rate_hz, limits, chunk_rows)
     clock = increments.regular_sample_times(ticks)
     del ticks
-    offset_s, timing = align_time(tag, clock, kept, lengths, size, imu_delay_s)
+    n_lines, span_ms = lengths.size, float(np.ptp(clock.time_ms))
+    matched = timetag.kept_arrivals(tag, kept, lengths, size)
+    del kept, lengths  # the fit below is the load's peak: hold only what it needs
+    offset_s, timing = align_time(tag, clock, matched, imu_delay_s)
+    del matched
     checks.clock_rate(path, files["tag"], tag, timing.method, timing.clock_rate, size,
-                      lengths.size, np.ptp(clock.time_ms) / 1000.0, limits)
-    del kept, lengths
+                      n_lines, span_ms / 1000.0, limits)
     frac0 = tag.start_frac_s + offset_s[0]
     epoch = tag.start_int_s + int(np.floor(frac0))
     base_s = tag.start_frac_s - (epoch - tag.start_int_s)

@@ -22,7 +22,7 @@ import numpy as np
 
 from fuzzynav.errors import InputFileError
 
-__all__ = ["HEADER_TEXT_LEN", "HEADER_LEN", "RECORD", "TimeTag", "read_timetag",
+__all__ = ["kept_arrivals", "HEADER_TEXT_LEN", "HEADER_LEN", "RECORD", "TimeTag", "read_timetag",
            "arrival_ticks", "logged_line_ends", "fit_clock"]
 
 HEADER_TEXT_LEN = 60
@@ -130,6 +130,25 @@ def logged_line_ends(tag: TimeTag, line_lengths, file_size: int):
     return None
 
 
+def kept_arrivals(tag: TimeTag, kept, line_lengths, file_size: int):
+    """``(arrival, crlf_restored)``: the tick [ms] by which each kept line had been written
+    (:func:`arrival_ticks`, -1 after the last record) and whether CR LF line ends were
+    restored (:func:`logged_line_ends`), or ``None`` when the tag does not fit the file.
+
+    Parameters
+    ----------
+    kept : ndarray of int
+        0-based index of each data line in the file.
+    line_lengths, file_size
+        As :func:`logged_line_ends`.
+    """
+    matched = logged_line_ends(tag, line_lengths, file_size)
+    if matched is None:
+        return None
+    ends, crlf = matched
+    return arrival_ticks(tag, ends[kept]), crlf
+
+
 def fit_clock(imu_ms, arrival_ms):
     """Straight line ``arrival = a + b imu`` through the arrival ticks, outliers removed.
 
@@ -148,9 +167,12 @@ def fit_clock(imu_ms, arrival_ms):
     y = np.asarray(arrival_ms, dtype=float)
     keep = np.ones(x.size, dtype=bool)
     for _ in range(3):
-        b, a = np.polyfit(x[keep], y[keep], 1)
+        # all kept: the arrays themselves (the same numbers, no copies of millions of points)
+        b, a = np.polyfit(*((x, y) if keep.all() else (x[keep], y[keep])), 1)
         r = y - (a + b * x)
-        sd = 1.4826 * np.median(np.abs(r[keep] - np.median(r[keep])))
+        rk = r if keep.all() else r[keep]
+        sd = 1.4826 * np.median(np.abs(rk - np.median(rk)))
+        del rk
         new = np.abs(r) <= 5.0 * max(sd, 0.5)
         if np.array_equal(new, keep):
             break
