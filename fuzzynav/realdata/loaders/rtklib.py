@@ -36,7 +36,6 @@ from pathlib import Path
 
 import numpy as np
 
-from fuzzynav import units
 from fuzzynav.errors import DataMissingError, InputFileError
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.realdata.loaders import checks, increments, timetag
@@ -50,8 +49,8 @@ from fuzzynav.realdata.loaders.rtkpos import read_pos
 from fuzzynav.sim.sensors import SensorData
 from fuzzynav.realdata.start_options import StartOptions
 
-__all__ = ["STREAMED_HINT", "DEFAULT_IMU_DELAY_S", "TimeAlignment", "Recording", "read_imu_csv", "align_time",
-           "load_rtklib"]
+__all__ = ["STREAMED_HINT", "DEFAULT_IMU_DELAY_S", "TimeAlignment", "Recording", "read_imu_csv",
+           "align_time", "load_rtklib"]
 
 #: how a recording too long to hold is read instead (the end of the held load's refusal)
 STREAMED_HINT = ("load it streamed, its IMU read from the file chunk by chunk "
