@@ -224,19 +224,20 @@ class PhysicsScan:
             k = int(np.argmax(mag))
             if name not in self.biggest or mag[k] > self.biggest[name][0]:
                 self.biggest[name] = (float(mag[k]), int(lineno[k]))
-        rows = np.column_stack([acc_g, gyro_dps])
-        if self.left is not None:
-            rows = np.concatenate([self.left, rows])
-        whole = rows.shape[0] // self.n * self.n
+        if self.left is not None:  # the rows short of a whole block, carried
+            acc_g = np.concatenate([self.left[0], acc_g])
+            gyro_dps = np.concatenate([self.left[1], gyro_dps])
+        whole = acc_g.shape[0] // self.n * self.n
         if whole:
-            self.stats.append(_block_stats(rows[:whole, :3], rows[:whole, 3:], self.n))
-        self.left = rows[whole:]
+            self.stats.append(_block_stats(acc_g[:whole], gyro_dps[:whole], self.n))
+        self.left = (acc_g[whole:], gyro_dps[whole:])
 
     def rest(self):
         """:func:`_rest` of the blocks (a file shorter than a block is one block)."""
         if self.stats:
             return _rest(np.concatenate(self.stats))
-        return _rest(_block_stats(self.left[:, :3], self.left[:, 3:], self.left.shape[0]))
+        acc, gyro = self.left
+        return _rest(_block_stats(acc, gyro, acc.shape[0]))
 
     def check(self, path, limits: Limits = DEFAULT_LIMITS, cols=None) -> None:
         """Raise the first failure (:func:`imu_physics`)."""

@@ -178,7 +178,7 @@ class ImuFile:
     def pieces(self):
         """Yield :class:`~fuzzynav.sim.imu.ImuData` of consecutive increments, as the file's
         blocks give them (each piece starts at the previous piece's last time)."""
-        acc, done, last_t, pending = RateIntegrator(), 0, None, None
+        acc, done, last_t = RateIntegrator(), 0, None
         for (t, w), final in _lookahead(self.samples()):
             b = self._bounds(t, final, done)
             done += b.size
