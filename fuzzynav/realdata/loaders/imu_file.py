@@ -263,6 +263,16 @@ class ImuCut:
 
     The bias is removed per increment as ``dtheta - bias * dt`` (the held start's
     arithmetic), so its chunks are the held start's to the last bit.
+
+    Attributes
+    ----------
+    source : ImuFile
+    start : int
+        Index of the first increment used.
+    gyro_bias_rps : ndarray, shape (3,)
+        The gyro bias removed [rad/s].
+    t0_s : float
+        Time of increment ``start`` [s].
     """
 
     source: ImuFile
@@ -272,22 +282,27 @@ class ImuCut:
 
     @property
     def span_s(self) -> tuple:
+        """The first and last increment boundary [s]."""
         return self.t0_s, self.source.span_s[1]
 
     @property
     def n_samples(self) -> int:
+        """Number of increments from the start on."""
         return self.source.n_samples - self.start
 
     @property
     def dt_nom_s(self) -> float:
+        """Nominal increment interval [s] (the file's)."""
         return self.source.dt_nom_s
 
     @property
     def rate_hz(self) -> float:
+        """Nominal increment rate [Hz] (the file's)."""
         return self.source.rate_hz
 
     @property
     def meta(self) -> dict:
+        """The file's :attr:`ImuFile.meta`."""
         return self.source.meta
 
     def chunks(self, samples: int):
