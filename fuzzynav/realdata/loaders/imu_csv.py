@@ -147,8 +147,9 @@ def read_imu_csv(path, chunk_rows=DEFAULT_CHUNK_ROWS, columns=slice(None),
     chunk_rows = chunked.check_chunk_rows(chunk_rows)
     n = chunked.counted_lines(path, held_bytes_per_line, block_lines=chunk_rows,
                               bytes_per_block_line=BLOCK_BYTES_PER_LINE, hint=hint)
-    # every line's length, the data lines' indices and rows: at most one per line
-    lengths, kept_rows = (chunked.Rows(path, n, None, np.int64) for _ in range(2))
+    # every line's length, the data lines' indices and rows: at most one per line (int32:
+    # a file of 2**31 lines would need hundreds of GB; the clock fits are a day's peak)
+    lengths, kept_rows = (chunked.Rows(path, n, None, np.int32) for _ in range(2))
     width = np.empty(_CSV_COLUMNS)[columns].size
     data_rows = chunked.Rows(path, n, width if isinstance(columns, slice) else None)
     for lines, first, rows, data in parsed_blocks(path, chunk_rows):

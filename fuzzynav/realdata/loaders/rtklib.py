@@ -153,7 +153,7 @@ def align_time(tag, clock, matched, imu_delay_s):
         arrival, crlf = matched
         ok = arrival >= 0
         # all arrived (the usual case): the arrays whole, the same numbers as selected
-        x, y = (x_ms, arrival.astype(float)) if ok.all() else (x_ms[ok], arrival[ok])
+        x, y = (x_ms, arrival) if ok.all() else (x_ms[ok], arrival[ok])
         del ok
         a, b, sd, _ = timetag.fit_clock(x, y)
         del x, y

@@ -132,7 +132,7 @@ def logged_line_ends(tag: TimeTag, line_lengths, file_size: int):
 
 def kept_arrivals(tag: TimeTag, kept, line_lengths, file_size: int):
     """``(arrival, crlf_restored)``: the tick [ms] by which each kept line had been written
-    (:func:`arrival_ticks`, -1 after the last record) and whether CR LF line ends were
+    (:func:`arrival_ticks` as floats, -1 after the last record) and whether CR LF line ends were
     restored (:func:`logged_line_ends`), or ``None`` when the tag does not fit the file.
 
     Parameters
@@ -146,7 +146,9 @@ def kept_arrivals(tag: TimeTag, kept, line_lengths, file_size: int):
     if matched is None:
         return None
     ends, crlf = matched
-    return arrival_ticks(tag, ends[kept]), crlf
+    arrival = arrival_ticks(tag, ends[kept])
+    del ends
+    return arrival.astype(float), crlf  # what the fit takes (whole ms: exact)
 
 
 def fit_clock(imu_ms, arrival_ms):
