@@ -227,7 +227,7 @@ def render(rows, load0, load1) -> str:
               "keeps and returns, the parsed rows (56 bytes per sample), each line's length "
               "and index (16 bytes, for the time tag), the timing columns of the clock fit "
               "and the increments (56 bytes). From the file, the load keeps the ticks and the "
-              "line lengths and indices only while it fits the clocks (about 90 bytes a line "
+              "line lengths and indices only while it fits the clocks (about 80 bytes a line "
               "at the clock fits' peak, `imu_file.SCAN_BYTES_PER_LINE`) and returns no IMU "
               "array; what the run then adds with the recording's length is its GNSS rate, "
               "not its IMU rate: the 4-Hz fixes and reference, their degraded copies, each "

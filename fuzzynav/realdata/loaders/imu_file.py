@@ -31,8 +31,8 @@ from fuzzynav.sim.imu import ImuData
 __all__ = ["SCAN_BYTES_PER_LINE", "body_rates", "RowTimes", "ImuFile", "ImuCut"]
 
 #: peak memory per line of the CSV of a streamed load beyond its parse block [bytes]: the
-#: ticks (8), the lines' lengths and indices (4 + 4) held for the clock fits, and the fits' working
-#: arrays; measured 83 at the fits' peak (tracemalloc, synthetic drives of 86 801 and
+#: ticks (8), the lines' lengths and indices (4 + 4) held for the clock fits, and the fits'
+#: working arrays; measured 83 at the fits' peak (tracemalloc, synthetic drives of 86 801 and
 #: 266 801 lines in blocks of 4 096; tests/realdata/test_imu_file.py), rounded up.
 #: Released once the load returns
 SCAN_BYTES_PER_LINE = 128
