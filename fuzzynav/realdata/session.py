@@ -19,7 +19,7 @@ from fuzzynav.errors import InputFileError, OutputRateError
 from fuzzynav.filters.named import FilterContext
 from fuzzynav.filters.runner import InitialState
 from fuzzynav.nav import attitude, earth
-from fuzzynav.realdata.loaders.imu_file import ImuCut
+from fuzzynav.realdata.loaders.imu_file import ImuCut, without_gyro_bias
 from fuzzynav.realdata.mems import CONSUMER_MEMS, MemsModel
 from fuzzynav.realdata.reference_scoring import ReferenceScoring
 from fuzzynav.runpath import RUN_SETTINGS, RunInputs
@@ -75,9 +75,8 @@ def start_from(imu, fixes, mounting_known: bool, lever_arm_b=(0.0, 0.0, 0.0),
     if hasattr(imu, "window"):
         cut = ImuCut(imu, k, s.gyro_bias_rps, t0)
     else:
-        t = imu.time_s[k:]
-        dth = imu.dtheta_b[k:] - s.gyro_bias_rps * np.diff(t)[:, None]
-        cut = ImuData(time_s=t, dtheta_b=dth, dv_b=imu.dv_b[k:], meta=dict(imu.meta))
+        cut = without_gyro_bias(ImuData(time_s=imu.time_s[k:], dtheta_b=imu.dtheta_b[k:],
+                                        dv_b=imu.dv_b[k:], meta=imu.meta), s.gyro_bias_rps)
     q_bn = attitude.euler_to_quat(s.att)
     # the fixes are the antenna's; the state is the IMU's
     l_n = attitude.quat_to_dcm(q_bn) @ np.asarray(lever_arm_b, float)

@@ -23,6 +23,7 @@ from fuzzynav.realdata.loaders.imu_file import SCAN_BYTES_PER_LINE, ImuCut, ImuF
 from fuzzynav.realdata.loaders.rtklib import load_rtklib
 from fuzzynav.realdata.session import start_from
 from fuzzynav.realdata.sources import MOUNTINGS_DIR
+from fuzzynav.realdata.start_options import StartOptions
 from fuzzynav.realdata.validate import validate
 from fuzzynav.sim.segments import Segment
 from tests.realdata.rtklib_files import DRIVE_SEGMENTS, write_drive
@@ -50,7 +51,8 @@ def _same(a, b):
 
 
 @pytest.mark.parametrize("kw", [{}, {"resample_hz": None}, {"span_s": (3.0, 50.0)},
-                                {"resample_hz": 50.0}], ids=["grid", "samples", "span", "50hz"])
+                                {"resample_hz": 50.0}, {"imu_delay_s": 0.3}],
+                         ids=["grid", "samples", "span", "50hz", "delay"])
 @pytest.mark.parametrize("rows", [977, None])
 def test_the_increments_read_again_are_the_held_loads_to_the_bit(drive, kw, rows):
     held = load_rtklib(drive, chunk_rows=rows, mounting=None, **kw)
@@ -89,12 +91,14 @@ def test_with_a_mounting_the_increments_agree_within_rounding(drive):
                                    atol=1e-13 * np.abs(getattr(held.imu, f)).max())
 
 
-def test_the_start_holds_the_opening_and_cuts_as_the_held_start(long_drive):
+@pytest.mark.parametrize("options", [None, StartOptions(window_s=80.0, heading="track")],
+                         ids=["default", "options"])
+def test_the_start_holds_the_opening_and_cuts_as_the_held_start(long_drive, options):
     held = load_rtklib(long_drive, mounting=None)
     rec = load_rtklib(long_drive, mounting=None, streamed=True)
-    until = coarse_align.reads_until_s(rec.imu.span_s, rec.gnss)
+    until = coarse_align.reads_until_s(rec.imu.span_s, rec.gnss, options)
     assert until < rec.imu.span_s[1] - 5.0  # the drive moves: not all of it is held
-    a, b = (start_from(r.imu, r.gnss, False) for r in (held, rec))
+    a, b = (start_from(r.imu, r.gnss, False, options=options) for r in (held, rec))
     assert isinstance(b.imu, ImuCut) and b.imu.span_s == a.imu.span_s
     assert b.imu.n_samples == a.imu.n_samples
     assert a.init.time_s == b.init.time_s

@@ -28,7 +28,8 @@ from fuzzynav.realdata.loaders.imu_csv import parsed_blocks
 from fuzzynav.realdata.loaders.increments import RateIntegrator
 from fuzzynav.sim.imu import ImuData
 
-__all__ = ["SCAN_BYTES_PER_LINE", "body_rates", "RowTimes", "ImuFile", "ImuCut"]
+__all__ = ["SCAN_BYTES_PER_LINE", "body_rates", "RowTimes", "ImuFile", "ImuCut",
+           "without_gyro_bias"]
 
 #: peak memory per line of the CSV of a streamed load beyond its parse block [bytes]: the
 #: ticks (8), the lines' lengths and indices (4 + 4) held for the clock fits, and the fits'
@@ -308,5 +309,11 @@ class ImuCut:
     def chunks(self, samples: int):
         """Yield ImuData chunks of ``samples`` increments, the bias removed."""
         for c in self.source.chunks(samples, self.start):
-            dth = c.dtheta_b - self.gyro_bias_rps * np.diff(c.time_s)[:, None]
-            yield ImuData(c.time_s, dth, c.dv_b)
+            yield without_gyro_bias(c, self.gyro_bias_rps)
+
+
+def without_gyro_bias(imu: ImuData, gyro_bias_rps) -> ImuData:
+    """``imu`` with a constant gyro bias [rad/s] removed from its angle increments
+    (``dtheta - bias * dt``: per increment, so a chunk's is the whole run's slice)."""
+    dth = imu.dtheta_b - gyro_bias_rps * np.diff(imu.time_s)[:, None]
+    return ImuData(time_s=imu.time_s, dtheta_b=dth, dv_b=imu.dv_b, meta=dict(imu.meta))
