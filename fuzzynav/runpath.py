@@ -5,8 +5,9 @@ Every way of running a filter on data goes through :func:`run` — a simulated l
 protocol (:class:`fuzzynav.realdata.session.GnssSource`), an A-KIT trajectory
 (:class:`fuzzynav.realdata.akit.AkitSource`), a window of either as a study run
 (:mod:`fuzzynav.realdata.studyruns`), a start behind an alignment
-(:class:`fuzzynav.align.chain.AlignedSource`) and the free inertial run ALS fits its noise
-on.  :func:`run` is the only caller of :func:`fuzzynav.filters.runner.run_filter` outside
+(:class:`fuzzynav.align.chain.AlignedSource`), a scenario simulated chunk by chunk
+(:class:`fuzzynav.streamrun.StreamedSource`, with or without an alignment ahead) and the
+free inertial run ALS fits its noise on.  :func:`run` is the only caller of :func:`fuzzynav.filters.runner.run_filter` outside
 ``filters/``, so what holds for one source holds for all:
 
 * ``NAME@FILE[+FILE]`` filter specs are resolved (the rule or parameter files become the
@@ -204,24 +205,29 @@ def run(source: Source, filter_spec: str, options=None,
     if inp.from_s is not None:
         sensors = {nm: start_cut(d, inp.from_s) for nm, d in sensors.items()}
     config = inp.config or setup.config
+    feed = inp.imu
+    # a feed whose chunks bring their own truth scores them itself, always chunk by chunk
+    scoring = feed if hasattr(feed, "score_streamed") else source
     keep, scorer = 1, None
     if output_rate_hz is not None:
         keep = keep_every(config.out_rate_hz, output_rate_hz)
-        if not hasattr(source, "streaming_scorer"):
+        if not hasattr(scoring, "streaming_scorer"):
             raise OutputRateError(f"{source.KIND} score their whole result, so their "
                                   "output cannot be decimated")
-        scorer = source.streaming_scorer()
-    if hasattr(inp.imu, "chunks") and chunk_samples is None:  # read from a file
+    if output_rate_hz is not None or scoring is feed:
+        scorer = scoring.streaming_scorer()
+    if hasattr(feed, "chunks") and chunk_samples is None:  # read from a file
         chunk_samples = DEFAULT_CHUNK_SAMPLES
-    _check_outputs(source, inp.imu, sensors, config, keep, chunk_samples)
-    res = run_filter(inp.imu, sensors, inp.init, config, setup.adapters,
+    _check_outputs(source, feed, sensors, config, keep, chunk_samples)
+    res = run_filter(feed, sensors, inp.init, config, setup.adapters,
                      _merged(setup.sensor_options, inp.sensor_options),
                      chunk_samples=chunk_samples, keep_every=keep,
                      on_chunk=None if scorer is None else scorer.add_result)
-    metrics = source.score(res) if scorer is None else source.score_streamed(res, scorer)
+    metrics = source.score(res) if scorer is None else scoring.score_streamed(res, scorer)
     metrics["completed"] = float(res.ok)
     return RunOutcome(filter_spec, source.name, int(source.seed), res, metrics,
-                      nonfinite(source, metrics))
+                      nonfinite(source, metrics), feed.trace() if hasattr(feed, "trace")
+                      else None)
 
 
 def _check_outputs(source, imu, sensors: dict, config, keep: int, chunk_samples) -> None:

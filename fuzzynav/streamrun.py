@@ -2,9 +2,10 @@
 
 :func:`run_streamed` simulates ``(scenario, seed)`` in chunks
 (:class:`fuzzynav.sim.stream.SimulatedChunks`; or cuts its cached whole log alike,
-:class:`fuzzynav.sim.log_chunks.LogChunks`) and feeds each to one
-:class:`~fuzzynav.filters.runner.FilterRun` with that chunk's epochs
-(``events_per_chunk``), scoring each chunk's outputs against its truth as it goes
+:class:`fuzzynav.sim.log_chunks.LogChunks`) as a run source, :class:`StreamedSource`, and
+runs it through the one run path, :func:`fuzzynav.runpath.run`, as every other source:
+its chunk feed brings each chunk's epochs to the compiled loop (``events_per_chunk``) and
+scores each chunk's outputs against that chunk's truth as it goes
 (:class:`~fuzzynav.metrics.StreamingRms`).  Nothing of the run's length is held but the
 kept (decimated) outputs, the epoch indices of the streams simulated whole and, in a short
 run (:data:`fuzzynav.sim.budget.TRUTH_STORE_BYTES`), its truth or cached log; the event
@@ -25,15 +26,13 @@ from types import SimpleNamespace
 import numpy as np
 
 from fuzzynav.errors import FuzzynavError
-from fuzzynav.filters.runner import FilterRun
 from fuzzynav.filters.sensor_tables import concat_event_logs
 from fuzzynav.fileio import write_npz
 from fuzzynav.metrics import StreamingRms
 from fuzzynav.metrics_rscale import KIND as USAGE_KIND, usage_metrics
 from fuzzynav.metrics_segments import for_scenario
-from fuzzynav.runpath import RunOutcome, keep_every, make_setup, nonfinite
+from fuzzynav.runpath import RunInputs, make_setup, run
 from fuzzynav.sim import budget
-from fuzzynav.sim.sensors import SensorData
 from fuzzynav.sim.log_chunks import LogChunks, chunks_of
 from fuzzynav.sim.stream import SimulatedChunks
 from fuzzynav.simsource import OnSimulatedLog, perturbed_initial_state
@@ -46,18 +45,130 @@ DEFAULT_CHUNK_SAMPLES = budget.DEFAULT_CHUNK_SAMPLES
 
 
 class StreamedSource(OnSimulatedLog):
-    """What named filters configure themselves from on a streamed simulation: the scenario's
-    IMU figures and the first chunk's streams (their kinds and constant ``meta``)."""
+    """A scenario simulated chunk by chunk as a run source (:mod:`fuzzynav.runpath`).
 
-    def __init__(self, chunks: SimulatedChunks | LogChunks):
+    What named filters configure themselves from are the scenario's IMU figures and the
+    first chunk's streams (their kinds and constant ``meta``).  :meth:`inputs` makes one
+    run's chunk feed (:class:`_Feed`): it iterates ``chunks`` (once), so a source serves
+    one run.
+
+    Parameters
+    ----------
+    chunks : SimulatedChunks or LogChunks
+    t_start_s : float
+        Scoring starts here.
+    start : callable, optional
+        ``start(chunks, setup) -> Start`` (:func:`run_streamed`).
+    segments : bool
+        Score each motion segment of the scenario too.
+    output_rate_hz : float, optional
+        The kept outputs' rate, for the trace's thinned event logs.
+    output_dir : path-like, optional
+        Write each chunk's kept outputs and event logs there.
+    keep_events : bool
+        Keep the chunks' event logs in the result.
+    trace : bool
+        Keep the kept outputs' errors and thinned event logs for figures.
+    """
+
+    def __init__(self, chunks: SimulatedChunks | LogChunks, t_start_s: float = 0.0,
+                 start=None, segments: bool = False, output_rate_hz: float | None = None,
+                 output_dir=None, keep_events: bool = False, trace: bool = False):
         self.chunks = chunks
         self.log = SimpleNamespace(scenario=chunks.scenario, seed=chunks.seed,
                                    sensors=chunks.header)
+        self.t_start_s, self.start, self.segments = float(t_start_s), start, bool(segments)
+        self.output_rate_hz, self.keep_events, self.trace = output_rate_hz, keep_events, trace
+        self.output_dir = None if output_dir is None else Path(output_dir)
 
     @property
     def sensors(self) -> dict:
         """The streams filters configure themselves from (their kinds and ``meta``)."""
         return self.log.sensors
+
+    def inputs(self, setup) -> RunInputs:
+        """The run's chunk feed, its start (the truth plus an error from P0, or ``start``'s)
+        and the first chunk's streams."""
+        feed = _Feed(self, setup)
+        return RunInputs(feed, self.chunks.header, feed.init, config=feed.config)
+
+
+class _Feed:
+    """One streamed run's chunks as :func:`~fuzzynav.filters.runner.run_filter` takes a
+    feed whose chunks bring their own epochs, and what it keeps per chunk: the scorer's
+    truth, the magnetometer usage, the trace and the ``--output-dir`` files."""
+
+    events_per_chunk = True
+
+    def __init__(self, source: StreamedSource, setup):
+        chunks = source.chunks
+        stream, self.begun = iter(chunks), None
+        if source.start is not None:
+            self.begun = source.start(stream, setup)
+            stream = itertools.chain(self.begun.pieces, stream)
+        first = next(stream)
+        self._stream = itertools.chain([first], stream)
+        self.init = self.begun.init if self.begun is not None else perturbed_initial_state(
+            SimpleNamespace(seed=chunks.seed, truth=first.truth), setup)
+        self.config = None if self.begun is None else self.begun.config
+        self.dt_nom_s = float(np.median(np.diff(first.imu.time_s))) \
+            if first.k1 > first.k0 else 0.01
+        self.n_samples, self.chunk_samples = chunks.n_samples, chunks.chunk_samples
+        self.span_s = (chunks.grid.t0_s, chunks.grid.t_end_s)
+        self.source, self.setup, self.keep_events = source, setup, source.keep_events
+        header = setup.sensors_for(chunks.header)
+        self.names = sorted(header)
+        self.usage = _Usage([nm for nm in self.names if header[nm].kind == USAGE_KIND
+                             and "deflection_rad" in header[nm].meta][:1])
+        self.scorer = StreamingRms(source.t_start_s, None, for_scenario(
+            chunks.scenario, source.t_start_s) if source.segments else None)
+        self.tracer = StreamTrace(source.output_rate_hz) if source.trace else None
+        self._chunk = self._logs = None
+        self._i = -1
+
+    def chunks(self, n: int):
+        """The run's chunks as ``(imu, epochs)``, the scorer's truth set to each's."""
+        if n != self.chunk_samples:
+            raise ValueError(f"the chunks are of {self.chunk_samples} samples, not {n}")
+        for self._i, ch in enumerate(self._stream):
+            self._chunk = ch
+            self.scorer.truth = ch.truth
+            sensors = self.setup.sensors_for(ch.sensors)
+            self.usage.add_chunk(sensors)
+            yield ch.imu, {nm: sensors[nm] for nm in self.names}
+
+    def on_events(self, logs: dict) -> None:
+        """A chunk's event logs, from the filter."""
+        self.usage.add_events(logs)
+        self._logs = logs
+
+    def chunk_fed(self, kept) -> None:
+        """After each chunk: its kept outputs (``kept()``) traced and written, if asked."""
+        out_dir = self.source.output_dir
+        if self.tracer is None and out_dir is None:
+            return
+        got = kept()
+        if self.tracer is not None:
+            self.tracer.add_chunk(got, self._chunk.truth, self._logs)
+        if out_dir is not None:
+            write_npz(out_dir / f"chunk-{self._i:06d}.npz", _output_arrays(got, self._logs),
+                      "streamed run output (--output-dir)")
+
+    def streaming_scorer(self) -> StreamingRms:
+        """The scorer the chunks set their truth on."""
+        return self.scorer
+
+    def score_streamed(self, result, scorer: StreamingRms) -> dict:
+        """The streamed error metrics, the magnetometer usage and the start's metrics."""
+        metrics = scorer.metrics()
+        metrics.update(self.usage.metrics())
+        if self.begun is not None:
+            metrics.update(self.begun.metrics)
+        return metrics
+
+    def trace(self):
+        """The run's :class:`~fuzzynav.streamtrace.Trace`, or ``None`` when not asked."""
+        return None if self.tracer is None else self.tracer.trace()
 
 
 def _output_arrays(result, logs: dict) -> dict:
@@ -177,62 +288,13 @@ def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None
         A filter told per-epoch sigmas of the whole run (``ekf-true``), or an output rate
         that does not divide the filter's.
     """
-    chunks = chunks_of(scenario, seed, chunk_samples, cache_dir)
-    source = StreamedSource(chunks)
+    source = StreamedSource(chunks_of(scenario, seed, chunk_samples, cache_dir), t_start_s,
+                            start, segments, output_rate_hz, output_dir, keep_events, trace)
     setup = setup or make_setup(source, filter_spec, options)
     if setup.sigma_override:
         raise FuzzynavError(f"{filter_spec}: told each epoch's sigma of the whole run "
                             f"({', '.join(sorted(setup.sigma_override))}); a streamed run "
                             "has its epochs one chunk at a time (run without --output-rate/"
                             "--chunk)")
-    stream, begun = iter(chunks), None
-    if start is not None:
-        begun = start(stream, setup)
-        stream = itertools.chain(begun.pieces, stream)
-    config = setup.config if begun is None else begun.config
-    keep = 1 if output_rate_hz is None else keep_every(config.out_rate_hz, output_rate_hz)
-    header = setup.sensors_for(chunks.header)
-    names = sorted(header)
-    scorer = StreamingRms(t_start_s, None,
-                          for_scenario(scenario, t_start_s) if segments else None)
-    usage = _Usage([nm for nm in names if header[nm].kind == USAGE_KIND
-                    and "deflection_rad" in header[nm].meta][:1])
-    out_dir = None if output_dir is None else Path(output_dir)
-    pending = {}
-    tracer = StreamTrace(output_rate_hz) if trace else None
-
-    def on_events(logs):
-        usage.add_events(logs)
-        pending["logs"] = logs
-
-    first = True
-    fr = None
-    for i, ch in enumerate(stream):
-        if first:
-            init = begun.init if begun is not None else perturbed_initial_state(
-                SimpleNamespace(seed=chunks.seed, truth=ch.truth), setup)
-            dt_nom = float(np.median(np.diff(ch.imu.time_s))) if ch.k1 > ch.k0 else 0.01
-            fr = FilterRun(header, init, config, setup.adapters,
-                           setup.sensor_options, dt_nom, keep,
-                           on_chunk=scorer.add_result, events_per_chunk=True,
-                           on_events=on_events, keep_events=keep_events)
-            first = False
-        scorer.truth = ch.truth
-        sensors = setup.sensors_for(ch.sensors)
-        usage.add_chunk(sensors)
-        fr.feed_arrays(np.ascontiguousarray(ch.imu.time_s), np.ascontiguousarray(ch.imu.dtheta_b),
-                       np.ascontiguousarray(ch.imu.dv_b), {nm: sensors[nm] for nm in names})
-        kept = fr.kept() if tracer is not None or out_dir is not None else None
-        if tracer is not None:
-            tracer.add_chunk(kept, ch.truth, pending["logs"])
-        if out_dir is not None:
-            write_npz(out_dir / f"chunk-{i:06d}.npz", _output_arrays(kept, pending["logs"]),
-                      "streamed run output (--output-dir)")
-    res = fr.result()
-    metrics = scorer.metrics()
-    metrics.update(usage.metrics())
-    if begun is not None:
-        metrics.update(begun.metrics)
-    metrics["completed"] = float(res.ok)
-    return RunOutcome(filter_spec, scenario.name, chunks.seed, res, metrics,
-                      nonfinite(source, metrics), None if tracer is None else tracer.trace())
+    return run(source, filter_spec, setup=setup, chunk_samples=chunk_samples,
+               output_rate_hz=output_rate_hz)

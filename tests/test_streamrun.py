@@ -95,6 +95,18 @@ def test_an_oracle_told_the_whole_runs_noise_is_refused():
         run_streamed(short("paper004", 20.0), 0, "ekf-true", chunk_samples=100)
 
 
+
+def test_a_streamed_run_passes_the_run_paths_output_check(monkeypatch):
+    """The streamed run goes through runpath.run: its kept outputs are sized before it
+    runs, decimated ones as decimated (60 s of the 10-Hz filter: 600 rows, at 1 Hz 60)."""
+    scn = short("paper003", 60.0)
+    monkeypatch.setenv(budget.ENV_VAR, "1e-6")  # 1 kiB: nothing fits
+    for rate, rows in ((None, "600"), (1.0, "60")):
+        with pytest.raises(InputFileError, match=f"its {rows} kept outputs and "):
+            run_streamed(scn, 0, "ekf", chunk_samples=500, output_rate_hz=rate)
+    monkeypatch.delenv(budget.ENV_VAR)
+    assert run_streamed(scn, 0, "ekf", chunk_samples=500).metrics["completed"] == 1.0
+
 #: a cruise with a ship's log at the IMU's rate (one epoch a sample)
 RUN = BUDGET_RUN.replace('[sensors.gps]\nkind = "gnss"', '[sensors.log]\nkind = "log"\n'
                          'rate_hz = {rate}')

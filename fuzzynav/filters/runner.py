@@ -76,7 +76,13 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
         objects of ``n`` increments each, consecutive, and ``dt_nom_s``, the nominal
         interval [s] (a recording read from its file,
         :class:`~fuzzynav.realdata.loaders.imu_file.ImuCut`), which needs
-        ``chunk_samples``.
+        ``chunk_samples``.  A feed whose chunks bring their own epochs (a simulation made
+        chunk by chunk, :class:`fuzzynav.streamrun.StreamedSource`) has
+        ``events_per_chunk = True``: its ``chunks(n)`` yields ``(imu, sensors)`` pairs (the
+        streams' epochs of that chunk, :meth:`FilterRun.feed_arrays`), ``sensors`` are then
+        the streams' first epochs (their kinds, constants and row layout), and it takes
+        ``on_events(logs)`` (each chunk's event logs), ``keep_events`` (keep them in the
+        result) and ``chunk_fed(kept)`` after each chunk (``kept()``: its kept outputs).
     sensors : mapping name -> SensorData
         Aiding measurements; each kind needs a registered measurement model.
     init : InitialState
@@ -102,10 +108,19 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
         if chunk_samples is None or int(chunk_samples) < 1:
             raise FuzzynavError("increments made chunk by chunk need chunk_samples >= 1, "
                                 f"got {chunk_samples}")
+        own = bool(getattr(imu, "events_per_chunk", False))
         fr = FilterRun(sensors, init, config, adapters, sensor_options, imu.dt_nom_s,
-                       keep_every, on_chunk)
+                       keep_every, on_chunk, events_per_chunk=own,
+                       on_events=imu.on_events if own else None,
+                       keep_events=imu.keep_events if own else True)
         for piece in imu.chunks(int(chunk_samples)):
-            fr.feed(piece)
+            if not own:
+                fr.feed(piece)
+                continue
+            part, epochs = piece
+            fr.feed_arrays(np.ascontiguousarray(part.time_s), np.ascontiguousarray(
+                part.dtheta_b), np.ascontiguousarray(part.dv_b), epochs)
+            imu.chunk_fed(fr.kept)
         return fr.result()
     time_s, dth, dv, dt_nom = _imu_arrays(imu)
     fr = FilterRun(sensors, init, config, adapters, sensor_options, dt_nom, keep_every,
