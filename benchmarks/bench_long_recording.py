@@ -231,8 +231,10 @@ def render(rows, load0, load1) -> str:
               "at the clock fits' peak, `imu_file.SCAN_BYTES_PER_LINE`) and returns no IMU "
               "array; what the run then adds with the recording's length is its GNSS rate, "
               "not its IMU rate: the 4-Hz fixes and reference, their degraded copies, each "
-              "feed's event logs and its errors at the reference epochs (about 20 and 45 "
-              "bytes per IMU line at 100 Hz, measured with tracemalloc). The price is time: "
+              "feed's errors at the reference epochs and its kept rows (about 20 and 26 "
+              "bytes per IMU line at 100 Hz, measured with tracemalloc; the filter's event "
+              "logs are made and let go chunk by chunk, `chunk_feed.EpochsByChunk`, where "
+              "they were 8 more). The price is time: "
               "the CSV is parsed five times (the load's timing, physics and gyro-scale "
               "checks, and each feed's run)."]
     return "\n".join(lines)

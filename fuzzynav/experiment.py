@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 
 from fuzzynav.errors import FuzzynavError, UnknownNameError
+from fuzzynav.filters.chunk_files import run_files
 from fuzzynav.filters.named import FilterContext, FilterSetup
 from fuzzynav.metrics import (StreamingRms, errors_vs_trajectory, improvement_ci, mean_ci,
                               rms_metrics)
@@ -46,7 +47,7 @@ class SimulatedSource(OnSimulatedLog):
 
     # the streaming options of fuzzynav run apply to a simulated log (its truth scores
     # chunk by chunk)
-    SETTINGS = OnSimulatedLog.SETTINGS | {"output_rate", "chunk"}
+    SETTINGS = OnSimulatedLog.SETTINGS | {"output_rate", "chunk", "output_dir"}
 
     def score(self, result) -> dict:
         err = errors_vs_trajectory(result, self.log.truth)
@@ -199,13 +200,10 @@ def streamed_run(scn, seed, name, opts, t_start_s, streaming, cache_dir,
     rate and output directory, one sub-directory per filter and seed; ``cache_dir``: read,
     never written; ``setup``: a configuration made elsewhere, e.g. on
     :func:`streamed_source`; ``segments``: scored per motion segment too)."""
-    from fuzzynav.fileio import safe_stem
     from fuzzynav.streamrun import DEFAULT_CHUNK_SAMPLES, run_streamed
 
-    kw = dict(streaming)
+    kw = run_files(streaming, name, seed)
     out_dir = kw.pop("output_dir", None)
-    if out_dir is not None:
-        out_dir = f"{out_dir}/{safe_stem(name)}-seed{int(seed)}"
     return run_streamed(scn, seed, name, opts, chunk_samples=kw.pop(
         "chunk_samples", DEFAULT_CHUNK_SAMPLES), t_start_s=t_start_s, output_dir=out_dir,
         cache_dir=cache_dir, setup=setup, segments=segments, **kw)

@@ -35,6 +35,7 @@ from typing import Protocol
 
 import numpy as np
 
+from fuzzynav.chunk_feed import EpochsByChunk
 from fuzzynav.errors import FuzzynavError, OutputRateError, RunDivergedError
 from fuzzynav.filters.named import FilterContext, FilterSetup, get_filter, parse_filter_spec
 from fuzzynav.filters.runner import InitialState, run_filter
@@ -168,8 +169,14 @@ def start_cut(data, t0: float):
 
 def run(source: Source, filter_spec: str, options=None,
         setup: FilterSetup | None = None, chunk_samples: int | None = None,
-        output_rate_hz: float | None = None) -> RunOutcome:
+        output_rate_hz: float | None = None, output_dir=None) -> RunOutcome:
     """Run one named filter (or an explicit ``setup``) on a source and score it.
+
+    A source whose IMU is read from its file chunk by chunk (increments with ``chunks``)
+    is also given its streams' epochs a chunk at a time
+    (:class:`~fuzzynav.chunk_feed.EpochsByChunk`): its event logs are not held (they go
+    to ``output_dir``, or are dropped), so its memory grows with the streams' epochs only,
+    not with the logs the filter makes of them.
 
     Parameters
     ----------
@@ -192,12 +199,15 @@ def run(source: Source, filter_spec: str, options=None,
         ``streaming_scorer()``, :class:`~fuzzynav.metrics.StreamingRms`, finished by its
         ``score_streamed(result, scorer)``), so they are those of the undecimated run
         up to the order of summation; a source without a ``scorer`` refuses it.
+    output_dir : path-like, optional
+        Write each chunk's kept outputs and event logs there (``--output-dir``;
+        :mod:`fuzzynav.filters.chunk_files`): for a source made or read chunk by chunk.
 
     Raises
     ------
     FuzzynavError
-        An output rate that does not divide the filter's, or a source that cannot score
-        chunk by chunk.
+        An output rate that does not divide the filter's, a source that cannot score
+        chunk by chunk, or ``output_dir`` for a run on held data.
     """
     setup = setup or make_setup(source, filter_spec, options)
     inp = source.inputs(setup)
@@ -219,10 +229,14 @@ def run(source: Source, filter_spec: str, options=None,
     if hasattr(feed, "chunks") and chunk_samples is None:  # read from a file
         chunk_samples = DEFAULT_CHUNK_SAMPLES
     _check_outputs(source, feed, sensors, config, keep, chunk_samples)
+    if hasattr(feed, "chunks") and not getattr(feed, "events_per_chunk", False):
+        feed = EpochsByChunk(feed, sensors)
+        sensors = feed.header
     res = run_filter(feed, sensors, inp.init, config, setup.adapters,
                      _merged(setup.sensor_options, inp.sensor_options),
                      chunk_samples=chunk_samples, keep_every=keep,
-                     on_chunk=None if scorer is None else scorer.add_result)
+                     on_chunk=None if scorer is None else scorer.add_result,
+                     output_dir=output_dir)
     metrics = source.score(res) if scorer is None else scoring.score_streamed(res, scorer)
     metrics["completed"] = float(res.ok)
     return RunOutcome(filter_spec, source.name, int(source.seed), res, metrics,
@@ -344,6 +358,7 @@ RUN_SETTINGS = {
     "span": "stretch of the recording used [s]",
     "output_rate": "rate of the kept recorded solution [Hz] (metrics streamed)",
     "chunk": "IMU seconds per chunk of the compiled loop",
+    "output_dir": "files of each chunk's kept solution and event logs",
 }
 
 #: the run settings of a streaming run (:func:`run`'s ``output_rate_hz`` and

@@ -20,14 +20,12 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass
-from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.filters.sensor_tables import concat_event_logs
-from fuzzynav.fileio import write_npz
 from fuzzynav.metrics import StreamingRms
 from fuzzynav.metrics_rscale import KIND as USAGE_KIND, usage_metrics
 from fuzzynav.metrics_segments import for_scenario
@@ -63,8 +61,6 @@ class StreamedSource(OnSimulatedLog):
         Score each motion segment of the scenario too.
     output_rate_hz : float, optional
         The kept outputs' rate, for the trace's thinned event logs.
-    output_dir : path-like, optional
-        Write each chunk's kept outputs and event logs there.
     keep_events : bool
         Keep the chunks' event logs in the result.
     trace : bool
@@ -73,13 +69,12 @@ class StreamedSource(OnSimulatedLog):
 
     def __init__(self, chunks: SimulatedChunks | LogChunks, t_start_s: float = 0.0,
                  start=None, segments: bool = False, output_rate_hz: float | None = None,
-                 output_dir=None, keep_events: bool = False, trace: bool = False):
+                 keep_events: bool = False, trace: bool = False):
         self.chunks = chunks
         self.log = SimpleNamespace(scenario=chunks.scenario, seed=chunks.seed,
                                    sensors=chunks.header)
         self.t_start_s, self.start, self.segments = float(t_start_s), start, bool(segments)
         self.output_rate_hz, self.keep_events, self.trace = output_rate_hz, keep_events, trace
-        self.output_dir = None if output_dir is None else Path(output_dir)
 
     @property
     def sensors(self) -> dict:
@@ -124,13 +119,12 @@ class _Feed:
             chunks.scenario, source.t_start_s) if source.segments else None)
         self.tracer = StreamTrace(source.output_rate_hz) if source.trace else None
         self._chunk = self._logs = None
-        self._i = -1
 
     def chunks(self, n: int):
         """The run's chunks as ``(imu, epochs)``, the scorer's truth set to each's."""
         if n != self.chunk_samples:
             raise ValueError(f"the chunks are of {self.chunk_samples} samples, not {n}")
-        for self._i, ch in enumerate(self._stream):
+        for ch in self._stream:
             self._chunk = ch
             self.scorer.truth = ch.truth
             sensors = self.setup.sensors_for(ch.sensors)
@@ -143,16 +137,9 @@ class _Feed:
         self._logs = logs
 
     def chunk_fed(self, kept) -> None:
-        """After each chunk: its kept outputs (``kept()``) traced and written, if asked."""
-        out_dir = self.source.output_dir
-        if self.tracer is None and out_dir is None:
-            return
-        got = kept()
+        """After each chunk: its kept outputs (``kept()``) traced, if asked."""
         if self.tracer is not None:
-            self.tracer.add_chunk(got, self._chunk.truth, self._logs)
-        if out_dir is not None:
-            write_npz(out_dir / f"chunk-{self._i:06d}.npz", _output_arrays(got, self._logs),
-                      "streamed run output (--output-dir)")
+            self.tracer.add_chunk(kept(), self._chunk.truth, self._logs)
 
     def streaming_scorer(self) -> StreamingRms:
         """The scorer the chunks set their truth on."""
@@ -169,18 +156,6 @@ class _Feed:
     def trace(self):
         """The run's :class:`~fuzzynav.streamtrace.Trace`, or ``None`` when not asked."""
         return None if self.tracer is None else self.tracer.trace()
-
-
-def _output_arrays(result, logs: dict) -> dict:
-    """A chunk's kept outputs and event logs as flat ``npz`` arrays."""
-    out = {"time_s": result.time_s, "lla": result.lla, "vel_n": result.vel_n,
-           "q_bn": result.q_bn, "sigma": result.sigma, "sensor_states": result.sensor_states,
-           "state_labels": np.array(result.state_labels, dtype=str)}
-    for nm, ev in logs.items():
-        out.update({f"events.{nm}.{f}": getattr(ev, f)
-                    for f in ("time_s", "residual", "S_diag", "nis", "flag", "diag")})
-        out[f"events.{nm}.diag_names"] = np.array(ev.diag_names, dtype=str)
-    return out
 
 
 @dataclass(frozen=True)
@@ -289,7 +264,7 @@ def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None
         that does not divide the filter's.
     """
     source = StreamedSource(chunks_of(scenario, seed, chunk_samples, cache_dir), t_start_s,
-                            start, segments, output_rate_hz, output_dir, keep_events, trace)
+                            start, segments, output_rate_hz, keep_events, trace)
     setup = setup or make_setup(source, filter_spec, options)
     if setup.sigma_override:
         raise FuzzynavError(f"{filter_spec}: told each epoch's sigma of the whole run "
@@ -297,4 +272,4 @@ def run_streamed(scenario, seed: int, filter_spec: str, options=None, setup=None
                             "has its epochs one chunk at a time (run without --output-rate/"
                             "--chunk)")
     return run(source, filter_spec, setup=setup, chunk_samples=chunk_samples,
-               output_rate_hz=output_rate_hz)
+               output_rate_hz=output_rate_hz, output_dir=output_dir)

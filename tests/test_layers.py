@@ -27,7 +27,8 @@ ALLOWED = {
     "metrics_rscale": set(),  # the metrics layer: usage of a sensor's R
     "metrics_segments": {"metrics"},  # the metrics layer: errors per motion segment
     "report": {"metrics"},
-    "runpath": {"filters", "sim"},  # sim.budget: the memory a run's outputs need
+    "runpath": {"filters", "sim", "chunk_feed"},  # sim.budget: the memory a run's outputs need
+    "chunk_feed": {"sim"},  # sim.stream.epochs_between: a chunk's epochs as a simulation's
     "experiment": {"runpath", "filters", "sim", "metrics", "metrics_rscale", "metrics_segments", "nav", "simsource",
                    "streamrun"},
     # a simulated log as a run source (context, initial error): whole or streamed

@@ -90,6 +90,17 @@ def test_output_dir_holds_every_chunk(tmp_path):
         assert z["events.log.nis"].shape == ev_t.shape
 
 
+
+def test_chunk_files_of_a_run_on_held_data_are_refused(tmp_path):
+    """A held log's event logs are made whole, not per chunk: no chunk files of them."""
+    from fuzzynav.experiment import SimulatedSource
+    from fuzzynav.runpath import run
+
+    log = simulate(short("paper003", 30.0), 0)
+    with pytest.raises(FuzzynavError, match="not for a held one"):
+        run(SimulatedSource(log), "ekf", chunk_samples=500, output_dir=tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+
 def test_an_oracle_told_the_whole_runs_noise_is_refused():
     with pytest.raises(FuzzynavError, match="ekf-true: told each epoch's sigma"):
         run_streamed(short("paper004", 20.0), 0, "ekf-true", chunk_samples=100)

@@ -97,7 +97,9 @@ def add_streaming_arguments(p) -> None:
                    help="write each chunk's kept solution (at --output-rate) and its event "
                         "logs (innovations, S, NIS, flags, adaptation traces) to "
                         "DIR/FILTER-seedK/chunk-NNNNNN.npz (each written to a temporary "
-                        "file, then renamed)")
+                        "file, then renamed); on an rtklib recording (read from its file) "
+                        "DIR/FILTER-seedK/FEED/chunk-NNNNNN.npz for each feed of the "
+                        "protocol (gnss, outages)")
 
 
 def streaming_options(args, imu_rate_hz: float) -> dict:
@@ -226,9 +228,6 @@ def _cmd_run(args) -> int:
     if args.align:
         refuse_segments(args, "not with --align (the navigation starts inside the first "
                               "segment, at the alignment's end)")
-    if args.data and getattr(args, "output_dir", None):
-        raise FuzzynavError("--output-dir: only with a simulated SCENARIO (a recording's "
-                            "run is streamed with --output-rate, its chunks not written)")
     check_rules(args, [args.filter], "--filter")
     if args.data:
         from fuzzynav.realdata.cli import run_recording

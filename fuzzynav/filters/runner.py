@@ -10,6 +10,7 @@ from fuzzynav.errors import FuzzynavError
 from fuzzynav.filters import adaptation
 from fuzzynav.filters.adaptation import N_DIAG, context
 from fuzzynav.filters.bank_beta import share_control
+from fuzzynav.filters.chunk_files import ChunkFiles
 from fuzzynav.filters.config import FilterConfig
 from fuzzynav.filters.error_st import EM_ST, error_model_code, st_covariance
 from fuzzynav.filters.layout import N_CORE
@@ -64,7 +65,7 @@ def _imu_arrays(imu):
 
 def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterConfig(),
                adapters=None, sensor_options=None, chunk_samples: int | None = None,
-               keep_every: int = 1, on_chunk=None) -> FilterResult:
+               keep_every: int = 1, on_chunk=None, output_dir=None) -> FilterResult:
     """Run the closed-loop error-state filter.
 
     Parameters
@@ -99,16 +100,30 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
         Keep every ``keep_every``-th recorded output (:class:`FilterRun`).
     on_chunk : callable, optional
         Called with each chunk's :class:`FilterResult` before it is decimated.
+    output_dir : path-like, optional
+        Write each chunk's kept outputs and event logs there
+        (:mod:`~fuzzynav.filters.chunk_files`); only for a feed whose chunks bring their
+        own epochs (the event logs are then a chunk's).
 
     Returns
     -------
     FilterResult
+
+    Raises
+    ------
+    FuzzynavError
+        ``output_dir`` for a run whose event logs are not made chunk by chunk.
     """
+    own = bool(getattr(imu, "events_per_chunk", False))
+    if output_dir is not None and not own:
+        raise FuzzynavError("chunk files (output_dir) are written for a run whose chunks "
+                            "bring their own epochs only (streamed from its simulation or "
+                            "its file), not for a held one")
+    files = None if output_dir is None else ChunkFiles(output_dir)
     if hasattr(imu, "chunks"):
         if chunk_samples is None or int(chunk_samples) < 1:
             raise FuzzynavError("increments made chunk by chunk need chunk_samples >= 1, "
                                 f"got {chunk_samples}")
-        own = bool(getattr(imu, "events_per_chunk", False))
         fr = FilterRun(sensors, init, config, adapters, sensor_options, imu.dt_nom_s,
                        keep_every, on_chunk, events_per_chunk=own,
                        on_events=imu.on_events if own else None,
@@ -121,6 +136,8 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
             fr.feed_arrays(np.ascontiguousarray(part.time_s), np.ascontiguousarray(
                 part.dtheta_b), np.ascontiguousarray(part.dv_b), epochs)
             imu.chunk_fed(fr.kept)
+            if files is not None:
+                files.write(fr.kept(), fr.chunk_logs)
         return fr.result()
     time_s, dth, dv, dt_nom = _imu_arrays(imu)
     fr = FilterRun(sensors, init, config, adapters, sensor_options, dt_nom, keep_every,
@@ -203,6 +220,8 @@ class FilterRun:
                                     context.size(M, tb.events.data.shape[1]))
         self.status, self.stop_t, self.t_end = loop.ST_OK, None, None
         self.parts = []
+        #: the last chunk's event logs (``events_per_chunk``)
+        self.chunk_logs = {}
 
     def feed(self, imu) -> None:
         """Run the next chunk: an object with ``time_s`` (N+1,), ``dtheta_b``, ``dv_b``
@@ -277,7 +296,7 @@ class FilterRun:
         """Hand a chunk's event logs on (``events_per_chunk``) and keep them if asked."""
         if not self.events_per_chunk:
             return
-        logs = split_events(self.ev, self.chunk_tb)
+        logs = self.chunk_logs = split_events(self.ev, self.chunk_tb)
         if self.on_events is not None:
             self.on_events(logs)
         if self.keep_events:

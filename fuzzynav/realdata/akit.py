@@ -89,7 +89,8 @@ class AkitSource:
     SETTINGS_NOTE = ("the filter starts from the reference, is fed the recorded sensors without "
                      "simulated outages or noise, and is scored over the whole run: nothing "
                      "depends on a seed; the loader establishes the frames and lags from the "
-                     "data")
+                     "data; its trajectories are held, minutes long, so no chunk files are "
+                     "written")
 
     def context(self, options=None) -> FilterContext:
         return context(self.rec, options)

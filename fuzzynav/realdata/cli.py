@@ -60,7 +60,7 @@ def add_arguments(p) -> None:
 #: may refuse
 _FLAGS = {**{d: "--" + d.replace("_", "-") for d in _SETTINGS}, "imu_delay": "--imu-delay",
           "span": "--span", "mounting": "--mounting", "t_start": "--t-start", "mc": "--mc",
-          "output_rate": "--output-rate", "chunk": "--chunk"}
+          "output_rate": "--output-rate", "chunk": "--chunk", "output_dir": "--output-dir"}
 
 
 def given_settings(args) -> dict:
@@ -136,12 +136,15 @@ def run_recording(spec, filter_name, options, args, streaming=None) -> int:
 
     stdout failures (full disk, closed pipe) are handled once, in :func:`fuzzynav.cli.main`.
     """
+    from fuzzynav.filters.chunk_files import run_files
     from fuzzynav.realdata.validate import check_finite, metrics_table, validate
 
     refuse_unused_options(spec, args)
     settings = settings_from(args)
-    # streamed runs (--output-rate, --chunk) read an rtklib IMU from its file chunk by chunk
-    streamed = any(getattr(args, k, None) is not None for k in ("output_rate", "chunk"))
+    # streamed runs (--output-rate, --chunk, --output-dir) read an rtklib IMU from its file
+    # chunk by chunk
+    streamed = any(getattr(args, k, None) is not None
+                   for k in ("output_rate", "chunk", "output_dir"))
     rec = load_recording(spec, args, streamed)
     span = max(r.imu.span_s[1] - r.imu.span_s[0]
                for r in (rec if isinstance(rec, list) else [rec]))
@@ -154,7 +157,9 @@ def run_recording(spec, filter_name, options, args, streaming=None) -> int:
 
         return run_akit(spec, rec, filter_name, options, args, streaming)
     seeds = list(range(args.seed, args.seed + args.mc))
-    vals = [validate(rec, filter_name, settings, s, options, **streaming) for s in seeds]
+    vals = [validate(rec, filter_name, settings, s, options, **run_files(streaming,
+                                                                          filter_name, s))
+            for s in seeds]
     check_finite(vals, spec)  # a diverged run: no table at all, exit 3
     check = vals[0].start.coarse.heading_check
     if check.startswith(("turned", "direction not checked")):

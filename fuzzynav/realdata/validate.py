@@ -116,7 +116,9 @@ def validate(rec, filter_name: str, settings: ProtocolSettings = ProtocolSetting
         ``chunk_samples`` and ``output_rate_hz`` of :func:`fuzzynav.runpath.run`: each
         feed's run streamed chunk by chunk and its recorded solution kept at
         ``output_rate_hz``; the metrics, errors and drifts are those of the whole run
-        (:mod:`~fuzzynav.realdata.reference_scoring`).
+        (:mod:`~fuzzynav.realdata.reference_scoring`).  With ``output_dir`` (a recording
+        read from its file), each feed's chunks are written to ``output_dir/FEED/``
+        (``gnss``, ``outages``).
     """
     mems = _with_heading_sigma(mems, getattr(rec, "start_options", None))
     feeds, windows, start, lever = prepare_feeds(rec, settings, seed)
@@ -136,12 +138,19 @@ def validate(rec, filter_name: str, settings: ProtocolSettings = ProtocolSetting
             f"{getattr(rec, 'directory', 'recording')} ({FEEDS[name]})", int(seed), start,
             lambda opts, fixes=fixes: context_for(fixes, opts, mems, sigma0, nhc),
             scoring, lambda m: required_names(m, vel_scored), settings.use_velocity)
-        out = run(source, filter_name, options, **streaming)
+        out = run(source, filter_name, options, **_feed_streaming(streaming, name))
         err = scored["errors"]
         runs[name] = FeedRun(fixes, out.result, err, out.metrics,
                              outage_drifts(err, scored["solution_time_s"], windows),
                              out.diverged)
     return Validation(filter_name, int(seed), settings, start, windows, runs)
+
+
+def _feed_streaming(streaming: dict, feed: str) -> dict:
+    """``run``'s streaming options for one feed: its chunk files in a directory of its own."""
+    if streaming.get("output_dir") is None:
+        return streaming
+    return {**streaming, "output_dir": f"{streaming['output_dir']}/{feed}"}
 
 
 def prepare_feeds(rec, settings: ProtocolSettings, seed: int):

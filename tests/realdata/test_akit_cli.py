@@ -64,3 +64,12 @@ def test_name_at_file_works_on_recordings(two_trajectories, tmp_path):
     rec = load_trajectory(two_trajectories, 2)
     assert at_file == run_trajectory(rec, "apso", {"params": str(params)})[1]["rms_pos_h_m"]
     assert at_file != run_trajectory(rec, "apso")[1]["rms_pos_h_m"]
+
+
+def test_chunk_files_are_refused_by_name_on_a_held_akit_recording(two_trajectories, tmp_path):
+    code, out, err = _run("run", "--data", f"akit:{two_trajectories}:1", "--output-rate", "1",
+                          "--output-dir", str(tmp_path / "out"))
+    assert code == 2 and not out
+    assert err.startswith("fuzzynav: error: --output-dir: does not apply to akit recordings")
+    assert "held" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()

@@ -222,3 +222,60 @@ def test_the_command_line_reads_an_rtklib_imu_from_its_file_when_streamed(drive,
                               *extra)
         assert code == 0, err
         assert seen[-1] is want, extra
+
+
+def _chunk_files(directory):
+    files = sorted(directory.glob("chunk-*.npz"))
+    assert [f.name for f in files] == [f"chunk-{i:06d}.npz" for i in range(len(files))]
+    return [dict(np.load(f)) for f in files]
+
+
+def test_a_run_on_the_file_gets_its_epochs_chunk_by_chunk_and_writes_them(drive, tmp_path):
+    """Read from its file, a run is given the fixes' and constraints' epochs a chunk at a
+    time (runpath's EpochsByChunk): its event logs are not held, and the chunk files of
+    ``output_dir`` hold, chunk after chunk, the held run's every kept row and every event
+    to the bit (each epoch in exactly one chunk, in order)."""
+    held = load_rtklib(drive, mounting=None)
+    rec = load_rtklib(drive, mounting=None, streamed=True)
+    from fuzzynav.realdata.protocol import ProtocolSettings
+
+    nhc = ProtocolSettings(nhc_sigma_mps=0.1)  # a second stream: constraints at 10 Hz
+    whole = validate(held, "fakf", nhc, chunk_samples=613)
+    got = validate(rec, "fakf", nhc, chunk_samples=613, output_dir=tmp_path / "out")
+
+    def n_chunks(t):  # 613 increments of 10 ms each from the start
+        return -(-int(round((t[-1] - t[0]) * rec.imu.rate_hz)) // 613)
+    for feed, run in whole.runs.items():
+        assert got.runs[feed].result.events == {}  # written, not held
+        m = got.runs[feed].metrics
+        assert m.keys() == run.metrics.keys()
+        assert all(m[k] == v or (np.isnan(v) and np.isnan(m[k])) for k, v in run.metrics.items())
+        parts = _chunk_files(tmp_path / "out" / feed)
+        assert len(parts) == n_chunks(run.result.time_s)
+        for f in ("time_s", "lla", "vel_n", "q_bn", "sigma"):
+            np.testing.assert_array_equal(np.concatenate([p[f] for p in parts]),
+                                          getattr(run.result, f), err_msg=f)
+        assert set(run.result.events) == {"gnss", "nhc"}
+        for nm, ev in run.result.events.items():
+            for f in ("time_s", "residual", "S_diag", "nis", "flag", "diag"):
+                np.testing.assert_array_equal(
+                    np.concatenate([p[f"events.{nm}.{f}"] for p in parts]), getattr(ev, f),
+                    err_msg=f"{feed} {nm}.{f}")
+            # a chunk's epochs are its own: none after its last kept output
+            for p in parts[:-1]:
+                assert p[f"events.{nm}.time_s"].max(initial=-np.inf) <= p["time_s"][-1] + 0.1
+
+
+def test_the_command_line_writes_a_recordings_chunks_per_filter_seed_and_feed(drive,
+                                                                              tmp_path):
+    from tests.realdata.test_cli_errors import _run
+
+    out = tmp_path / "out"
+    code, _, err = _run("run", "--data", f"rtklib:{drive}", "--filter", "ekf", "--mc", "2",
+                        "--output-rate", "1", "--output-dir", str(out))
+    assert code == 0, err
+    for seed in (0, 1):
+        for feed in ("gnss", "outages"):
+            parts = _chunk_files(out / f"ekf-seed{seed}" / feed)
+            t = np.concatenate([p["time_s"] for p in parts])
+            assert len(parts) >= 1 and np.all(np.diff(t) > 0.999) and np.all(np.diff(t) < 1.001)
