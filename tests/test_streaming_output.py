@@ -178,3 +178,23 @@ def test_streaming_rms_sums_are_each_chunks_own_sums_added_in_order():
     got = acc.metrics()
     for k, s in sums.items():
         assert got[k] == pytest.approx(float(np.sqrt(s / 3001)), rel=ULP_RTOL, abs=0.0), k
+
+
+def test_cli_output_dir_holding_an_earlier_runs_chunks_is_refused(capsys, sim_cache, tmp_path):
+    """A second run into the same --output-dir would leave the first's chunks beside its
+    own (a shorter run, its last ones): refused, one line naming the directory, before any
+    run writes; the files already there unchanged."""
+    out = tmp_path / "out"
+    argv = ("run", "paper000", "--filter", "ekf", "--cache", str(sim_cache), "--output-rate",
+            "1", "--output-dir", str(out))
+    code, _, err = _cli(capsys, *argv)
+    assert code == 0, err
+    files = sorted(out.rglob("*"))
+    assert [f.name for f in files if f.is_file()][:1] == ["chunk-000000.npz"]
+    before = {f: f.read_bytes() for f in files if f.is_file()}
+    code, table, err = _cli(capsys, *argv)
+    assert code == 2 and not table
+    assert err.startswith(f"fuzzynav: error: {out}: cannot write the streamed run output") \
+        and "holds 3 chunk file(s) of an earlier run" in err and err.count("\n") == 1, err
+    assert sorted(out.rglob("*")) == files
+    assert all(f.read_bytes() == b for f, b in before.items())

@@ -88,6 +88,13 @@ def test_output_dir_holds_every_chunk(tmp_path):
         ev_t = z["events.log.time_s"]  # the log's epochs of samples 501..1000 (50 Hz)
         np.testing.assert_array_equal(ev_t, np.arange(501, 1001) / 50.0)
         assert z["events.log.nis"].shape == ev_t.shape
+    # a shorter run into the same directory would leave chunk 2 behind as its own: refused
+    from fuzzynav.errors import OutputError
+
+    with pytest.raises(OutputError, match="holds 3 chunk file"):
+        run_streamed(short("paper003", 10.0), 0, "ekf", chunk_samples=500,
+                     output_rate_hz=2.0, output_dir=tmp_path / "out")
+    assert sorted((tmp_path / "out").iterdir()) == files
 
 
 

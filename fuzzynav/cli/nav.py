@@ -99,7 +99,8 @@ def add_streaming_arguments(p) -> None:
                         "DIR/FILTER-seedK/chunk-NNNNNN.npz (each written to a temporary "
                         "file, then renamed); on an rtklib recording (read from its file) "
                         "DIR/FILTER-seedK/FEED/chunk-NNNNNN.npz for each feed of the "
-                        "protocol (gnss, outages)")
+                        "protocol (gnss, outages). A DIR already holding chunk files of an "
+                        "earlier run is refused before anything runs")
 
 
 def streaming_options(args, imu_rate_hz: float) -> dict:
@@ -108,6 +109,10 @@ def streaming_options(args, imu_rate_hz: float) -> dict:
     rate, chunk = getattr(args, "output_rate", None), getattr(args, "chunk", None)
     out_dir = getattr(args, "output_dir", None)
     out = {} if out_dir is None else {"output_dir": out_dir}
+    if out_dir is not None:  # before any run of the table writes
+        from fuzzynav.filters.chunk_files import refuse_earlier_chunks
+
+        refuse_earlier_chunks(out_dir)
     for flag, value in (("--output-rate", rate), ("--chunk", chunk)):
         if value is not None and not (0.0 < value < float("inf")):
             raise FuzzynavError(f"{flag} must be a positive number, got {value:g}")

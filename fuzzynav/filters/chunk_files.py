@@ -12,9 +12,10 @@ from pathlib import Path
 
 import numpy as np
 
+from fuzzynav.errors import OutputError
 from fuzzynav.fileio import write_npz
 
-__all__ = ["chunk_arrays", "ChunkFiles", "run_files"]
+__all__ = ["chunk_arrays", "ChunkFiles", "refuse_earlier_chunks", "run_files"]
 
 #: the fields of an event log written per stream
 EVENT_FIELDS = ("time_s", "residual", "S_diag", "nis", "flag", "diag")
@@ -32,16 +33,40 @@ def chunk_arrays(result, logs: dict) -> dict:
     return out
 
 
+#: what the files are, in messages
+WHAT = "streamed run output (--output-dir)"
+
+
+def refuse_earlier_chunks(out_dir) -> None:
+    """Refuse ``out_dir`` if it (or a directory below it) already holds chunk files: a
+    reader of the directory would take an earlier run's chunks for this run's (a shorter
+    run leaves the longer one's last chunks behind).
+
+    Raises
+    ------
+    OutputError
+        Naming the directory, how many chunk files it holds and the first of them.
+    """
+    out_dir = Path(out_dir)
+    stale = sorted(out_dir.rglob("chunk-*.npz")) if out_dir.is_dir() else []
+    if stale:
+        raise OutputError(out_dir, f"it holds {len(stale)} chunk file(s) of an earlier run "
+                                   f"({stale[0]}); give an empty or a new directory",
+                          WHAT)
+
+
 class ChunkFiles:
-    """Writes ``chunk-000000.npz``, ``chunk-000001.npz``, ... into ``out_dir``."""
+    """Writes ``chunk-000000.npz``, ``chunk-000001.npz``, ... into ``out_dir``, which must
+    not hold chunk files yet (:func:`refuse_earlier_chunks`, before the run)."""
 
     def __init__(self, out_dir):
+        refuse_earlier_chunks(out_dir)
         self.out_dir, self.count = Path(out_dir), 0
 
     def write(self, kept, logs: dict) -> None:
         """The next chunk's file (``kept``: its kept outputs; ``logs``: its event logs)."""
         write_npz(self.out_dir / f"chunk-{self.count:06d}.npz", chunk_arrays(kept, logs),
-                  "streamed run output (--output-dir)")
+                  WHAT)
         self.count += 1
 
 
