@@ -11,8 +11,12 @@ decimated), each run's log held and cut into chunks; *streamed, long*: the same 
 too long to hold).  The measurements of a round are interleaved, in reversed order every
 other round; medians over the rounds.  The trial values are compared across the three ways.
 
+Then ``--paired-rounds`` pairs of a whole and a held study of ``--paired-trials`` trials,
+alternated in one process, give the held way's rate without the spread between processes.
+
 Usage: ``python benchmarks/bench_study_stream.py [--trials 40] [--long-trials 3]
-[--rounds 3]`` (about 6 minutes on the 2-core machine).
+[--rounds 3] [--paired-rounds 8] [--paired-trials 15]`` (about 8 minutes on the 2-core
+machine).
 """
 from __future__ import annotations
 
@@ -38,6 +42,23 @@ t0 = time.perf_counter()
 study = run_study(cfg, int(sys.argv[2]), 1, None, sys.argv[3], progress=False)
 secs = time.perf_counter() - t0
 print(json.dumps({"secs": secs, "values": [t.value for t in study.trials]}))
+"""
+#: the paired program: whole and held studies alternated in one process, their times
+PAIRED = """
+import json, sys, time
+from fuzzynav.tuning.study_config import load_study_config
+from fuzzynav.tuning.study_run import run_study
+files, trials, rounds, cache = sys.argv[1:3], int(sys.argv[3]), int(sys.argv[4]), sys.argv[5]
+out = {"whole": [], "held": []}
+for r in range(-1, rounds):  # round -1 warms the process up and is not kept
+    ways = [("whole", files[0]), ("held", files[1])]
+    for way, path in (ways if r % 2 == 0 else ways[::-1]):
+        cfg = load_study_config(path.replace(".toml", f"_{r + 1}.toml"))
+        t0 = time.perf_counter()
+        run_study(cfg, trials, 1, None, cache, progress=False)
+        if r >= 0:
+            out[way].append(time.perf_counter() - t0)
+print(json.dumps(out))
 """
 #: the three ways: the [streaming] table appended to the study file (None: whole)
 WAYS = {"whole": None,
@@ -80,6 +101,34 @@ def run_rounds(tmp: Path, trials: dict, rounds: int) -> list:
     return out
 
 
+def measure_paired(tmp: Path, trials: int, rounds: int) -> dict:
+    """``rounds`` pairs of whole and held studies of ``trials`` trials in one process, the
+    order reversed every other pair: the ratio of their rates pair by pair."""
+    stems = {}
+    for way, key in (("whole", "whole"), ("streamed, held", "held")):
+        for r in range(rounds + 1):  # a study of its own per pair: nothing resumed
+            study_file(tmp, f"paired_{key}_{r}", way)  # tmp/paired_KEY_R.toml
+        stems[key] = str(tmp / f"paired_{key}.toml")
+    env = dict(os.environ, PYTHONPATH=str(ROOT), PYTHONWARNINGS="ignore")
+    out = subprocess.run([sys.executable, "-c", PAIRED, stems["whole"], stems["held"],
+                          str(trials), str(rounds), str(tmp / "cache")], env=env, cwd=tmp,
+                         check=True, capture_output=True, text=True)
+    got = json.loads(out.stdout.strip().splitlines()[-1])
+    return {"trials": trials, "ratios": [w / h for w, h in zip(got["whole"], got["held"])]}
+
+
+def paired_line(paired: dict) -> str:
+    """The paired measurement's sentence."""
+    q = paired["ratios"]
+    return (f"**In one process** (`--paired-rounds`: the imports, numba's cache and the "
+            f"process's memory layout shared by both ways), {len(q)} pairs of "
+            f"{paired['trials']}-trial studies, whole and held alternated: the held way's "
+            f"rate is {statistics.median(q):.3f} of the whole way's (pairs: min "
+            f"{min(q):.3f}, max {max(q):.3f}). This is the gap without the processes' own "
+            "spread; each chunk beyond a run's first costs the held way a fixed part (the "
+            "loop's call, scoring and keeping the chunk's rows).")
+
+
 def agreement(rounds: list) -> str:
     """How the trial values of the three ways agree (the same candidates, trial by trial)."""
     def rel(a, b):
@@ -104,11 +153,11 @@ def report(args, rounds: list, load: tuple, secs: float) -> str:
              f"end; {secs / 60:.1f} min in all.", "",
              "| way | trials/min (median) | per round | / whole (median) |", "|---|---|---|---|"]
     for way in WAYS:
-        tpm = [r[way]["tpm"] for r in rounds]
-        ratio = statistics.median(r[way]["tpm"] / r["whole"]["tpm"] for r in rounds)
+        tpm = [r[way]["tpm"] for r in rounds["fresh"]]
+        ratio = statistics.median(r[way]["tpm"] / r["whole"]["tpm"] for r in rounds["fresh"])
         lines.append(f"| {way} | {statistics.median(tpm):.1f} | "
                      + ", ".join(f"{v:.1f}" for v in tpm) + f" | {ratio:.2f} |")
-    lines += ["", agreement(rounds), "",
+    lines += ["", agreement(rounds["fresh"]), "", paired_line(rounds["paired"]), "",
               "Each study's time includes its start-up in the process: loading the nine logs "
               "(from the cache; the long way makes each run's first chunk instead) and the "
               "baseline's nine runs. The long way simulates every run again for every trial, "
@@ -118,14 +167,16 @@ def report(args, rounds: list, load: tuple, secs: float) -> str:
 
 
 def main(argv=None):
-    args = bench_parser(__doc__, trials=40, long_trials=3, rounds=3).parse_args(argv)
+    args = bench_parser(__doc__, trials=40, long_trials=3, rounds=3, paired_rounds=8,
+                        paired_trials=15).parse_args(argv)
     trials = {"whole": args.trials, "streamed, held": args.trials,
               "streamed, long": args.long_trials}
 
     def measure_all(tmp):
         for i, way in enumerate(WAYS):  # simulate the logs, load or compile the kernels
             measure(tmp, f"warm_{i}", way, 1)
-        return run_rounds(tmp, trials, args.rounds)
+        return {"fresh": run_rounds(tmp, trials, args.rounds),
+                "paired": measure_paired(tmp, args.paired_trials, args.paired_rounds)}
 
     measured_section("study-stream", args, measure_all, report)
 
