@@ -228,10 +228,11 @@ def run(source: Source, filter_spec: str, options=None,
         scorer = scoring.streaming_scorer()
     if hasattr(feed, "chunks") and chunk_samples is None:  # read from a file
         chunk_samples = DEFAULT_CHUNK_SAMPLES
-    _check_outputs(source, feed, sensors, config, keep, chunk_samples)
+    held = sensors
     if hasattr(feed, "chunks") and not getattr(feed, "events_per_chunk", False):
         feed = EpochsByChunk(feed, sensors)
         sensors = feed.header
+    _check_outputs(source, feed, held, config, keep, chunk_samples)
     res = run_filter(feed, sensors, inp.init, config, setup.adapters,
                      _merged(setup.sensor_options, inp.sensor_options),
                      chunk_samples=chunk_samples, keep_every=keep,
@@ -247,8 +248,9 @@ def run(source: Source, filter_spec: str, options=None,
 def _check_outputs(source, imu, sensors: dict, config, keep: int, chunk_samples) -> None:
     """:func:`fuzzynav.sim.budget.check_run_outputs` of a run about to be filtered: the
     solution rows it will keep (one per output period, every ``keep``-th), the epochs its
-    event logs record, beside the IMU and sensor arrays it is given (of increments made
-    chunk by chunk, one chunk)."""
+    event logs record (given chunk by chunk, :class:`EpochsByChunk`: a chunk's share),
+    beside the IMU and sensor arrays it is given (of increments made chunk by chunk, one
+    chunk)."""
     if hasattr(imu, "chunks"):
         n, (t0, t1) = imu.n_samples + 1, imu.span_s
         held = min(n, int(chunk_samples) + 1) * BYTES_PER_INCREMENT
@@ -263,6 +265,8 @@ def _check_outputs(source, imu, sensors: dict, config, keep: int, chunk_samples)
     stride = max(1, round(1.0 / (config.out_rate_hz * dt))) if dt > 0 else 1
     held += sum(d.time_s.nbytes + d.z.nbytes + d.sigma.nbytes for d in sensors.values())
     epochs = sum(d.time_s.size for d in sensors.values())
+    if isinstance(imu, EpochsByChunk):  # its event logs are a chunk's at a time
+        epochs *= min(1.0, (int(chunk_samples) + 1) / n)
     check_run_outputs(source.name, held, n / stride / keep, epochs)
 
 

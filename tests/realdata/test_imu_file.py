@@ -279,3 +279,24 @@ def test_the_command_line_writes_a_recordings_chunks_per_filter_seed_and_feed(dr
             parts = _chunk_files(out / f"ekf-seed{seed}" / feed)
             t = np.concatenate([p["time_s"] for p in parts])
             assert len(parts) >= 1 and np.all(np.diff(t) > 0.999) and np.all(np.diff(t) < 1.001)
+
+
+def test_the_output_check_counts_a_chunks_epochs_when_they_come_chunk_by_chunk(drive,
+                                                                               monkeypatch):
+    """Read from its file, a run's event logs are a chunk's at a time: the size check
+    counts that chunk's share of the epochs (not all of them, as for the held run), beside
+    the same kept rows and the held streams' bytes."""
+    import fuzzynav.runpath as runpath
+
+    seen = []
+    monkeypatch.setattr(runpath, "check_run_outputs", lambda *a: seen.append(a))
+    kw = dict(chunk_samples=613, output_rate_hz=1.0)
+    validate(load_rtklib(drive, mounting=None), "ekf", **kw)
+    validate(load_rtklib(drive, mounting=None, streamed=True), "ekf", **kw)
+    assert len(seen) == 4  # two feeds each; the GNSS-throughout feeds compared
+    (_, h_bytes, h_rows, h_epochs), (_, s_bytes, s_rows, s_epochs) = seen[0], seen[2]
+    n = load_rtklib(drive, mounting=None).imu.n_samples  # the whole recording's increments
+    assert s_rows == pytest.approx(h_rows, rel=1e-12) and h_epochs > 100
+    # the run starts after the rest: a chunk's share of fewer than n increments
+    assert 614 / n * h_epochs < s_epochs < 614 / (0.5 * n) * h_epochs
+    assert s_bytes < h_bytes  # one chunk of increments held, not all
