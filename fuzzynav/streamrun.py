@@ -91,7 +91,8 @@ class StreamedSource(OnSimulatedLog):
 class _Feed:
     """One streamed run's chunks as :func:`~fuzzynav.filters.runner.run_filter` takes a
     feed whose chunks bring their own epochs, and what it keeps per chunk: the scorer's
-    truth, the magnetometer usage, the trace and the ``--output-dir`` files."""
+    truth, the magnetometer usage and the trace (the ``--output-dir`` files are the run
+    path's, :mod:`fuzzynav.filters.chunk_files`)."""
 
     events_per_chunk = True
 
@@ -110,7 +111,7 @@ class _Feed:
             if first.k1 > first.k0 else 0.01
         self.n_samples, self.chunk_samples = chunks.n_samples, chunks.chunk_samples
         self.span_s = (chunks.grid.t0_s, chunks.grid.t_end_s)
-        self.source, self.setup, self.keep_events = source, setup, source.keep_events
+        self.setup, self.keep_events = setup, source.keep_events
         header = setup.sensors_for(chunks.header)
         self.names = sorted(header)
         self.usage = _Usage([nm for nm in self.names if header[nm].kind == USAGE_KIND

@@ -48,8 +48,9 @@ class InitialState:
     q_bn: np.ndarray
 
 
-def _imu_arrays(imu):
-    """The IMU arrays as the loop takes them, checked, and the nominal sample interval."""
+def _imu_arrays(imu, nominal: bool = True):
+    """The IMU arrays as the loop takes them, checked, and the nominal sample interval
+    (``nominal=False``: ``None``, not computed)."""
     time_s = np.ascontiguousarray(imu.time_s, dtype=float)
     dth = np.ascontiguousarray(imu.dtheta_b, dtype=float)
     dv = np.ascontiguousarray(imu.dv_b, dtype=float)
@@ -59,8 +60,7 @@ def _imu_arrays(imu):
     step = np.diff(time_s)
     if np.any(step <= 0):
         raise FuzzynavError("IMU sample times must increase strictly")
-    dt_nom = float(np.median(step))
-    return time_s, dth, dv, dt_nom
+    return time_s, dth, dv, float(np.median(step)) if nominal else None
 
 
 def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterConfig(),
@@ -133,8 +133,7 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
                 fr.feed(piece)
                 continue
             part, epochs = piece
-            fr.feed_arrays(np.ascontiguousarray(part.time_s), np.ascontiguousarray(
-                part.dtheta_b), np.ascontiguousarray(part.dv_b), epochs)
+            fr.feed_arrays(*_imu_arrays(part, nominal=False)[:3], epochs)
             imu.chunk_fed(fr.kept)
             if files is not None:
                 files.write(fr.kept(), fr.chunk_logs)
