@@ -22,7 +22,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from fuzzynav.errors import FuzzynavError
+from fuzzynav.errors import FuzzynavError, InputFileError
 from fuzzynav.realdata import akit
 from fuzzynav.realdata.dataspec import parse_recording_spec, resolve, until, within
 from fuzzynav.realdata.protocol import ProtocolSettings
@@ -32,7 +32,7 @@ from fuzzynav.realdata.sources import SOURCES, data_options
 from fuzzynav.realdata.validate import fed_sigma, prepare_feeds, required_names
 from fuzzynav.runpath import STREAMING_SETTINGS
 
-__all__ = ["STUDY_FEED", "UNSCORED", "RecordingRun", "MIN_SCORED_S", "recording_run"]
+__all__ = ["STUDY_FEED", "STUDY_HINT", "UNSCORED", "RecordingRun", "MIN_SCORED_S", "recording_run"]
 
 #: which protocol feed a GNSS study run gets: the fixes throughout.  With the simulated
 #: outages the free-inertial drift of a consumer MEMS IMU (hundreds of metres in 60 s,
@@ -109,8 +109,22 @@ def _load(kind: str, directory: str, session, options: str | None = None):
     """A loaded recording (kept: the two halves of a split and every seed share it)."""
     start = None if options is None else data_options(f"{kind}:{directory}?{options}")
     kw = {} if start is None else {"options": start}
-    loaded = SOURCES[kind].load(directory, session=session, **kw)
+    try:
+        loaded = SOURCES[kind].load(directory, session=session, **kw)
+    except InputFileError as exc:  # too large to hold: a study cannot read it streamed
+        from fuzzynav.realdata.loaders.rtklib import STREAMED_HINT
+
+        if not exc.what.endswith(STREAMED_HINT):
+            raise
+        raise InputFileError(exc.path, exc.where, exc.what[:-len(STREAMED_HINT)]
+                             + STUDY_HINT) from None
     return loaded[0] if isinstance(loaded, list) else loaded
+
+
+#: what a study says of a recording too large to hold (its runs hold it: every trial runs
+#: it again, so it is not read from its file chunk by chunk)
+STUDY_HINT = ("a study holds its recordings (each trial runs them again): raise "
+              "$FUZZYNAV_MAX_MEMORY_GB, or study a shorter recording")
 
 
 #: shortest stretch of a recording a study may score [s]: a window past the end, or of a few

@@ -206,6 +206,29 @@ def test_a_recording_too_long_to_hold_is_refused_with_how_to_stream_it(drive, mo
     assert rec.imu.n_samples > 6000
 
 
+def test_a_study_told_of_a_recording_too_long_to_hold_is_told_what_a_study_can_do(
+        drive, tmp_path, monkeypatch):
+    """A study holds its recordings (every trial runs them again): its refusal says so,
+    not how the command line streams one."""
+    import shutil
+
+    from fuzzynav.realdata.loaders.chunked import count_lines
+    from fuzzynav.realdata.loaders.imu_csv import BLOCK_BYTES_PER_LINE, HELD_BYTES_PER_LINE
+    from fuzzynav.realdata.studyruns import STUDY_HINT, recording_run
+    from fuzzynav.sim import budget
+
+    d = tmp_path / "drive"  # not a directory a study of another test loaded (kept loaded)
+    shutil.copytree(drive, d)
+    n = count_lines(d / "imu_1.csv")
+    monkeypatch.setenv(budget.ENV_VAR, str(0.5 * n * HELD_BYTES_PER_LINE / 2**30))
+    with pytest.raises(InputFileError) as exc:
+        recording_run(f"rtklib:{d}", 0)
+    msg = str(exc.value)
+    assert msg.startswith(str(d / "imu_1.csv")) and msg.endswith(STUDY_HINT), msg
+    assert "--output-rate" not in msg and "streamed=True" not in msg
+    assert budget.human_bytes(n * (HELD_BYTES_PER_LINE + BLOCK_BYTES_PER_LINE)) in msg
+
+
 def test_the_command_line_reads_an_rtklib_imu_from_its_file_when_streamed(drive, monkeypatch):
     """``run --data rtklib:...`` loads streamed with ``--output-rate`` or ``--chunk`` (and
     only then): the JSON of the streamed run equals the held run's, seen in
