@@ -153,3 +153,51 @@ def test_a_run_that_fits_only_in_chunks_is_refused_whole_with_both_estimates(tmp
                                              "filtered in chunks of 15000 samples with 1-Hz "
                                              "output; the limit is 1 GB"):
         load_scenario(path)
+
+
+def test_read_chunks_joins_a_runs_files_back_into_its_result(tmp_path):
+    from fuzzynav.filters.chunk_files import read_chunks
+
+    scn = short("paper003", 30.0)
+    out = run_streamed(scn, 0, "ekf", chunk_samples=500, output_rate_hz=2.0,
+                       output_dir=tmp_path / "out", keep_events=True)
+    got = read_chunks(tmp_path / "out")
+    assert [f.name for f in got.files] == [f"chunk-{i:06d}.npz" for i in range(3)]
+    for f in ("time_s", "lla", "vel_n", "q_bn", "sigma", "sensor_states"):
+        np.testing.assert_array_equal(getattr(got, f), getattr(out.result, f), err_msg=f)
+    assert got.state_labels == tuple(out.result.state_labels)
+    assert got.events.keys() == out.result.events.keys()
+    for nm, ev in out.result.events.items():
+        for f in ("time_s", "residual", "S_diag", "nis", "flag", "diag"):
+            np.testing.assert_array_equal(getattr(got.events[nm], f), getattr(ev, f))
+        assert got.events[nm].diag_names == tuple(ev.diag_names)
+
+
+def test_read_chunks_refuses_a_gap_a_damaged_file_and_another_runs_chunk(tmp_path):
+    import shutil
+
+    from fuzzynav.filters.chunk_files import read_chunks
+
+    scn = short("paper003", 30.0)
+    run_streamed(scn, 0, "ekf", chunk_samples=500, output_rate_hz=2.0,
+                 output_dir=tmp_path / "a")
+    run_streamed(scn, 0, "ekf", chunk_samples=300, output_rate_hz=2.0,
+                 output_dir=tmp_path / "b")
+    cases = {}
+    for name, damage in (("gap", lambda d: (d / "chunk-000001.npz").unlink()),
+                         ("cut", lambda d: (d / "chunk-000002.npz").write_bytes(b"PK\x03")),
+                         ("mixed", lambda d: shutil.copy(tmp_path / "b" / "chunk-000000.npz",
+                                                         d / "chunk-000002.npz"))):
+        d = tmp_path / name
+        shutil.copytree(tmp_path / "a", d)
+        damage(d)
+        with pytest.raises(InputFileError) as exc:
+            read_chunks(d)
+        cases[name] = str(exc.value)
+    assert cases["gap"].startswith(f"{tmp_path / 'gap' / 'chunk-000001.npz'}: missing")
+    assert cases["cut"].startswith(f"{tmp_path / 'cut' / 'chunk-000002.npz'}: is not a "
+                                   "readable npz file")
+    assert cases["mixed"].startswith(f"{tmp_path / 'mixed' / 'chunk-000002.npz'}: time_s: "
+                                     "starts at")
+    with pytest.raises(InputFileError, match="holds no chunk files"):
+        read_chunks(tmp_path / "nowhere")

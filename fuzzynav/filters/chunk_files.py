@@ -5,17 +5,22 @@ order, each written to a temporary file and renamed (:func:`fuzzynav.fileio.writ
 so a reader never sees half a chunk.  Arrays: ``time_s``, ``lla``, ``vel_n``, ``q_bn``,
 ``sigma``, ``sensor_states``, ``state_labels`` (the kept rows) and, per stream ``NAME``,
 ``events.NAME.{time_s,residual,S_diag,nis,flag,diag,diag_names}`` (the chunk's epochs).
+:func:`read_chunks` joins a run's files again, checked.
 """
 from __future__ import annotations
 
+import zipfile
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from fuzzynav.errors import OutputError
+from fuzzynav.errors import InputFileError, OutputError
 from fuzzynav.fileio import write_npz
+from fuzzynav.filters.result import EventLog
 
-__all__ = ["chunk_arrays", "ChunkFiles", "refuse_earlier_chunks", "run_files"]
+__all__ = ["chunk_arrays", "ChunkFiles", "ChunkedRun", "read_chunks", "refuse_earlier_chunks",
+           "run_files"]
 
 #: the fields of an event log written per stream
 EVENT_FIELDS = ("time_s", "residual", "S_diag", "nis", "flag", "diag")
@@ -79,3 +84,107 @@ def run_files(streaming: dict, filter_spec: str, seed: int) -> dict:
         return dict(streaming)
     return {**streaming, "output_dir": f"{streaming['output_dir']}/{safe_stem(filter_spec)}"
                                        f"-seed{int(seed)}"}
+
+
+@dataclass(frozen=True)
+class ChunkedRun:
+    """One run's chunk files joined in order (:func:`read_chunks`).
+
+    Attributes
+    ----------
+    time_s, lla, vel_n, q_bn, sigma, sensor_states : ndarray
+        The kept rows, as in :class:`~fuzzynav.filters.result.FilterResult`.
+    state_labels : tuple of str
+    events : dict
+        Stream name -> :class:`~fuzzynav.filters.result.EventLog` of every chunk's epochs.
+    files : tuple of Path
+        The chunk files read, in order.
+    """
+
+    time_s: np.ndarray
+    lla: np.ndarray
+    vel_n: np.ndarray
+    q_bn: np.ndarray
+    sigma: np.ndarray
+    sensor_states: np.ndarray
+    state_labels: tuple
+    events: dict
+    files: tuple
+
+
+#: the kept-row arrays of a chunk file
+ROW_FIELDS = ("time_s", "lla", "vel_n", "q_bn", "sigma", "sensor_states")
+
+
+def read_chunks(directory) -> ChunkedRun:
+    """The chunk files ``chunk-000000.npz``, ``chunk-000001.npz``, ... of one run's
+    directory (``--output-dir DIR/FILTER-seedK``, a recording's ``.../FEED``) joined.
+
+    Every file is checked before anything is joined: the numbering has no gap, each file
+    holds the arrays of :func:`chunk_arrays` (read without pickles: nothing in a file is
+    executed), every chunk has the first one's state labels and streams, and the kept rows'
+    times increase across files.
+
+    Raises
+    ------
+    InputFileError
+        Naming the file (or the directory) and what is wrong with it.
+    """
+    directory = Path(directory)
+    files = sorted(directory.glob("chunk-*.npz")) if directory.is_dir() else []
+    if not files:
+        below = sorted({f.parent.name for f in directory.glob("*/chunk-000000.npz")})
+        raise InputFileError(directory, "", "holds no chunk files (chunk-NNNNNN.npz)" + (
+            f"; its directories {', '.join(below)} do (one per feed of a recording)"
+            if below else ""))
+    for i, path in enumerate(files):
+        if path.name != f"chunk-{i:06d}.npz":
+            raise InputFileError(directory / f"chunk-{i:06d}.npz", "",
+                                 f"missing: the chunks are numbered from 0 without gaps, "
+                                 f"found {path.name} in its place")
+    parts = [_chunk(path) for path in files]
+    first = parts[0]
+    last_t = None
+    for path, part in zip(files, parts):
+        for key, want in (("state_labels", first["state_labels"]),
+                          ("streams", first["streams"])):
+            if part[key] != want:
+                raise InputFileError(path, key, f"{part[key]} differ from {files[0].name}'s "
+                                                f"{want}: not the same run")
+        t = part["time_s"]
+        if t.size and last_t is not None and not t[0] > last_t:
+            raise InputFileError(path, "time_s", f"starts at {t[0]!r} s, not after the "
+                                                 f"previous chunk's last row ({last_t!r} s)")
+        last_t = t[-1] if t.size else last_t
+    rows = {f: np.concatenate([p[f] for p in parts]) for f in ROW_FIELDS}
+    events = {nm: EventLog(**{f: np.concatenate([p["events"][nm][f] for p in parts])
+                              for f in EVENT_FIELDS},
+                           diag_names=first["events"][nm]["diag_names"])
+              for nm in first["streams"]}
+    return ChunkedRun(**rows, state_labels=first["state_labels"], events=events,
+                      files=tuple(files))
+
+
+def _chunk(path: Path) -> dict:
+    """One chunk file's arrays, checked for the names :func:`chunk_arrays` writes."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            arrays = {k: z[k] for k in z.files}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        raise InputFileError(path, "", f"is not a readable npz file "
+                                       f"({exc.__class__.__name__})") from None
+    missing = [f for f in (*ROW_FIELDS, "state_labels") if f not in arrays]
+    if missing:
+        raise InputFileError(path, missing[0], "missing: not a chunk file of a run")
+    streams = sorted({k.split(".")[1] for k in arrays if k.startswith("events.")})
+    events = {}
+    for nm in streams:
+        got = {f: arrays.get(f"events.{nm}.{f}") for f in (*EVENT_FIELDS, "diag_names")}
+        absent = [f for f, v in got.items() if v is None]
+        if absent:
+            raise InputFileError(path, f"events.{nm}.{absent[0]}", "missing")
+        got["diag_names"] = tuple(str(s) for s in got["diag_names"])
+        events[nm] = got
+    return {**{f: arrays[f] for f in ROW_FIELDS},
+            "state_labels": tuple(str(s) for s in arrays["state_labels"]),
+            "streams": streams, "events": events}

@@ -291,6 +291,7 @@ def test_a_run_on_the_file_gets_its_epochs_chunk_by_chunk_and_writes_them(drive,
 
 def test_the_command_line_writes_a_recordings_chunks_per_filter_seed_and_feed(drive,
                                                                               tmp_path):
+    from fuzzynav.filters.chunk_files import read_chunks
     from tests.realdata.test_cli_errors import _run
 
     out = tmp_path / "out"
@@ -302,6 +303,9 @@ def test_the_command_line_writes_a_recordings_chunks_per_filter_seed_and_feed(dr
             parts = _chunk_files(out / f"ekf-seed{seed}" / feed)
             t = np.concatenate([p["time_s"] for p in parts])
             assert len(parts) >= 1 and np.all(np.diff(t) > 0.999) and np.all(np.diff(t) < 1.001)
+            np.testing.assert_array_equal(read_chunks(out / f"ekf-seed{seed}" / feed).time_s, t)
+    with pytest.raises(InputFileError, match="its directories gnss, outages do"):
+        read_chunks(out / "ekf-seed0")
 
 
 def test_the_output_check_counts_a_chunks_epochs_when_they_come_chunk_by_chunk(drive,
