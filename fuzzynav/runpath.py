@@ -35,7 +35,7 @@ from typing import Protocol
 
 import numpy as np
 
-from fuzzynav.chunk_feed import EpochsByChunk
+from fuzzynav.chunk_feed import EpochsByChunk, HeldChunks
 from fuzzynav.errors import FuzzynavError, OutputRateError, RunDivergedError
 from fuzzynav.filters.named import FilterContext, FilterSetup, get_filter, parse_filter_spec
 from fuzzynav.filters.runner import InitialState, run_filter
@@ -201,13 +201,16 @@ def run(source: Source, filter_spec: str, options=None,
         up to the order of summation; a source without a ``scorer`` refuses it.
     output_dir : path-like, optional
         Write each chunk's kept outputs and event logs there (``--output-dir``;
-        :mod:`fuzzynav.filters.chunk_files`): for a source made or read chunk by chunk.
+        :mod:`fuzzynav.filters.chunk_files`); a held source's increments are then cut into
+        chunks of ``chunk_samples`` (default :data:`~fuzzynav.sim.budget.
+        DEFAULT_CHUNK_SAMPLES`, :class:`~fuzzynav.chunk_feed.HeldChunks`), its epochs given
+        chunk by chunk alike: the same arithmetic.
 
     Raises
     ------
     FuzzynavError
-        An output rate that does not divide the filter's, a source that cannot score
-        chunk by chunk, or ``output_dir`` for a run on held data.
+        An output rate that does not divide the filter's, or a source that cannot score
+        chunk by chunk.
     """
     setup = setup or make_setup(source, filter_spec, options)
     inp = source.inputs(setup)
@@ -229,6 +232,9 @@ def run(source: Source, filter_spec: str, options=None,
     if hasattr(feed, "chunks") and chunk_samples is None:  # read from a file
         chunk_samples = DEFAULT_CHUNK_SAMPLES
     held = sensors
+    if output_dir is not None and not hasattr(feed, "chunks"):  # chunk files of held data
+        feed = HeldChunks(feed)
+        chunk_samples = DEFAULT_CHUNK_SAMPLES if chunk_samples is None else chunk_samples
     if hasattr(feed, "chunks") and not getattr(feed, "events_per_chunk", False):
         feed = EpochsByChunk(feed, sensors)
         sensors = feed.header
@@ -253,7 +259,8 @@ def _check_outputs(source, imu, sensors: dict, config, keep: int, chunk_samples)
     chunk)."""
     if hasattr(imu, "chunks"):
         n, (t0, t1) = imu.n_samples + 1, imu.span_s
-        held = min(n, int(chunk_samples) + 1) * BYTES_PER_INCREMENT
+        held = getattr(imu, "held_bytes", None) or \
+            min(n, int(chunk_samples) + 1) * BYTES_PER_INCREMENT
     else:
         n, t0, t1 = int(np.size(imu.time_s)), None, None
         held = sum(getattr(imu, f).nbytes for f in ("time_s", "dtheta_b", "dv_b"))
@@ -365,6 +372,6 @@ RUN_SETTINGS = {
     "output_dir": "files of each chunk's kept solution and event logs",
 }
 
-#: the run settings of a streaming run (:func:`run`'s ``output_rate_hz`` and
-#: ``chunk_samples``): only sources that can score chunk by chunk take them
-STREAMING_SETTINGS = frozenset({"output_rate", "chunk"})
+#: the run settings of a streaming run (:func:`run`'s ``output_rate_hz``,
+#: ``chunk_samples`` and ``output_dir``): only sources that can score chunk by chunk take them
+STREAMING_SETTINGS = frozenset({"output_rate", "chunk", "output_dir"})

@@ -98,15 +98,29 @@ def test_output_dir_holds_every_chunk(tmp_path):
 
 
 
-def test_chunk_files_of_a_run_on_held_data_are_refused(tmp_path):
-    """A held log's event logs are made whole, not per chunk: no chunk files of them."""
+def test_chunk_files_of_a_run_on_held_data_hold_the_held_runs_rows_and_events(tmp_path):
+    """Held data with ``output_dir`` is cut into chunks (chunk_feed.HeldChunks) and given
+    its epochs chunk by chunk: the files hold the held run's rows and events to the bit, and
+    the metrics are the held run's; run_filter itself still refuses chunk files of a run
+    whose event logs are made whole."""
     from fuzzynav.experiment import SimulatedSource
+    from fuzzynav.filters.chunk_files import read_chunks
+    from fuzzynav.filters.runner import run_filter
     from fuzzynav.runpath import run
 
     log = simulate(short("paper003", 30.0), 0)
+    whole = run(SimulatedSource(log), "fuzzy-ship", chunk_samples=500)
+    got = run(SimulatedSource(log), "fuzzy-ship", chunk_samples=500, output_dir=tmp_path / "o")
+    _same(got.metrics, whole.metrics)
+    files = read_chunks(tmp_path / "o")
+    assert len(files.files) == 3 and not got.result.events
+    for f in ("time_s", "lla", "sigma"):
+        np.testing.assert_array_equal(getattr(files, f), getattr(whole.result, f))
+    for nm, ev in whole.result.events.items():
+        for f in ("time_s", "residual", "S_diag", "nis", "flag", "diag"):
+            np.testing.assert_array_equal(getattr(files.events[nm], f), getattr(ev, f))
     with pytest.raises(FuzzynavError, match="not for a held one"):
-        run(SimulatedSource(log), "ekf", chunk_samples=500, output_dir=tmp_path / "out")
-    assert not (tmp_path / "out").exists()
+        run_filter(log.imu, log.sensors, whole.result, output_dir=tmp_path / "x")
 
 def test_an_oracle_told_the_whole_runs_noise_is_refused():
     with pytest.raises(FuzzynavError, match="ekf-true: told each epoch's sigma"):

@@ -99,7 +99,9 @@ def add_streaming_arguments(p) -> None:
                         "DIR/FILTER-seedK/chunk-NNNNNN.npz (each written to a temporary "
                         "file, then renamed); on an rtklib recording (read from its file) "
                         "DIR/FILTER-seedK/FEED/chunk-NNNNNN.npz for each feed of the "
-                        "protocol (gnss, outages). A DIR already holding chunk files of an "
+                        "protocol (gnss, outages), on A-KIT DIR/FILTER-seed0/trajN/. Read "
+                        "back with fuzzynav.filters.chunk_files.read_chunks. A DIR already "
+                        "holding chunk files of an "
                         "earlier run is refused before anything runs")
 
 

@@ -89,8 +89,7 @@ class AkitSource:
     SETTINGS_NOTE = ("the filter starts from the reference, is fed the recorded sensors without "
                      "simulated outages or noise, and is scored over the whole run: nothing "
                      "depends on a seed; the loader establishes the frames and lags from the "
-                     "data; its trajectories are held, minutes long, so no chunk files are "
-                     "written")
+                     "data")
 
     def context(self, options=None) -> FilterContext:
         return context(self.rec, options)
@@ -169,8 +168,14 @@ def score_errors(err, ref, ok: bool) -> dict:
 
 def run_outcomes(recs, filter_name: str, options=None, **streaming) -> list:
     """One :class:`~fuzzynav.runpath.RunOutcome` per trajectory of ``recs`` (``streaming``:
-    as :func:`run_trajectory`)."""
-    return [run(AkitSource(rec), filter_name, options, **streaming) for rec in recs]
+    as :func:`run_trajectory`; its ``output_dir``, if any, gets a directory per trajectory,
+    ``trajN``)."""
+    def own(rec):
+        if streaming.get("output_dir") is None:
+            return streaming
+        return {**streaming, "output_dir": f"{streaming['output_dir']}/traj{rec.trajectory}"}
+
+    return [run(AkitSource(rec), filter_name, options, **own(rec)) for rec in recs]
 
 
 def outcomes_table(recs, outcomes) -> tuple[pd.DataFrame, dict]:

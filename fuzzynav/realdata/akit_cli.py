@@ -87,7 +87,11 @@ def run_akit(spec, recs, filter_name, options, args, streaming=None) -> int:
     of the whole run)."""
     from fuzzynav.realdata.akit import outcomes_table, run_outcomes
 
-    outcomes = run_outcomes(recs, filter_name, options, **dict(streaming or {}))
+    from fuzzynav.filters.chunk_files import run_files
+
+    # --output-dir: DIR/FILTER-seed0/trajN (nothing is drawn: one seed)
+    outcomes = run_outcomes(recs, filter_name, options,
+                            **run_files(dict(streaming or {}), filter_name, 0))
     # the guarantee every source keeps: non-finite metrics print nothing and exit 3 (the
     # attitude is not scored against the reference here: its RMS columns are NaN by design)
     check_outcomes([replace(o, filter=filter_name, scenario=f"{spec} (traj {r.trajectory})",
