@@ -7,38 +7,9 @@ a time, as on a simulation made chunk by chunk (:mod:`fuzzynav.streamrun`).
 """
 from __future__ import annotations
 
-from types import SimpleNamespace
-
-import numpy as np
-
 from fuzzynav.sim.stream import epochs_between
 
-__all__ = ["EpochsByChunk", "HeldChunks"]
-
-
-class HeldChunks:
-    """Held increments (``time_s``, ``dtheta_b``, ``dv_b``) handed out as consecutive chunks
-    of views, so a run on held data can be given its epochs chunk by chunk too
-    (:class:`EpochsByChunk`; what ``--output-dir`` needs: each chunk's event logs).  The
-    nominal interval is the whole run's median step, as a held run takes it."""
-
-    def __init__(self, imu):
-        self.imu = imu
-        t = np.asarray(imu.time_s, dtype=float)
-        self.n_samples = t.size - 1
-        self.span_s = (float(t[0]), float(t[-1]))
-        self.dt_nom_s = float(np.median(np.diff(t)))
-        #: the increments held [bytes] (they are not made chunk by chunk)
-        self.held_bytes = sum(np.asarray(getattr(imu, f)).nbytes
-                              for f in ("time_s", "dtheta_b", "dv_b"))
-
-    def chunks(self, n: int):
-        """Views of ``n`` increments each (their ``n + 1`` times), in order."""
-        imu, N = self.imu, self.n_samples
-        for a in range(0, max(N, 1), n):
-            b = min(a + n, N)
-            yield SimpleNamespace(time_s=imu.time_s[a:b + 1], dtheta_b=imu.dtheta_b[a:b],
-                                  dv_b=imu.dv_b[a:b])
+__all__ = ["EpochsByChunk"]
 
 
 class EpochsByChunk:

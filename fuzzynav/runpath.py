@@ -35,10 +35,10 @@ from typing import Protocol
 
 import numpy as np
 
-from fuzzynav.chunk_feed import EpochsByChunk, HeldChunks
+from fuzzynav.chunk_feed import EpochsByChunk
 from fuzzynav.errors import FuzzynavError, OutputRateError, RunDivergedError
 from fuzzynav.filters.named import FilterContext, FilterSetup, get_filter, parse_filter_spec
-from fuzzynav.filters.runner import InitialState, run_filter
+from fuzzynav.filters.runner import HeldChunks, InitialState, run_filter
 from fuzzynav.filters.sensor_states import with_sensor_states
 from fuzzynav.sim.budget import DEFAULT_CHUNK_SAMPLES, check_run_outputs
 
@@ -203,7 +203,7 @@ def run(source: Source, filter_spec: str, options=None,
         Write each chunk's kept outputs and event logs there (``--output-dir``;
         :mod:`fuzzynav.filters.chunk_files`); a held source's increments are then cut into
         chunks of ``chunk_samples`` (default :data:`~fuzzynav.sim.budget.
-        DEFAULT_CHUNK_SAMPLES`, :class:`~fuzzynav.chunk_feed.HeldChunks`), its epochs given
+        DEFAULT_CHUNK_SAMPLES`, :class:`~fuzzynav.filters.runner.HeldChunks`), its epochs given
         chunk by chunk alike: the same arithmetic.
 
     Raises
@@ -231,14 +231,14 @@ def run(source: Source, filter_spec: str, options=None,
         scorer = scoring.streaming_scorer()
     if hasattr(feed, "chunks") and chunk_samples is None:  # read from a file
         chunk_samples = DEFAULT_CHUNK_SAMPLES
-    held = sensors
+    fed = sensors  # whole: what the run holds beside its outputs
     if output_dir is not None and not hasattr(feed, "chunks"):  # chunk files of held data
         feed = HeldChunks(feed)
         chunk_samples = DEFAULT_CHUNK_SAMPLES if chunk_samples is None else chunk_samples
     if hasattr(feed, "chunks") and not getattr(feed, "events_per_chunk", False):
         feed = EpochsByChunk(feed, sensors)
         sensors = feed.header
-    _check_outputs(source, feed, held, config, keep, chunk_samples)
+    _check_outputs(source, feed, fed, config, keep, chunk_samples)
     res = run_filter(feed, sensors, inp.init, config, setup.adapters,
                      _merged(setup.sensor_options, inp.sensor_options),
                      chunk_samples=chunk_samples, keep_every=keep,

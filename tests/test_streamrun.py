@@ -99,7 +99,7 @@ def test_output_dir_holds_every_chunk(tmp_path):
 
 
 def test_chunk_files_of_a_run_on_held_data_hold_the_held_runs_rows_and_events(tmp_path):
-    """Held data with ``output_dir`` is cut into chunks (chunk_feed.HeldChunks) and given
+    """Held data with ``output_dir`` is cut into chunks (filters.runner.HeldChunks) and given
     its epochs chunk by chunk: the files hold the held run's rows and events to the bit, and
     the metrics are the held run's; run_filter itself still refuses chunk files of a run
     whose event logs are made whole."""
@@ -201,7 +201,8 @@ def test_read_chunks_refuses_a_gap_a_damaged_file_and_another_runs_chunk(tmp_pat
     for name, damage in (("gap", lambda d: (d / "chunk-000001.npz").unlink()),
                          ("cut", lambda d: (d / "chunk-000002.npz").write_bytes(b"PK\x03")),
                          ("mixed", lambda d: shutil.copy(tmp_path / "b" / "chunk-000000.npz",
-                                                         d / "chunk-000002.npz"))):
+                                                         d / "chunk-000002.npz")),
+                         ("short", lambda d: _drop_last_row(d / "chunk-000001.npz", "lla"))):
         d = tmp_path / name
         shutil.copytree(tmp_path / "a", d)
         damage(d)
@@ -213,5 +214,15 @@ def test_read_chunks_refuses_a_gap_a_damaged_file_and_another_runs_chunk(tmp_pat
                                    "readable npz file")
     assert cases["mixed"].startswith(f"{tmp_path / 'mixed' / 'chunk-000002.npz'}: time_s: "
                                      "starts at")
+    assert cases["short"].startswith(f"{tmp_path / 'short' / 'chunk-000001.npz'}: lla: has "
+                                     "shape")
     with pytest.raises(InputFileError, match="holds no chunk files"):
         read_chunks(tmp_path / "nowhere")
+
+
+def _drop_last_row(path, field):
+    """Rewrite a chunk file with one of its arrays a row short (a damaged file)."""
+    with np.load(path) as z:
+        arrays = {k: z[k] for k in z.files}
+    arrays[field] = arrays[field][:-1]
+    np.savez(path, **arrays)

@@ -19,8 +19,8 @@ from fuzzynav.errors import InputFileError, OutputError
 from fuzzynav.fileio import write_npz
 from fuzzynav.filters.result import EventLog
 
-__all__ = ["chunk_arrays", "ChunkFiles", "ChunkedRun", "read_chunks", "refuse_earlier_chunks",
-           "run_files"]
+__all__ = ["chunk_arrays", "ChunkFiles", "ChunkedRun", "below", "read_chunks",
+           "refuse_earlier_chunks", "run_files"]
 
 #: the fields of an event log written per stream
 EVENT_FIELDS = ("time_s", "residual", "S_diag", "nis", "flag", "diag")
@@ -75,15 +75,20 @@ class ChunkFiles:
         self.count += 1
 
 
+def below(streaming: dict, name: str) -> dict:
+    """Streaming options with their ``output_dir`` (if any) made its sub-directory
+    ``name`` (a run of a table, a feed of the protocol, a trajectory)."""
+    if streaming.get("output_dir") is None:
+        return dict(streaming)
+    return {**streaming, "output_dir": f"{streaming['output_dir']}/{name}"}
+
+
 def run_files(streaming: dict, filter_spec: str, seed: int) -> dict:
     """Streaming options with their ``output_dir`` (if any) made the run's own directory,
     ``output_dir/FILTER-seedK`` (``--output-dir`` of a table of filters and seeds)."""
     from fuzzynav.fileio import safe_stem
 
-    if streaming.get("output_dir") is None:
-        return dict(streaming)
-    return {**streaming, "output_dir": f"{streaming['output_dir']}/{safe_stem(filter_spec)}"
-                                       f"-seed{int(seed)}"}
+    return below(streaming, f"{safe_stem(filter_spec)}-seed{int(seed)}")
 
 
 @dataclass(frozen=True)
@@ -151,6 +156,7 @@ def read_chunks(directory) -> ChunkedRun:
             if part[key] != want:
                 raise InputFileError(path, key, f"{part[key]} differ from {files[0].name}'s "
                                                 f"{want}: not the same run")
+        _same_shapes(path, part, first)
         t = part["time_s"]
         if t.size and last_t is not None and not t[0] > last_t:
             raise InputFileError(path, "time_s", f"starts at {t[0]!r} s, not after the "
@@ -163,6 +169,22 @@ def read_chunks(directory) -> ChunkedRun:
               for nm in first["streams"]}
     return ChunkedRun(**rows, state_labels=first["state_labels"], events=events,
                       files=tuple(files))
+
+
+def _same_shapes(path: Path, part: dict, first: dict) -> None:
+    """Refuse a chunk whose arrays do not line up: a row or event count other than its
+    times', or columns other than the first chunk's."""
+    groups = [(part, first, ROW_FIELDS, "")] + [
+        (part["events"][nm], first["events"][nm], EVENT_FIELDS, f"events.{nm}.")
+        for nm in part["streams"]]
+    for got, want, fields, prefix in groups:
+        rows = got["time_s"].shape[:1]
+        for f in fields:
+            shape, ref = got[f].shape, want[f].shape
+            if shape[:1] != rows or shape[1:] != ref[1:]:
+                raise InputFileError(path, prefix + f, f"has shape {shape}: expected "
+                                                       f"{rows + ref[1:]} (its times' rows, "
+                                                       "the first chunk's columns)")
 
 
 def _chunk(path: Path) -> dict:

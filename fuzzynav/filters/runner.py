@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -22,7 +23,7 @@ from fuzzynav.filters.sensor_tables import (concat_event_logs, event_outputs, ev
 from fuzzynav.nav import strapdown
 from fuzzynav.nav.state_layout import LLA_SLICE, NAV_SIZE, Q_SLICE, VEL_SLICE
 
-__all__ = ["InitialState", "run_filter", "FilterRun"]
+__all__ = ["InitialState", "run_filter", "FilterRun", "HeldChunks"]
 
 # the kernel tables are the same few tuples run after run: numba types them once (every
 # loop's tables: fuzzynav.filters.loop), and looks their kernels' addresses up once
@@ -138,18 +139,41 @@ def run_filter(imu, sensors, init: InitialState, config: FilterConfig = FilterCo
             if files is not None:
                 files.write(fr.kept(), fr.chunk_logs)
         return fr.result()
-    time_s, dth, dv, dt_nom = _imu_arrays(imu)
-    fr = FilterRun(sensors, init, config, adapters, sensor_options, dt_nom, keep_every,
+    held = HeldChunks(imu)
+    fr = FilterRun(sensors, init, config, adapters, sensor_options, held.dt_nom_s, keep_every,
                    on_chunk)
-    N = dth.shape[0]
+    N = held.n_samples
     step = N if chunk_samples is None else int(chunk_samples)
     if step < 1 and N:
         raise FuzzynavError(f"chunk_samples must be a positive number of IMU samples, "
                             f"got {chunk_samples}")
-    for a in range(0, max(N, 1), max(step, 1)):
-        b = min(a + step, N)
-        fr.feed_arrays(time_s[a:b + 1], dth[a:b], dv[a:b])
+    for piece in held.chunks(max(step, 1)):
+        fr.feed_arrays(piece.time_s, piece.dtheta_b, piece.dv_b)
     return fr.result()
+
+
+class HeldChunks:
+    """Held increments (``time_s``, ``dtheta_b``, ``dv_b``), checked once, handed out as
+    consecutive chunks of views: how :func:`run_filter` feeds a held run in chunks, and
+    what a held run given its epochs chunk by chunk is fed from
+    (:class:`fuzzynav.chunk_feed.EpochsByChunk`, ``--output-dir``).  The nominal interval
+    is the whole run's median step."""
+
+    def __init__(self, imu):
+        self.time_s, self.dtheta_b, self.dv_b, self.dt_nom_s = _imu_arrays(imu)
+        self.n_samples = self.dtheta_b.shape[0]
+        self.span_s = (float(self.time_s[0]), float(self.time_s[-1]))
+        #: the increments held [bytes] (they are not made chunk by chunk)
+        self.held_bytes = self.time_s.nbytes + self.dtheta_b.nbytes + self.dv_b.nbytes
+
+    def chunks(self, n: int):
+        """Views of ``n`` increments each (their ``n + 1`` times), in order; one empty
+        chunk of a run without increments."""
+        N = self.n_samples
+        for a in range(0, max(N, 1), n):
+            b = min(a + n, N)
+            yield SimpleNamespace(time_s=self.time_s[a:b + 1], dtheta_b=self.dtheta_b[a:b],
+                                  dv_b=self.dv_b[a:b])
 
 
 class FilterRun:

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from fuzzynav.filters.chunk_files import below
 from fuzzynav.filters.named import FilterContext
 from fuzzynav.filters.runner import InitialState
 from fuzzynav.metrics import errors_vs_reference, rms_metrics
@@ -170,12 +171,8 @@ def run_outcomes(recs, filter_name: str, options=None, **streaming) -> list:
     """One :class:`~fuzzynav.runpath.RunOutcome` per trajectory of ``recs`` (``streaming``:
     as :func:`run_trajectory`; its ``output_dir``, if any, gets a directory per trajectory,
     ``trajN``)."""
-    def own(rec):
-        if streaming.get("output_dir") is None:
-            return streaming
-        return {**streaming, "output_dir": f"{streaming['output_dir']}/traj{rec.trajectory}"}
-
-    return [run(AkitSource(rec), filter_name, options, **own(rec)) for rec in recs]
+    return [run(AkitSource(rec), filter_name, options,
+                **below(streaming, f"traj{rec.trajectory}")) for rec in recs]
 
 
 def outcomes_table(recs, outcomes) -> tuple[pd.DataFrame, dict]:

@@ -11,6 +11,7 @@ import numpy as np
 import pandas as pd
 
 from fuzzynav.errors import InputFileError
+from fuzzynav.filters.chunk_files import below
 from fuzzynav.realdata import protocol
 from fuzzynav.realdata.mems import CONSUMER_MEMS, MemsModel
 from fuzzynav.realdata.protocol import ProtocolSettings
@@ -138,19 +139,12 @@ def validate(rec, filter_name: str, settings: ProtocolSettings = ProtocolSetting
             f"{getattr(rec, 'directory', 'recording')} ({FEEDS[name]})", int(seed), start,
             lambda opts, fixes=fixes: context_for(fixes, opts, mems, sigma0, nhc),
             scoring, lambda m: required_names(m, vel_scored), settings.use_velocity)
-        out = run(source, filter_name, options, **_feed_streaming(streaming, name))
+        out = run(source, filter_name, options, **below(streaming, name))
         err = scored["errors"]
         runs[name] = FeedRun(fixes, out.result, err, out.metrics,
                              outage_drifts(err, scored["solution_time_s"], windows),
                              out.diverged)
     return Validation(filter_name, int(seed), settings, start, windows, runs)
-
-
-def _feed_streaming(streaming: dict, feed: str) -> dict:
-    """``run``'s streaming options for one feed: its chunk files in a directory of its own."""
-    if streaming.get("output_dir") is None:
-        return streaming
-    return {**streaming, "output_dir": f"{streaming['output_dir']}/{feed}"}
 
 
 def prepare_feeds(rec, settings: ProtocolSettings, seed: int):
