@@ -160,15 +160,20 @@ def pitch_correlation(imu, gt) -> float:
     edges = np.arange(lo, hi + 1e-9, PITCH_WINDOW_S)
     if edges.size < 6:
         return float("nan")
-    f = np.array([imu[(imu[:, 0] >= a) & (imu[:, 0] < b), 1].mean()
-                  for a, b in zip(edges[:-1], edges[1:])])
-    g_sin = units.G0 * np.sin(gt[:, 8])
-    p = np.array([g_sin[(gt[:, 0] >= a) & (gt[:, 0] < b)].mean()
-                  for a, b in zip(edges[:-1], edges[1:])])
+    f = _window_means(imu[:, 0], imu[:, 1], edges)
+    p = _window_means(gt[:, 0], units.G0 * np.sin(gt[:, 8]), edges)
     ok = np.isfinite(f) & np.isfinite(p)
     if ok.sum() < 5 or np.std(p[ok]) < 1e-3 * units.G0:
         return float("nan")
     return float(np.corrcoef(f[ok], p[ok])[0, 1])
+
+
+def _window_means(t, v, edges) -> np.ndarray:
+    """Means of ``v`` over the samples with ``edges[i] <= t < edges[i + 1]`` (NaN where
+    none): ``t`` increases, so each window is a slice, found by bisection (a mask per
+    window would cost windows x samples, hours on a day's IMU)."""
+    i = np.searchsorted(t, edges, side="left")
+    return np.array([v[a:b].mean() for a, b in zip(i[:-1].tolist(), i[1:].tolist())])
 
 
 def pitch_sign(path, imu, gt) -> None:

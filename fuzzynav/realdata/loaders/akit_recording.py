@@ -27,6 +27,7 @@ Everything is returned in fuzzynav's frames: ENU navigation, body RFU
 """
 from __future__ import annotations
 
+import io
 import re
 import warnings
 from dataclasses import dataclass, field
@@ -118,6 +119,9 @@ def _parse_rows(path, lines, first_lineno: int, ncol: int):
     """The numbers of text rows (``lines``, the first being line ``first_lineno`` of the
     file, 1-based); raises the error of the first row that is cut, not a number or not
     finite."""
+    plain = _parsed_at_once(lines, ncol)
+    if plain is not None:
+        return plain
     rows = []
     for i, line in enumerate(lines, start=first_lineno):
         parts = line.split(",")
@@ -133,6 +137,21 @@ def _parse_rows(path, lines, first_lineno: int, ncol: int):
             raise InputFileError(path, f"line {i}", "a field is not finite")
         rows.append(vals)
     return np.array(rows, dtype=float).reshape(len(rows), ncol)
+
+
+def _parsed_at_once(lines, ncol: int):
+    """The rows parsed by numpy's reader at once (the speed of a long file), or ``None``
+    when one is not plain numbers (a cut row, a blank line, an odd spelling): the row by
+    row parse then says which, or reads what Python's ``float`` takes and numpy's does
+    not.  Both parse a number with CPython's own ``PyOS_string_to_double``, so a row gives
+    the same floats either way."""
+    try:
+        a = np.loadtxt(io.StringIO("\n".join(lines)), delimiter=",", ndmin=2, comments=None)
+    except ValueError:
+        return None
+    if a.shape != (len(lines), ncol) or not np.all(np.isfinite(a)):
+        return None
+    return a
 
 
 def _time_error(path, t, first_lineno: int):
@@ -220,8 +239,7 @@ def reference_attitude(rpy) -> np.ndarray:
     C = np.array([[cp * cy, sr * sp * cy - cr * sy, cr * sp * cy + sr * sy],
                   [cp * sy, sr * sp * sy + cr * cy, cr * sp * sy - sr * cy],
                   [-sp, sr * cp, cr * cp]])
-    C_frd_ned = np.moveaxis(C, -1, 0)
-    return np.array([attitude.dcm_to_quat(SWAP @ Cm @ SWAP) for Cm in C_frd_ned])
+    return attitude.dcm_to_quat(SWAP @ np.moveaxis(C, -1, 0) @ SWAP).reshape(len(rpy), 4)
 
 
 def reference_at(gt, t_new) -> Reference:

@@ -25,8 +25,8 @@ import numpy as np
 
 from fuzzynav.nav import attitude
 
-__all__ = ["EARTH_RATE", "MAX_OFFSET_S", "SEGMENTS", "ClockMap", "parabola_min",
-           "attitude_track", "track_at", "without_earth_rate", "epoch_misfits",
+__all__ = ["EARTH_RATE", "MAX_OFFSET_S", "SEGMENTS", "BLOCK_ELEMENTS", "ClockMap",
+           "parabola_min", "attitude_track", "track_at", "without_earth_rate", "epoch_misfits",
            "segment_offsets", "estimate_clock", "MIN_OFFSET_CONTRAST", "dvl_offset"]
 
 #: earth rotation rate [rad/s] (WGS-84)
@@ -35,6 +35,12 @@ EARTH_RATE = 7.292115e-5
 MAX_OFFSET_S = 2.0
 #: segments of the trajectory whose best offsets give the clock rate
 SEGMENTS = 10
+#: IMU samples, or (offset, epoch) pairs of the misfit search, handled at a time: the
+#: array steps work through a recording in blocks of this many, so their temporaries are
+#: bounded by the block (a day of 100-Hz IMU and 1-Hz reference has 35 M pairs of four
+#: quaternions each) while every number is the whole arrays' (each is computed from its
+#: own sample or pair alone)
+BLOCK_ELEMENTS = 1 << 15
 
 
 @dataclass(frozen=True)
@@ -71,14 +77,17 @@ def parabola_min(cost) -> float:
 def attitude_track(dtheta_b) -> np.ndarray:
     """Quaternions of the body at each IMU sample relative to the first, chained from the
     rotation increments ``dtheta_b`` (K-1, 3): ``q[k] = q[k-1] * exp(dtheta[k-1])``."""
-    inc = attitude.rotvec_to_quat(dtheta_b)
-    q = np.empty((inc.shape[0] + 1, 4))
+    q = np.empty((dtheta_b.shape[0] + 1, 4))
     q[0] = w, x, y, z = 1.0, 0.0, 0.0, 0.0
-    # a scalar loop: a cumulative quaternion product has no numpy form
-    for k, (a, b, c, d) in enumerate(inc.tolist()):
-        w, x, y, z = (w * a - x * b - y * c - z * d, w * b + x * a + y * d - z * c,
-                      w * c - x * d + y * a + z * b, w * d + x * c - y * b + z * a)
-        q[k + 1] = w, x, y, z
+    k = 1
+    # a scalar loop: a cumulative quaternion product has no numpy form; the increments'
+    # quaternions a block at a time (as Python floats they would be ~200 B a sample)
+    for s0 in range(0, dtheta_b.shape[0], BLOCK_ELEMENTS):
+        for a, b, c, d in attitude.rotvec_to_quat(dtheta_b[s0:s0 + BLOCK_ELEMENTS]).tolist():
+            w, x, y, z = (w * a - x * b - y * c - z * d, w * b + x * a + y * d - z * c,
+                          w * c - x * d + y * a + z * b, w * d + x * c - y * b + z * a)
+            q[k] = w, x, y, z
+            k += 1
     return q
 
 
@@ -93,25 +102,36 @@ def track_at(t_imu, q, dtheta_b, t) -> np.ndarray:
 def without_earth_rate(t_imu, dtheta_b, t_ref, q_ref, lat_rad) -> np.ndarray:
     """Gyro increments less the earth rate seen in the body (the reference attitude of the
     nearest epoch is close enough: 0.004 deg/s either way)."""
-    k = np.clip(np.searchsorted(t_ref, t_imu[1:]), 0, t_ref.size - 1)
-    C_bn = np.swapaxes(attitude.quat_to_dcm(q_ref[k]), -1, -2)
     w_ie = EARTH_RATE * np.array([0.0, np.cos(lat_rad), np.sin(lat_rad)])  # ENU
-    return dtheta_b - (C_bn @ w_ie) * np.diff(t_imu)[:, None]
+    out = np.empty_like(dtheta_b)
+    for a in range(0, dtheta_b.shape[0], BLOCK_ELEMENTS):  # a (3, 3) matrix per sample
+        b = min(a + BLOCK_ELEMENTS, dtheta_b.shape[0])
+        k = np.clip(np.searchsorted(t_ref, t_imu[a + 1:b + 1]), 0, t_ref.size - 1)
+        C_bn = np.swapaxes(attitude.quat_to_dcm(q_ref[k]), -1, -2)
+        out[a:b] = dtheta_b[a:b] - (C_bn @ w_ie) * np.diff(t_imu[a:b + 1])[:, None]
+    return out
 
 
 def epoch_misfits(t_imu, dtheta_b, t_ref, q_ref, shifts) -> tuple[np.ndarray, np.ndarray]:
     """Squared rotation misfit [rad^2], shape (len(shifts), J), between the reference's body
     rotation from epoch j to j+1 and the gyro track's from ``t_ref - shift``; with the
-    epochs j used (both ends inside the IMU span for every shift)."""
+    epochs j used (both ends inside the IMU span for every shift).  Made for
+    :data:`BLOCK_ELEMENTS` pairs of shift and epoch at a time."""
     q = attitude_track(dtheta_b)
     j = np.flatnonzero((t_ref[:-1] - shifts.max() >= t_imu[0])
                        & (t_ref[1:] - shifts.min() <= t_imu[-1]))
-    d_ref = attitude.quat_multiply(attitude.quat_conj(q_ref[j]), q_ref[j + 1])
-    q0 = track_at(t_imu, q, dtheta_b, t_ref[j][None, :] - shifts[:, None])
-    q1 = track_at(t_imu, q, dtheta_b, t_ref[j + 1][None, :] - shifts[:, None])
-    d_gyro = attitude.quat_multiply(attitude.quat_conj(q0), q1)
-    err = attitude.quat_to_rotvec(attitude.quat_multiply(attitude.quat_conj(d_ref)[None], d_gyro))
-    return np.sum(err * err, -1), j
+    misfit = np.empty((shifts.size, j.size))
+    step = max(1, BLOCK_ELEMENTS // shifts.size)
+    for a in range(0, j.size, step):
+        jb = j[a:a + step]
+        d_ref = attitude.quat_multiply(attitude.quat_conj(q_ref[jb]), q_ref[jb + 1])
+        q0 = track_at(t_imu, q, dtheta_b, t_ref[jb][None, :] - shifts[:, None])
+        q1 = track_at(t_imu, q, dtheta_b, t_ref[jb + 1][None, :] - shifts[:, None])
+        d_gyro = attitude.quat_multiply(attitude.quat_conj(q0), q1)
+        err = attitude.quat_to_rotvec(attitude.quat_multiply(attitude.quat_conj(d_ref)[None],
+                                                             d_gyro))
+        misfit[:, a:a + jb.size] = np.sum(err * err, -1)
+    return misfit, j
 
 
 def _along(misfit, shifts, lines) -> np.ndarray:
