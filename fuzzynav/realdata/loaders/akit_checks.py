@@ -29,8 +29,11 @@ __all__ = ["HELD_COPIES", "NOMINAL_RATE_HZ", "RATE_TOLERANCE", "MAX_START_S",
            "rotation_misfit_deg", "belong_together", "dvl_forward_rms", "clock_map"]
 
 #: peak memory of loading a file, in copies of its parsed table (float64 rows): the table
-#: and what the loader derives from it (the IMU's increments and their intermediates);
-#: measured 4.3 on an IMU file of 10^6 rows (+232 MB of peak RSS for a 53-MB table)
+#: and what the loader derives from it (the IMU's increments, the clock estimate's attitude
+#: track, gyro and misfit table; their temporaries are a block's, ``akit_timing``);
+#: measured 2.9 (the peak traced over ``load_trajectory`` grows by 165 B per IMU line from
+#: a synthetic 1-h file to a 2-h one at 100 Hz with a 1-Hz reference,
+#: ``benchmarks/bench_akit_long.py``), 4.3 before the array steps were made in blocks
 HELD_COPIES = 5
 #: nominal rates [Hz] of the files (Phins IMU 100 Hz; DVL and reference 1 Hz) and how far
 #: the time column may imply another (the 1-Hz streams run 0.25 % slow; a time column in ms,

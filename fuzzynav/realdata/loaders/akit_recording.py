@@ -39,7 +39,8 @@ from fuzzynav.errors import DataMissingError, InputFileError, brief
 from fuzzynav.nav import attitude
 from fuzzynav.realdata.loaders import akit_checks as checks, chunked
 from fuzzynav.realdata.loaders.chunked import DEFAULT_CHUNK_ROWS
-from fuzzynav.realdata.loaders.akit_timing import ClockMap, dvl_offset, estimate_clock
+from fuzzynav.realdata.loaders.akit_timing import BLOCK_ELEMENTS, ClockMap, dvl_offset, \
+    estimate_clock
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.sim.sensors import SensorData
 
@@ -222,14 +223,19 @@ def imu_increments(t, acc_file, gyro_file) -> ImuData:
     """Trapezoidal increments of the sampled rates, in body RFU.
 
     The files' y columns (accelerometer and gyro) have the opposite sign of a
-    forward-right-down frame (:data:`IMU_FILE_TO_FRD`); they are turned round first.
+    forward-right-down frame (:data:`IMU_FILE_TO_FRD`); they are turned round first.  Made
+    a block of samples at a time (:data:`~.akit_timing.BLOCK_ELEMENTS`: each increment is
+    its two samples' alone), so a long file's temporaries are the block's.
     """
-    acc_frd, gyro_frd = acc_file * IMU_FILE_TO_FRD, gyro_file * IMU_FILE_TO_FRD
-    dt = np.diff(t)[:, None]
-    dth = 0.5 * (gyro_frd[1:] + gyro_frd[:-1]) * dt
-    dv = 0.5 * (acc_frd[1:] + acc_frd[:-1]) * dt
-    return ImuData(time_s=t.copy(), dtheta_b=dth @ SWAP.T, dv_b=dv @ SWAP.T,
-                   meta={"frame": "RFU from FRD"})
+    K = max(t.size - 1, 0)
+    dth, dv = np.empty((K, 3)), np.empty((K, 3))
+    for a in range(0, K, BLOCK_ELEMENTS):
+        b = min(a + BLOCK_ELEMENTS, K)
+        acc_frd, gyro_frd = acc_file[a:b + 1] * IMU_FILE_TO_FRD, gyro_file[a:b + 1] * IMU_FILE_TO_FRD
+        dt = np.diff(t[a:b + 1])[:, None]
+        dth[a:b] = (0.5 * (gyro_frd[1:] + gyro_frd[:-1]) * dt) @ SWAP.T
+        dv[a:b] = (0.5 * (acc_frd[1:] + acc_frd[:-1]) * dt) @ SWAP.T
+    return ImuData(time_s=t.copy(), dtheta_b=dth, dv_b=dv, meta={"frame": "RFU from FRD"})
 
 
 def reference_attitude(rpy) -> np.ndarray:
@@ -259,9 +265,10 @@ def forward_velocity(gt) -> np.ndarray:
     return np.einsum("ki,ki->k", C[:, :, 1], gt[:, 4:7] @ SWAP.T)
 
 
-def reference_clock(imu, gt, dvl) -> ClockMap:
-    """The reference's and the DVL's clock map onto the IMU (:mod:`.akit_timing`)."""
-    inc = imu_increments(imu[:, 0], imu[:, 1:4], imu[:, 4:7])
+def reference_clock(imu, gt, dvl, inc=None) -> ClockMap:
+    """The reference's and the DVL's clock map onto the IMU (:mod:`.akit_timing`); ``inc``:
+    the IMU table's :func:`imu_increments`, if made already."""
+    inc = imu_increments(imu[:, 0], imu[:, 1:4], imu[:, 4:7]) if inc is None else inc
     clock = estimate_clock(inc.time_s, inc.dtheta_b, gt[:, 0], reference_attitude(gt[:, 7:10]),
                            float(np.median(gt[:, 2])))
     dt = float(np.median(np.diff(imu[:, 0])))
@@ -337,8 +344,8 @@ def _load(d: Path, n: int, files: dict, chunk_rows) -> AkitRecording:
     checks.reference_of(files["reference"], gt)
     checks.pitch_sign(files["reference"], imu, gt)
     checks.spans(files, imu[:, 0], dvl[:, 0], gt[:, 0])
-    clock = reference_clock(imu, gt, dvl)
     full = imu_increments(imu[:, 0], imu[:, 1:4], imu[:, 4:7])
+    clock = reference_clock(imu, gt, dvl, full)
     checks.belong_together(
         files, checks.rotation_misfit_deg(full, gt, reference_attitude(gt[:, 7:10]), clock),
         checks.dvl_forward_rms(dvl, gt, clock, reference_on_imu_clock, body_velocity))
@@ -349,7 +356,11 @@ def _load(d: Path, n: int, files: dict, chunk_rows) -> AkitRecording:
     z = dvl[inside, 1:4] @ SWAP.T
     sensor = SensorData("dvl", t_dvl[inside], z, np.full(z.shape, DVL_SIGMA_MPS),
                         {"rate_hz": 1.0 / float(np.median(np.diff(dvl[:, 0])))})
-    inc = imu_increments(imu[:, 0], imu[:, 1:4], imu[:, 4:7])
+    # the increments from the first sample kept on: the whole table's from there (each
+    # increment is its two samples' alone), not made again
+    s = full.time_s.size - imu.shape[0]
+    inc = full if s == 0 else ImuData(full.time_s[s:], full.dtheta_b[s:], full.dv_b[s:],
+                                      meta=full.meta)
     r_b = reference_offset(inc, sensor, reference_on_imu_clock(gt, clock, sensor.time_s))
     return AkitRecording(n, d, inc, sensor, ref, clock, r_b, {k: str(v) for k, v in files.items()})
 

@@ -134,15 +134,21 @@ def epoch_misfits(t_imu, dtheta_b, t_ref, q_ref, shifts) -> tuple[np.ndarray, np
     return misfit, j
 
 
-def _along(misfit, shifts, lines) -> np.ndarray:
-    """Mean misfit over epochs for each line of shifts (rows of ``lines``, one per epoch),
-    the misfit interpolated between the sampled shifts."""
+def _along(misfit, shifts, slope: float, t_epoch) -> np.ndarray:
+    """Mean misfit over epochs along each line of shifts ``shifts[i] + slope t_epoch``, the
+    misfit interpolated between the sampled shifts; a block of lines at a time (each
+    line's mean is over all epochs, so the blocks do not change it)."""
     step = shifts[1] - shifts[0]
-    pos = np.clip((lines - shifts[0]) / step, 0.0, shifts.size - 1.000001)
-    i = pos.astype(int)
-    f = pos - i
     cols = np.arange(misfit.shape[1])
-    return np.mean((1 - f) * misfit[i, cols] + f * misfit[i + 1, cols], axis=-1)
+    out = np.empty(shifts.size)
+    rows = max(1, BLOCK_ELEMENTS // max(cols.size, 1))
+    for r in range(0, shifts.size, rows):
+        lines = shifts[r:r + rows, None] + slope * t_epoch[None, :]
+        pos = np.clip((lines - shifts[0]) / step, 0.0, shifts.size - 1.000001)
+        i = pos.astype(int)
+        f = pos - i
+        out[r:r + rows] = np.mean((1 - f) * misfit[i, cols] + f * misfit[i + 1, cols], axis=-1)
+    return out
 
 
 def segment_offsets(misfit, shifts, t_epoch) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -184,7 +190,7 @@ def estimate_clock(t_imu, dtheta_b, t_ref, q_ref, lat_rad) -> ClockMap:
         A = np.column_stack([np.ones_like(mids), mids]) * np.sqrt(w)[:, None]
         b = float(np.linalg.lstsq(A, best * np.sqrt(w), rcond=None)[0][1])
     # the offset at the start, refined along the fitted slope over every epoch
-    c = _along(misfit, shifts, shifts[:, None] + b * t_ref[j][None, :])
+    c = _along(misfit, shifts, b, t_ref[j])
     a = shifts[0] + parabola_min(c) * dt
     # label = t_ref; the event happened at t_imu = label - (a + b * label)
     rate = 1.0 / (1.0 - b)
