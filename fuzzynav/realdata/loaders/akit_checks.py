@@ -176,7 +176,8 @@ def _window_means(t, v, edges) -> np.ndarray:
     none): ``t`` increases, so each window is a slice, found by bisection (a mask per
     window would cost windows x samples, hours on a day's IMU)."""
     i = np.searchsorted(t, edges, side="left")
-    return np.array([v[a:b].mean() for a, b in zip(i[:-1].tolist(), i[1:].tolist())])
+    return np.array([v[a:b].mean() if b > a else np.nan
+                     for a, b in zip(i[:-1].tolist(), i[1:].tolist())])
 
 
 def pitch_sign(path, imu, gt) -> None:
