@@ -265,13 +265,12 @@ def forward_velocity(gt) -> np.ndarray:
     return np.einsum("ki,ki->k", C[:, :, 1], gt[:, 4:7] @ SWAP.T)
 
 
-def reference_clock(imu, gt, dvl, inc=None) -> ClockMap:
-    """The reference's and the DVL's clock map onto the IMU (:mod:`.akit_timing`); ``inc``:
-    the IMU table's :func:`imu_increments`, if made already."""
-    inc = imu_increments(imu[:, 0], imu[:, 1:4], imu[:, 4:7]) if inc is None else inc
+def reference_clock(inc: ImuData, gt, dvl) -> ClockMap:
+    """The reference's and the DVL's clock map onto the IMU (:mod:`.akit_timing`) from the
+    IMU's increments ``inc`` (:func:`imu_increments` of its table)."""
     clock = estimate_clock(inc.time_s, inc.dtheta_b, gt[:, 0], reference_attitude(gt[:, 7:10]),
                            float(np.median(gt[:, 2])))
-    dt = float(np.median(np.diff(imu[:, 0])))
+    dt = float(np.median(np.diff(inc.time_s)))
     delta = dvl_offset(dvl[:, 0], dvl[:, 1], gt[:, 0], forward_velocity(gt), dt)
     return ClockMap(clock.offset_s, clock.rate, delta)
 
@@ -311,14 +310,14 @@ def reference_on_imu_clock(gt, clock: ClockMap, t_imu) -> Reference:
     return Reference(np.asarray(t_imu, float), ref.lla, ref.vel_n, ref.q_bn)
 
 
-def _reference_on_imu_clock(gt, imu, clock: ClockMap):
+def _reference_on_imu_clock(gt, t_imu, clock: ClockMap):
     """The reference resampled at its own rate on the IMU clock from the first IMU sample it
-    covers (IMU samples before that are dropped: the filter starts from the reference)."""
-    t0 = max(imu[0, 0], float(clock.to_imu(gt[0, 0])))
-    imu = imu[np.searchsorted(imu[:, 0], t0 - 1e-9):]
+    covers, and that sample's index in ``t_imu`` (the samples before it are dropped: the
+    filter starts from the reference)."""
+    s = int(np.searchsorted(t_imu, max(t_imu[0], float(clock.to_imu(gt[0, 0]))) - 1e-9))
     period = float(np.median(np.diff(gt[:, 0]))) / clock.rate
-    t_ref = np.arange(imu[0, 0], min(float(clock.to_imu(gt[-1, 0])), imu[-1, 0]) + 1e-9, period)
-    return reference_on_imu_clock(gt, clock, t_ref), imu
+    t_ref = np.arange(t_imu[s], min(float(clock.to_imu(gt[-1, 0])), t_imu[-1]) + 1e-9, period)
+    return reference_on_imu_clock(gt, clock, t_ref), s
 
 
 def load_trajectory(directory, n: int, chunk_rows=DEFAULT_CHUNK_ROWS) -> AkitRecording:
@@ -345,22 +344,22 @@ def _load(d: Path, n: int, files: dict, chunk_rows) -> AkitRecording:
     checks.pitch_sign(files["reference"], imu, gt)
     checks.spans(files, imu[:, 0], dvl[:, 0], gt[:, 0])
     full = imu_increments(imu[:, 0], imu[:, 1:4], imu[:, 4:7])
-    clock = reference_clock(imu, gt, dvl, full)
+    del imu  # from here on its increments and their times: the table is not held twice
+    t = full.time_s
+    clock = reference_clock(full, gt, dvl)
     checks.belong_together(
         files, checks.rotation_misfit_deg(full, gt, reference_attitude(gt[:, 7:10]), clock),
         checks.dvl_forward_rms(dvl, gt, clock, reference_on_imu_clock, body_velocity))
     checks.clock_map(files, clock, gt[[0, -1], 0])
-    ref, imu = _reference_on_imu_clock(gt, imu, clock)
+    ref, s = _reference_on_imu_clock(gt, t, clock)
     t_dvl = clock.to_imu(dvl[:, 0], clock.dvl_offset_s)
-    inside = (t_dvl > imu[0, 0]) & (t_dvl <= imu[-1, 0])
+    inside = (t_dvl > t[s]) & (t_dvl <= t[-1])
     z = dvl[inside, 1:4] @ SWAP.T
     sensor = SensorData("dvl", t_dvl[inside], z, np.full(z.shape, DVL_SIGMA_MPS),
                         {"rate_hz": 1.0 / float(np.median(np.diff(dvl[:, 0])))})
     # the increments from the first sample kept on: the whole table's from there (each
     # increment is its two samples' alone), not made again
-    s = full.time_s.size - imu.shape[0]
-    inc = full if s == 0 else ImuData(full.time_s[s:], full.dtheta_b[s:], full.dv_b[s:],
-                                      meta=full.meta)
+    inc = full if s == 0 else ImuData(t[s:], full.dtheta_b[s:], full.dv_b[s:], meta=full.meta)
     r_b = reference_offset(inc, sensor, reference_on_imu_clock(gt, clock, sensor.time_s))
     return AkitRecording(n, d, inc, sensor, ref, clock, r_b, {k: str(v) for k, v in files.items()})
 
