@@ -221,9 +221,8 @@ def rotation_misfit_deg(inc, gt, q_ref, clock) -> float:
     """RMS misfit [deg] between the reference's body rotation over each epoch and the
     gyros' over the same interval on the IMU clock."""
     t_ref = clock.to_imu(gt[:, 0])
-    gyro = timing.without_earth_rate(inc.time_s, inc.dtheta_b, t_ref, q_ref,
-                                     float(np.median(gt[:, 2])))
-    misfit, _ = timing.epoch_misfits(inc.time_s, gyro, t_ref, q_ref, np.zeros(1))
+    track = timing.GyroTrack(inc.time_s, inc.dtheta_b, t_ref, q_ref, float(np.median(gt[:, 2])))
+    misfit, _ = timing.epoch_misfits(track, t_ref, q_ref, np.zeros(1))
     return float(np.rad2deg(np.sqrt(np.mean(misfit[0]))))
 
 

@@ -231,7 +231,8 @@ def imu_increments(t, acc_file, gyro_file) -> ImuData:
     dth, dv = np.empty((K, 3)), np.empty((K, 3))
     for a in range(0, K, BLOCK_ELEMENTS):
         b = min(a + BLOCK_ELEMENTS, K)
-        acc_frd, gyro_frd = acc_file[a:b + 1] * IMU_FILE_TO_FRD, gyro_file[a:b + 1] * IMU_FILE_TO_FRD
+        acc_frd = acc_file[a:b + 1] * IMU_FILE_TO_FRD
+        gyro_frd = gyro_file[a:b + 1] * IMU_FILE_TO_FRD
         dt = np.diff(t[a:b + 1])[:, None]
         dth[a:b] = (0.5 * (gyro_frd[1:] + gyro_frd[:-1]) * dt) @ SWAP.T
         dv[a:b] = (0.5 * (acc_frd[1:] + acc_frd[:-1]) * dt) @ SWAP.T

@@ -26,8 +26,9 @@ import numpy as np
 from fuzzynav.nav import attitude
 
 __all__ = ["EARTH_RATE", "MAX_OFFSET_S", "SEGMENTS", "BLOCK_ELEMENTS", "ClockMap",
-           "parabola_min", "attitude_track", "track_at", "without_earth_rate", "epoch_misfits",
-           "segment_offsets", "estimate_clock", "MIN_OFFSET_CONTRAST", "dvl_offset"]
+           "parabola_min", "attitude_track", "GyroTrack", "track_at", "without_earth_rate",
+           "epoch_misfits", "segment_offsets", "estimate_clock", "MIN_OFFSET_CONTRAST",
+           "dvl_offset"]
 
 #: earth rotation rate [rad/s] (WGS-84)
 EARTH_RATE = 7.292115e-5
@@ -77,9 +78,15 @@ def parabola_min(cost) -> float:
 def attitude_track(dtheta_b) -> np.ndarray:
     """Quaternions of the body at each IMU sample relative to the first, chained from the
     rotation increments ``dtheta_b`` (K-1, 3): ``q[k] = q[k-1] * exp(dtheta[k-1])``."""
-    q = np.empty((dtheta_b.shape[0] + 1, 4))
-    q[0] = w, x, y, z = 1.0, 0.0, 0.0, 0.0
-    k = 1
+    q0 = np.array([[1.0, 0.0, 0.0, 0.0]])
+    return np.concatenate([q0, _chain(q0[0], dtheta_b)])
+
+
+def _chain(q_last, dtheta_b) -> np.ndarray:
+    """The track's next quaternions after ``q_last``, one per increment of ``dtheta_b``."""
+    q = np.empty((dtheta_b.shape[0], 4))
+    w, x, y, z = q_last.tolist()
+    k = 0
     # a scalar loop: a cumulative quaternion product has no numpy form; the increments'
     # quaternions a block at a time (as Python floats they would be ~200 B a sample)
     for s0 in range(0, dtheta_b.shape[0], BLOCK_ELEMENTS):
@@ -91,12 +98,66 @@ def attitude_track(dtheta_b) -> np.ndarray:
     return q
 
 
-def track_at(t_imu, q, dtheta_b, t) -> np.ndarray:
+class GyroTrack:
+    """The gyro track of an IMU made as far as it is asked for, forward only: the
+    increments less the earth rate (:func:`without_earth_rate`) chained into the body's
+    attitude (:func:`attitude_track`), held from the last window's first sample on.
+
+    The misfit search asks for the samples around each block of reference epochs in turn,
+    so a recording's track is never held whole; its numbers are the whole track's (each
+    increment is its own sample's, the chain the same scalar loop carried on).
+
+    Parameters
+    ----------
+    t_imu, dtheta_b : IMU times (K+1,) and rotation increments (K, 3).
+    t_ref, q_ref, lat_rad : the earth rate's reference, as :func:`without_earth_rate`.
+    """
+
+    def __init__(self, t_imu, dtheta_b, t_ref, q_ref, lat_rad):
+        self.t_imu, self.dtheta_b, self.earth = t_imu, dtheta_b, (t_ref, q_ref, lat_rad)
+        self.start = 0  # the sample of q[0], the increment of gyro[0]
+        self.q = np.array([[1.0, 0.0, 0.0, 0.0]])
+        self.gyro = np.empty((0, 3))
+
+    def window(self, lo: int, hi: int) -> tuple[np.ndarray, np.ndarray]:
+        """``(q, gyro)``: the track at samples ``lo..hi`` and the increments ``lo..hi`` (up
+        to the last); ``lo`` must not be before an earlier window's."""
+        if lo < self.start:
+            raise ValueError(f"GyroTrack goes forward only: sample {lo} is before {self.start}")
+        while self.start + self.q.shape[0] <= hi:  # chain on, a block at a time
+            last = self.start + self.q.shape[0] - 1
+            target = min(hi, last + BLOCK_ELEMENTS)
+            self._make_gyro(target - 1)
+            g = self.gyro[last - self.start:target - self.start]
+            self.q = np.concatenate([self.q, _chain(self.q[-1], g)])
+            self._drop(min(lo, target))
+        self._make_gyro(min(hi, self.dtheta_b.shape[0] - 1))
+        self._drop(lo)
+        return self.q[:hi - lo + 1], self.gyro[:hi - lo + 1]
+
+    def _make_gyro(self, upto: int) -> None:
+        """The increments up to ``upto``, less the earth rate."""
+        end = self.start + self.gyro.shape[0]
+        if upto >= end:
+            new = without_earth_rate(self.t_imu[end:upto + 2], self.dtheta_b[end:upto + 1],
+                                     *self.earth)
+            self.gyro = np.concatenate([self.gyro, new])
+
+    def _drop(self, lo: int) -> None:
+        """Let go of the samples before ``lo``."""
+        cut = lo - self.start
+        if cut > 0:
+            self.q, self.gyro, self.start = self.q[cut:], self.gyro[cut:], lo
+
+
+def track_at(t_imu, q, dtheta_b, t, first: int = 0) -> np.ndarray:
     """The track ``q`` at times ``t`` (any shape) between samples: the increment of the
-    sample interval taken in proportion (constant rate within a sample)."""
-    k = np.clip(np.searchsorted(t_imu, t, side="right") - 1, 0, dtheta_b.shape[0] - 1)
+    sample interval taken in proportion (constant rate within a sample).  ``q`` and
+    ``dtheta_b`` may start at sample ``first`` (a :meth:`GyroTrack.window`)."""
+    k = np.clip(np.searchsorted(t_imu, t, side="right") - 1, 0, t_imu.size - 2)
     frac = (t - t_imu[k]) / (t_imu[k + 1] - t_imu[k])
-    return attitude.quat_multiply(q[k], attitude.rotvec_to_quat(frac[..., None] * dtheta_b[k]))
+    return attitude.quat_multiply(q[k - first], attitude.rotvec_to_quat(
+        frac[..., None] * dtheta_b[k - first]))
 
 
 def without_earth_rate(t_imu, dtheta_b, t_ref, q_ref, lat_rad) -> np.ndarray:
@@ -112,21 +173,27 @@ def without_earth_rate(t_imu, dtheta_b, t_ref, q_ref, lat_rad) -> np.ndarray:
     return out
 
 
-def epoch_misfits(t_imu, dtheta_b, t_ref, q_ref, shifts) -> tuple[np.ndarray, np.ndarray]:
+def epoch_misfits(track: GyroTrack, t_ref, q_ref, shifts) -> tuple[np.ndarray, np.ndarray]:
     """Squared rotation misfit [rad^2], shape (len(shifts), J), between the reference's body
-    rotation from epoch j to j+1 and the gyro track's from ``t_ref - shift``; with the
-    epochs j used (both ends inside the IMU span for every shift).  Made for
-    :data:`BLOCK_ELEMENTS` pairs of shift and epoch at a time."""
-    q = attitude_track(dtheta_b)
+    rotation from epoch j to j+1 and the gyro track's (a :class:`GyroTrack`) from
+    ``t_ref - shift``; with the epochs j used (both ends inside the IMU span for every
+    shift).  Made for :data:`BLOCK_ELEMENTS` pairs of shift and epoch at a time, the
+    track's samples around them asked for in turn."""
+    t_imu = track.t_imu
     j = np.flatnonzero((t_ref[:-1] - shifts.max() >= t_imu[0])
                        & (t_ref[1:] - shifts.min() <= t_imu[-1]))
     misfit = np.empty((shifts.size, j.size))
     step = max(1, BLOCK_ELEMENTS // shifts.size)
     for a in range(0, j.size, step):
         jb = j[a:a + step]
+        t0 = t_ref[jb][None, :] - shifts[:, None]
+        t1 = t_ref[jb + 1][None, :] - shifts[:, None]
+        lo, hi = np.clip(np.searchsorted(t_imu, [t0.min(), t1.max()], side="right") - 1, 0,
+                         t_imu.size - 2)
+        q, gyro = track.window(int(lo), int(hi))
         d_ref = attitude.quat_multiply(attitude.quat_conj(q_ref[jb]), q_ref[jb + 1])
-        q0 = track_at(t_imu, q, dtheta_b, t_ref[jb][None, :] - shifts[:, None])
-        q1 = track_at(t_imu, q, dtheta_b, t_ref[jb + 1][None, :] - shifts[:, None])
+        q0 = track_at(t_imu, q, gyro, t0, int(lo))
+        q1 = track_at(t_imu, q, gyro, t1, int(lo))
         d_gyro = attitude.quat_multiply(attitude.quat_conj(q0), q1)
         err = attitude.quat_to_rotvec(attitude.quat_multiply(attitude.quat_conj(d_ref)[None],
                                                              d_gyro))
@@ -180,8 +247,8 @@ def estimate_clock(t_imu, dtheta_b, t_ref, q_ref, lat_rad) -> ClockMap:
     dt = float(np.median(np.diff(t_imu)))
     n = int(round(MAX_OFFSET_S / dt))
     shifts = np.arange(-n, n + 1) * dt
-    gyro = without_earth_rate(t_imu, dtheta_b, t_ref, q_ref, lat_rad)
-    misfit, j = epoch_misfits(t_imu, gyro, t_ref, q_ref, shifts)
+    track = GyroTrack(t_imu, dtheta_b, t_ref, q_ref, lat_rad)
+    misfit, j = epoch_misfits(track, t_ref, q_ref, shifts)
     mids, best, w = segment_offsets(misfit, shifts, t_ref[j])
     # weighted straight line offset(t) = a + b t through the segment offsets; with fewer
     # than three informative segments the slope is left at zero (the clocks' rates equal)
