@@ -26,7 +26,7 @@ import numpy as np
 from fuzzynav.nav import attitude
 
 __all__ = ["EARTH_RATE", "MAX_OFFSET_S", "SEGMENTS", "BLOCK_ELEMENTS", "ClockMap",
-           "parabola_min", "attitude_track", "GyroTrack", "track_at", "without_earth_rate",
+           "parabola_min", "GyroTrack", "track_at", "without_earth_rate",
            "epoch_misfits", "segment_offsets", "estimate_clock", "MIN_OFFSET_CONTRAST",
            "dvl_offset"]
 
@@ -75,13 +75,6 @@ def parabola_min(cost) -> float:
     return float(i)
 
 
-def attitude_track(dtheta_b) -> np.ndarray:
-    """Quaternions of the body at each IMU sample relative to the first, chained from the
-    rotation increments ``dtheta_b`` (K-1, 3): ``q[k] = q[k-1] * exp(dtheta[k-1])``."""
-    q0 = np.array([[1.0, 0.0, 0.0, 0.0]])
-    return np.concatenate([q0, _chain(q0[0], dtheta_b)])
-
-
 def _chain(q_last, dtheta_b) -> np.ndarray:
     """The track's next quaternions after ``q_last``, one per increment of ``dtheta_b``."""
     q = np.empty((dtheta_b.shape[0], 4))
@@ -101,7 +94,8 @@ def _chain(q_last, dtheta_b) -> np.ndarray:
 class GyroTrack:
     """The gyro track of an IMU made as far as it is asked for, forward only: the
     increments less the earth rate (:func:`without_earth_rate`) chained into the body's
-    attitude (:func:`attitude_track`), held from the last window's first sample on.
+    attitude relative to the first sample (``q[k] = q[k-1] * exp(dtheta[k-1])``), held from
+    the last window's first sample on.
 
     The misfit search asks for the samples around each block of reference epochs in turn,
     so a recording's track is never held whole; its numbers are the whole track's (each
