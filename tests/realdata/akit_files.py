@@ -89,21 +89,26 @@ def lever_point(tr, t, lla, vel, q, lever_y):
     return lla, vel + dv_n
 
 
-def write_akit(directory, tr, n=1, lag=1.0, rate=1.0, lever_y=0.0):
+def write_akit(directory, tr, n=1, lag=1.0, rate=1.0, lever_y=0.0, dvl_on_imu_clock=True):
     """Write trajectory ``n``: the GT row stamped ``s`` holds the truth at ``(s - lag) / rate``
-    of a point ``lever_y`` m forward of the IMU (the DVL, the IMU point's, is on the IMU
-    clock); returns the 1-Hz truth indices of the DVL/GT rows."""
+    of a point ``lever_y`` m forward of the IMU; the DVL (the IMU point's velocity) is on
+    the IMU clock, or with ``dvl_on_imu_clock=False`` on the reference's (as the real
+    files': its row stamped ``s`` holds the velocity at the same time as the GT row);
+    returns the 1-Hz truth indices of the DVL/GT rows."""
     rates, force = _point_samples(tr.time_s, tr.dtheta_b), _point_samples(tr.time_s, tr.dv_b)
     flip = np.array([1.0, -1.0, 1.0])
     _write(directory / f"IMU_trajectory{n}.csv", "IMU",
            np.column_stack([tr.time_s, (force @ SWAP.T) * flip, (rates @ SWAP.T) * flip]))
     idx = np.arange(0, tr.time_s.size, 100)
-    C = attitude.quat_to_dcm(tr.q_bn[idx])
-    v_b = np.einsum("kji,kj->ki", C, tr.vel_n[idx])
-    _write(directory / "corrected" / f"DVL_trajectory{n}.csv", "DVL",
-           np.column_stack([tr.time_s[idx], v_b @ SWAP.T]))
     t_gt = (tr.time_s[idx] - lag) / rate
     lla, vel, q = truth_at(tr, t_gt)
+    if dvl_on_imu_clock:
+        q_dvl, vel_dvl = tr.q_bn[idx], tr.vel_n[idx]
+    else:
+        q_dvl, vel_dvl = q, vel
+    v_b = np.einsum("kji,kj->ki", attitude.quat_to_dcm(q_dvl), vel_dvl)
+    _write(directory / "corrected" / f"DVL_trajectory{n}.csv", "DVL",
+           np.column_stack([tr.time_s[idx], v_b @ SWAP.T]))
     lla, vel = lever_point(tr, np.clip(t_gt, tr.time_s[0], tr.time_s[-1]), lla, vel, q, lever_y)
     _write(directory / "corrected" / f"GT_trajectory{n}.csv", "GT",
            np.column_stack([tr.time_s[idx], lla[:, 1], lla[:, 0], lla[:, 2], vel @ SWAP.T,

@@ -226,10 +226,13 @@ def rotation_misfit_deg(inc, gt, q_ref, clock) -> float:
     return float(np.rad2deg(np.sqrt(np.mean(misfit[0]))))
 
 
-def belong_together(files, rotation_deg: float, dvl_forward_rms: float) -> None:
+def belong_together(files, rotation_deg: float, dvl_forward_rms: float,
+                    clock_measured: bool = True) -> None:
     """Stop when the three files are not one trajectory, blaming the odd one out: the IMU
     when only the gyros disagree with the reference, the DVL when only it does, the
-    reference when both do."""
+    reference when both do.  ``clock_measured``: whether the clock map was found inside
+    its search (:meth:`~.akit_timing.ClockSearch.inside`); when not, the gyros' misfit may
+    be the stamps' offset instead, and the message says so."""
     gyros_ok = rotation_deg <= MAX_ROTATION_MISFIT_DEG
     dvl_ok = dvl_forward_rms <= MAX_DVL_FORWARD_RMS_MPS
     if gyros_ok and dvl_ok:
@@ -237,6 +240,10 @@ def belong_together(files, rotation_deg: float, dvl_forward_rms: float) -> None:
     gyro_said = (f"the gyros turn {rotation_deg:.3g} deg (RMS per epoch) away from the "
                  f"reference's attitude (at most {MAX_ROTATION_MISFIT_DEG:g}: "
                  "MAX_ROTATION_MISFIT_DEG)")
+    if not clock_measured:
+        gyro_said += (" along a clock map found at the edge of its search (offsets "
+                      f"+-{timing.MAX_OFFSET_S:g} s about zero at the start: MAX_OFFSET_S; "
+                      "are the reference's stamps further off the IMU's?)")
     dvl_said = (f"the DVL's forward velocity is {dvl_forward_rms:.3g} m/s (RMS) away from the "
                 f"reference's (at most {MAX_DVL_FORWARD_RMS_MPS:g}: MAX_DVL_FORWARD_RMS_MPS)")
     if not gyros_ok and not dvl_ok:
@@ -260,16 +267,19 @@ def dvl_forward_rms(dvl, gt, clock, reference_on_imu_clock, body_velocity) -> fl
 
 
 
-def clock_map(files, clock, span) -> None:
-    """Stop when the clock map is not a measurement: an offset at the edge of the search
-    (the gyros and the reference never line up within it) anywhere over the reference's
-    ``span`` of stamps, or an implausible rate."""
-    edge = timing.MAX_OFFSET_S - 0.05
-    gap = np.asarray(span, float) - clock.to_imu(span)
-    if not (np.all(np.abs(gap) < edge) and abs(clock.rate - 1.0) < MAX_RATE_DEVIATION):
+def clock_map(files, clock, search, labels) -> None:
+    """Stop when the clock map is not a measurement: an offset at the edge of the offsets
+    searched (``search``, :class:`~.akit_timing.ClockSearch`: the gyros and the reference
+    never line up within them) at any of the reference's stamps ``labels``, or an
+    implausible rate."""
+    edge = timing.MAX_OFFSET_S - timing.SEARCH_EDGE_S
+    if not (search.inside(clock, labels) and abs(clock.rate - 1.0) < MAX_RATE_DEVIATION):
+        gap, centre = search.from_centre(clock, labels)
+        k = int(np.argmax(np.abs(gap - centre)))
         raise InputFileError(files["reference"], "column Time [s]", (
-            f"does not line up with the IMU's gyros (offset {gap[0]:+.2f} s, rate "
-            f"{clock.rate:.4f}; plausible: within +-{edge:.2f} s, rate within "
+            f"does not line up with the IMU's gyros (offset {gap[k]:+.2f} s at stamp "
+            f"{labels[k]:.1f} s, rate {clock.rate:.4f}; plausible: within {edge:.2f} s of "
+            f"the offset searched about there ({centre[k]:+.2f} s), rate within "
             f"{MAX_RATE_DEVIATION:.0%} of 1): wrong trajectory pair or damaged time stamps"))
     if not abs(clock.dvl_offset_s) < edge:
         raise InputFileError(files["dvl"], "column Time [s]", (

@@ -39,8 +39,8 @@ from fuzzynav.errors import DataMissingError, InputFileError, brief
 from fuzzynav.nav import attitude
 from fuzzynav.realdata.loaders import akit_checks as checks, chunked
 from fuzzynav.realdata.loaders.chunked import DEFAULT_CHUNK_ROWS
-from fuzzynav.realdata.loaders.akit_timing import BLOCK_ELEMENTS, ClockMap, dvl_offset, \
-    estimate_clock
+from fuzzynav.realdata.loaders.akit_timing import BLOCK_ELEMENTS, ClockMap, ClockSearch, \
+    dvl_offset, estimate_clock
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.sim.sensors import SensorData
 
@@ -266,14 +266,15 @@ def forward_velocity(gt) -> np.ndarray:
     return np.einsum("ki,ki->k", C[:, :, 1], gt[:, 4:7] @ SWAP.T)
 
 
-def reference_clock(inc: ImuData, gt, dvl) -> ClockMap:
+def reference_clock(inc: ImuData, gt, dvl) -> tuple[ClockMap, ClockSearch]:
     """The reference's and the DVL's clock map onto the IMU (:mod:`.akit_timing`) from the
-    IMU's increments ``inc`` (:func:`imu_increments` of its table)."""
-    clock = estimate_clock(inc.time_s, inc.dtheta_b, gt[:, 0], reference_attitude(gt[:, 7:10]),
-                           float(np.median(gt[:, 2])))
+    IMU's increments ``inc`` (:func:`imu_increments` of its table), and where the
+    reference's was searched for."""
+    clock, search = estimate_clock(inc.time_s, inc.dtheta_b, gt[:, 0],
+                                   reference_attitude(gt[:, 7:10]), float(np.median(gt[:, 2])))
     dt = float(np.median(np.diff(inc.time_s)))
     delta = dvl_offset(dvl[:, 0], dvl[:, 1], gt[:, 0], forward_velocity(gt), dt)
-    return ClockMap(clock.offset_s, clock.rate, delta)
+    return ClockMap(clock.offset_s, clock.rate, delta), search
 
 
 def body_velocity(ref: Reference) -> np.ndarray:
@@ -347,11 +348,12 @@ def _load(d: Path, n: int, files: dict, chunk_rows) -> AkitRecording:
     full = imu_increments(imu[:, 0], imu[:, 1:4], imu[:, 4:7])
     del imu  # from here on its increments and their times: the table is not held twice
     t = full.time_s
-    clock = reference_clock(full, gt, dvl)
+    clock, search = reference_clock(full, gt, dvl)
     checks.belong_together(
         files, checks.rotation_misfit_deg(full, gt, reference_attitude(gt[:, 7:10]), clock),
-        checks.dvl_forward_rms(dvl, gt, clock, reference_on_imu_clock, body_velocity))
-    checks.clock_map(files, clock, gt[[0, -1], 0])
+        checks.dvl_forward_rms(dvl, gt, clock, reference_on_imu_clock, body_velocity),
+        search.inside(clock, gt[:, 0]))
+    checks.clock_map(files, clock, search, gt[:, 0])
     ref, s = _reference_on_imu_clock(gt, t, clock)
     t_dvl = clock.to_imu(dvl[:, 0], clock.dvl_offset_s)
     inside = (t_dvl > t[s]) & (t_dvl <= t[-1])

@@ -12,7 +12,11 @@ trajectory, on top of a constant offset.  Matching the gyros to the reference sh
   offset (IMU-sample steps, negative and positive), giving a misfit per epoch and offset;
 * per segment of the trajectory the best offset (parabola through the three smallest
   misfits) is found, a straight line through them gives the clock rate, and the offset at
-  the start is refined over all epochs along that line.
+  the start is refined over all epochs along that line;
+* when that map leaves the offsets searched (a clock drifting further over the file than
+  +-:data:`MAX_OFFSET_S`), the search is made again in blocks of :data:`FOLLOW_BLOCK_S`,
+  each about the offset the blocks before it predict (:func:`followed_clock`);
+  :class:`ClockSearch` says where it looked, so that a map at its edge is refused.
 
 A time offset is observable only where the turn rate changes (for a steady rate the shifted
 increments are the same), which the misfit curvature reflects: segments are weighted by it.
@@ -26,6 +30,7 @@ import numpy as np
 from fuzzynav.nav import attitude
 
 __all__ = ["EARTH_RATE", "MAX_OFFSET_S", "SEGMENTS", "BLOCK_ELEMENTS", "ClockMap",
+           "ClockSearch", "FOLLOW_BLOCK_S", "SEARCH_EDGE_S", "followed_clock",
            "parabola_min", "GyroTrack", "track_at", "without_earth_rate",
            "epoch_misfits", "segment_offsets", "estimate_clock", "MIN_OFFSET_CONTRAST",
            "dvl_offset"]
@@ -62,6 +67,37 @@ class ClockMap:
     def to_label(self, t_imu) -> np.ndarray:
         """Reference file stamps of IMU times ``t_imu``."""
         return self.rate * np.asarray(t_imu, float) + self.offset_s
+
+
+#: reference seconds per block of the search that follows a drifting clock: at the largest
+#: plausible rate error (1 %) the offset moves 1 s over a block, well inside the offsets
+#: searched about where the blocks before it predict
+FOLLOW_BLOCK_S = 100.0
+#: how near [s] the map's offset may come to the edge of the offsets searched
+SEARCH_EDGE_S = 0.05
+
+
+@dataclass(frozen=True)
+class ClockSearch:
+    """Where the clock search looked: from reference stamp ``starts_s[i]`` on, the offsets
+    ``centres_s[i] +- MAX_OFFSET_S`` (one search centred on 0 unless the clock drifted out
+    of it and the search followed, :func:`followed_clock`)."""
+
+    starts_s: np.ndarray
+    centres_s: np.ndarray
+
+    def from_centre(self, clock: ClockMap, labels) -> tuple[np.ndarray, np.ndarray]:
+        """``clock``'s offsets ``label - t_imu`` at reference stamps ``labels`` and the
+        centres of the offsets searched there."""
+        labels = np.asarray(labels, float)
+        k = np.clip(np.searchsorted(self.starts_s, labels, side="right") - 1, 0, None)
+        return labels - clock.to_imu(labels), self.centres_s[k]
+
+    def inside(self, clock: ClockMap, labels) -> bool:
+        """``clock``'s offset stays :data:`SEARCH_EDGE_S` inside the offsets searched at
+        every stamp of ``labels``: the map is a measurement, not the search's edge."""
+        gap, centre = self.from_centre(clock, labels)
+        return bool(np.all(np.abs(gap - centre) < MAX_OFFSET_S - SEARCH_EDGE_S))
 
 
 def parabola_min(cost) -> float:
@@ -105,17 +141,20 @@ class GyroTrack:
     ----------
     t_imu, dtheta_b : IMU times (K+1,) and rotation increments (K, 3).
     t_ref, q_ref, lat_rad : the earth rate's reference, as :func:`without_earth_rate`.
+    keep : samples held before the last window's first, so that the next window may start
+        up to that many earlier.
     """
 
-    def __init__(self, t_imu, dtheta_b, t_ref, q_ref, lat_rad):
+    def __init__(self, t_imu, dtheta_b, t_ref, q_ref, lat_rad, keep: int = 0):
         self.t_imu, self.dtheta_b, self.earth = t_imu, dtheta_b, (t_ref, q_ref, lat_rad)
+        self.keep = keep
         self.start = 0  # the sample of q[0], the increment of gyro[0]
         self.q = np.array([[1.0, 0.0, 0.0, 0.0]])
         self.gyro = np.empty((0, 3))
 
     def window(self, lo: int, hi: int) -> tuple[np.ndarray, np.ndarray]:
         """``(q, gyro)``: the track at samples ``lo..hi`` and the increments ``lo..hi`` (up
-        to the last); ``lo`` must not be before an earlier window's."""
+        to the last); ``lo`` must not be before an earlier window's less ``keep``."""
         if lo < self.start:
             raise ValueError(f"GyroTrack goes forward only: sample {lo} is before {self.start}")
         while self.start + self.q.shape[0] <= hi:  # chain on, a block at a time
@@ -127,7 +166,8 @@ class GyroTrack:
             self._drop(min(lo, target))
         self._make_gyro(min(hi, self.dtheta_b.shape[0] - 1))
         self._drop(lo)
-        return self.q[:hi - lo + 1], self.gyro[:hi - lo + 1]
+        first = lo - self.start
+        return self.q[first:hi - self.start + 1], self.gyro[first:hi - self.start + 1]
 
     def _make_gyro(self, upto: int) -> None:
         """The increments up to ``upto``, less the earth rate."""
@@ -138,10 +178,10 @@ class GyroTrack:
             self.gyro = np.concatenate([self.gyro, new])
 
     def _drop(self, lo: int) -> None:
-        """Let go of the samples before ``lo``."""
-        cut = lo - self.start
+        """Let go of the samples before ``lo`` less ``keep``."""
+        cut = lo - self.keep - self.start
         if cut > 0:
-            self.q, self.gyro, self.start = self.q[cut:], self.gyro[cut:], lo
+            self.q, self.gyro, self.start = self.q[cut:], self.gyro[cut:], self.start + cut
 
 
 def track_at(t_imu, q, dtheta_b, t, first: int = 0) -> np.ndarray:
@@ -195,41 +235,83 @@ def epoch_misfits(track: GyroTrack, t_ref, q_ref, shifts) -> tuple[np.ndarray, n
     return misfit, j
 
 
-def _along(misfit, shifts, slope: float, t_epoch) -> np.ndarray:
-    """Mean misfit over epochs along each line of shifts ``shifts[i] + slope t_epoch``, the
-    misfit interpolated between the sampled shifts; a block of lines at a time (each
-    line's mean is over all epochs, so the blocks do not change it)."""
-    step = shifts[1] - shifts[0]
+def _along(misfit, origin, starts, slope: float, t_epoch) -> np.ndarray:
+    """Mean misfit over epochs along each line of shifts ``starts[i] + slope t_epoch``, the
+    misfit interpolated between its sampled shifts (``origin``, per epoch or one for all,
+    then IMU-sample steps); a block of lines at a time (each line's mean is over all
+    epochs, so the blocks do not change it)."""
+    step = starts[1] - starts[0]
     cols = np.arange(misfit.shape[1])
-    out = np.empty(shifts.size)
+    out = np.empty(starts.size)
     rows = max(1, BLOCK_ELEMENTS // max(cols.size, 1))
-    for r in range(0, shifts.size, rows):
-        lines = shifts[r:r + rows, None] + slope * t_epoch[None, :]
-        pos = np.clip((lines - shifts[0]) / step, 0.0, shifts.size - 1.000001)
+    for r in range(0, starts.size, rows):
+        lines = starts[r:r + rows, None] + slope * t_epoch[None, :]
+        pos = np.clip((lines - origin) / step, 0.0, misfit.shape[0] - 1.000001)
         i = pos.astype(int)
         f = pos - i
         out[r:r + rows] = np.mean((1 - f) * misfit[i, cols] + f * misfit[i + 1, cols], axis=-1)
     return out
 
 
+def _best(cost, origin: float, step: float) -> tuple[float, float]:
+    """The best shift of mean misfits ``cost`` sampled from ``origin`` in ``step``s and its
+    weight (the misfit's curvature there; zero at the search's edge)."""
+    p = parabola_min(cost)
+    i = int(round(p))
+    inside = 0 < i < cost.size - 1
+    return (origin + p * step,
+            max(cost[i - 1] - 2 * cost[i] + cost[i + 1], 0.0) if inside else 0.0)
+
+
 def segment_offsets(misfit, shifts, t_epoch) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Best offset of each of :data:`SEGMENTS` segments: (mid times, offsets, weights =
     misfit curvature at the best offset, zero where the best is at the search's edge)."""
     mids, best, weight = [], [], []
-    step = shifts[1] - shifts[0]
     for cols in np.array_split(np.arange(misfit.shape[1]), SEGMENTS):
-        c = misfit[:, cols].mean(axis=1)
-        p = parabola_min(c)
-        i = int(round(p))
-        inside = 0 < i < c.size - 1
+        b, w = _best(misfit[:, cols].mean(axis=1), shifts[0], shifts[1] - shifts[0])
         mids.append(t_epoch[cols].mean())
-        best.append(shifts[0] + p * step)
-        weight.append(max(c[i - 1] - 2 * c[i] + c[i + 1], 0.0) if inside else 0.0)
+        best.append(b)
+        weight.append(w)
     return np.array(mids), np.array(best), np.array(weight)
 
 
-def estimate_clock(t_imu, dtheta_b, t_ref, q_ref, lat_rad) -> ClockMap:
-    """The reference's clock map (:class:`ClockMap`, DVL offset 0) from the gyro track.
+def _line(mids, best, w, least: int) -> tuple[float, float]:
+    """``(a, b)`` of the straight line ``offset(t) = a + b t`` through offsets ``best`` at
+    ``mids`` weighted by ``w``; with fewer than ``least`` informative ones (weight over
+    1e-3 of the largest) ``b = 0`` and ``a`` their weighted mean (0 without any)."""
+    mids, best, w = (np.asarray(x, float) for x in (mids, best, w))
+    keep = w > 1e-3 * w.max(initial=0.0)
+    if np.count_nonzero(keep) >= least:
+        A = np.column_stack([np.ones_like(mids), mids]) * np.sqrt(w)[:, None]
+        a, b = np.linalg.lstsq(A, best * np.sqrt(w), rcond=None)[0]
+        return float(a), float(b)
+    return (float(np.sum(w[keep] * best[keep]) / np.sum(w[keep])) if keep.any() else 0.0), 0.0
+
+
+def _refined(misfit, origin, starts, slope: float, t_epoch, dt: float) -> ClockMap:
+    """The map whose offset at the start is refined along ``slope`` over every epoch, from
+    the lines starting at ``starts`` (:func:`_along`)."""
+    a = starts[0] + parabola_min(_along(misfit, origin, starts, slope, t_epoch)) * dt
+    # label = t_ref; the event happened at t_imu = label - (a + b * label)
+    rate = 1.0 / (1.0 - slope)
+    return ClockMap(offset_s=float(a * rate), rate=float(rate))
+
+
+def _informed_time(misfit, t_epoch) -> float:
+    """The time a block's best offset describes: its epochs' mean time weighted by how much
+    each epoch's misfit changes over the offsets (a steady turn rate says nothing of the
+    offset; the block's mean misfit is dominated by the epochs where it changes)."""
+    w = misfit.max(axis=0) - misfit.min(axis=0)
+    return float(np.sum(w * t_epoch) / np.sum(w)) if np.sum(w) > 0.0 else float(t_epoch.mean())
+
+
+def estimate_clock(t_imu, dtheta_b, t_ref, q_ref, lat_rad) -> tuple[ClockMap, ClockSearch]:
+    """The reference's clock map (:class:`ClockMap`, DVL offset 0) from the gyro track, and
+    where it was searched for (:class:`ClockSearch`).
+
+    The offsets +-:data:`MAX_OFFSET_S` are searched over the whole reference; when the map
+    found leaves them (a clock drifting further over the file), the search is made again
+    following the drift (:func:`followed_clock`).
 
     Parameters
     ----------
@@ -241,21 +323,52 @@ def estimate_clock(t_imu, dtheta_b, t_ref, q_ref, lat_rad) -> ClockMap:
     dt = float(np.median(np.diff(t_imu)))
     n = int(round(MAX_OFFSET_S / dt))
     shifts = np.arange(-n, n + 1) * dt
-    track = GyroTrack(t_imu, dtheta_b, t_ref, q_ref, lat_rad)
-    misfit, j = epoch_misfits(track, t_ref, q_ref, shifts)
-    mids, best, w = segment_offsets(misfit, shifts, t_ref[j])
-    # weighted straight line offset(t) = a + b t through the segment offsets; with fewer
-    # than three informative segments the slope is left at zero (the clocks' rates equal)
-    b = 0.0
-    if np.count_nonzero(w > 1e-3 * w.max(initial=0.0)) >= 3:
-        A = np.column_stack([np.ones_like(mids), mids]) * np.sqrt(w)[:, None]
-        b = float(np.linalg.lstsq(A, best * np.sqrt(w), rcond=None)[0][1])
-    # the offset at the start, refined along the fitted slope over every epoch
-    c = _along(misfit, shifts, b, t_ref[j])
-    a = shifts[0] + parabola_min(c) * dt
-    # label = t_ref; the event happened at t_imu = label - (a + b * label)
-    rate = 1.0 / (1.0 - b)
-    return ClockMap(offset_s=float(a * rate), rate=float(rate))
+    misfit, j = epoch_misfits(GyroTrack(t_imu, dtheta_b, t_ref, q_ref, lat_rad), t_ref,
+                              q_ref, shifts)
+    # the slope of the line through the segment offsets (zero with fewer than three
+    # informative segments: the clocks' rates equal), then the offset along it
+    slope = _line(*segment_offsets(misfit, shifts, t_ref[j]), least=3)[1]
+    clock = _refined(misfit, shifts[0], shifts, slope, t_ref[j], dt)
+    search = ClockSearch(t_ref[:1].copy(), np.zeros(1))
+    if search.inside(clock, t_ref):
+        return clock, search
+    del misfit  # held no longer than the search made again
+    return followed_clock(t_imu, dtheta_b, t_ref, q_ref, lat_rad, shifts)
+
+
+def followed_clock(t_imu, dtheta_b, t_ref, q_ref, lat_rad, shifts
+                   ) -> tuple[ClockMap, ClockSearch]:
+    """The clock search following a drifting clock: the reference in blocks of
+    :data:`FOLLOW_BLOCK_S`, each searched over ``shifts`` about the offset the line through
+    the blocks before it predicts there (moved by at most :data:`MAX_OFFSET_S` a block),
+    then the line through every block's best offset and the offset along it refined as
+    :func:`estimate_clock` does over the one search."""
+    dt = shifts[1] - shifts[0]
+    track = GyroTrack(t_imu, dtheta_b, t_ref, q_ref, lat_rad,
+                      keep=2 * shifts.size)  # a centre moved back needs samples let go
+    edges = np.append(np.searchsorted(t_ref, np.arange(t_ref[0], t_ref[-1], FOLLOW_BLOCK_S)),
+                      t_ref.size - 1)
+    misfit, origin, t_epoch = (np.empty((shifts.size, t_ref.size - 1)),
+                               np.empty(t_ref.size - 1), np.empty(t_ref.size - 1))
+    fits, centres, used = ([], [], []), [0.0], 0
+    for e0, e1 in zip(edges[:-1].tolist(), edges[1:].tolist()):
+        a, b = _line(*fits, least=2)
+        want = a + b * 0.5 * (t_ref[e0] + t_ref[e1])
+        centre = centres[-1] + dt * round(np.clip(want - centres[-1], -MAX_OFFSET_S,
+                                                  MAX_OFFSET_S) / dt)
+        centres.append(centre)
+        m, jj = epoch_misfits(track, t_ref[e0:e1 + 1], q_ref[e0:e1 + 1], centre + shifts)
+        if jj.size:
+            cols = slice(used, used + jj.size)
+            misfit[:, cols], origin[cols], t_epoch[cols] = m, centre + shifts[0], t_ref[e0 + jj]
+            for seq, x in zip(fits, (_informed_time(m, t_epoch[cols]), *_best(m.mean(axis=1),
+                                                                  centre + shifts[0], dt))):
+                seq.append(x)
+            used += jj.size
+    a, slope = _line(*fits, least=3)
+    clock = _refined(misfit[:, :used], origin[:used], dt * round(a / dt) + shifts, slope,
+                     t_epoch[:used], dt)
+    return clock, ClockSearch(t_ref[edges[:-1]], np.array(centres[1:]))
 
 
 #: the DVL offset is determined when the best shift's misfit is this many times below the
