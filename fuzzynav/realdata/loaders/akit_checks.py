@@ -18,7 +18,8 @@ from fuzzynav import units
 from fuzzynav.errors import InputFileError
 from fuzzynav.nav import earth
 from fuzzynav.realdata.loaders import akit_timing as timing
-from fuzzynav.realdata.loaders.checks import DEFAULT_LIMITS, MAX_IMU_GAP_S, ImuColumns, imu_physics
+from fuzzynav.realdata.loaders.checks import DEFAULT_LIMITS, MAX_IMU_GAP_S, ImuColumns, \
+    PhysicsScan
 
 __all__ = ["HELD_COPIES", "NOMINAL_RATE_HZ", "RATE_TOLERANCE", "MAX_START_S",
            "MAX_SPAN_SHORTFALL_S", "MAX_ROTATION_MISFIT_DEG", "MAX_DVL_FORWARD_RMS_MPS",
@@ -111,9 +112,13 @@ def timing_of(path, t, kind: str) -> None:
 def imu_of(path, imu) -> None:
     """Gravity, rates at rest and full scale (the shared checks), then the file's frame:
     forward-right-down, the accelerometer z column reading about -g."""
-    rows = np.arange(2, imu.shape[0] + 2)
-    imu_physics(path, imu[:, 1:4] / units.G0, imu[:, 4:7] / units.DPS, rows,
-                NOMINAL_RATE_HZ["IMU"], DEFAULT_LIMITS, AKIT_IMU)
+    scan = PhysicsScan(NOMINAL_RATE_HZ["IMU"])
+    step = timing.BLOCK_ELEMENTS  # the columns in g and deg/s a block at a time, not whole
+    for a in range(0, imu.shape[0], step):
+        rows = imu[a:a + step]
+        scan.add(rows[:, 1:4] / units.G0, rows[:, 4:7] / units.DPS,
+                 np.arange(a + 2, a + 2 + rows.shape[0]))
+    scan.check(path, DEFAULT_LIMITS, AKIT_IMU)
     fz = imu[:, 3].mean()
     if abs(fz + 9.8) > GRAVITY_TOLERANCE:
         raise InputFileError(path, "column ACC Z [m/s^2]",

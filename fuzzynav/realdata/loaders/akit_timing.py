@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fuzzynav.nav import attitude
+from fuzzynav.nav import attitude, attitude_chain
 
 __all__ = ["EARTH_RATE", "MAX_OFFSET_S", "SEGMENTS", "BLOCK_ELEMENTS", "ClockMap",
            "ClockSearch", "FOLLOW_BLOCK_S", "SEARCH_EDGE_S", "followed_clock",
@@ -112,18 +112,15 @@ def parabola_min(cost) -> float:
 
 
 def _chain(q_last, dtheta_b) -> np.ndarray:
-    """The track's next quaternions after ``q_last``, one per increment of ``dtheta_b``."""
+    """The track's next quaternions after ``q_last``, one per increment of ``dtheta_b``:
+    the increments' quaternions a block at a time, chained by the compiled loop
+    (:func:`fuzzynav.nav.attitude_chain.chain_into`)."""
     q = np.empty((dtheta_b.shape[0], 4))
-    w, x, y, z = q_last.tolist()
-    k = 0
-    # a scalar loop: a cumulative quaternion product has no numpy form; the increments'
-    # quaternions a block at a time (as Python floats they would be ~200 B a sample)
+    last = np.asarray(q_last, dtype=float)
     for s0 in range(0, dtheta_b.shape[0], BLOCK_ELEMENTS):
-        for a, b, c, d in attitude.rotvec_to_quat(dtheta_b[s0:s0 + BLOCK_ELEMENTS]).tolist():
-            w, x, y, z = (w * a - x * b - y * c - z * d, w * b + x * a + y * d - z * c,
-                          w * c - x * d + y * a + z * b, w * d + x * c - y * b + z * a)
-            q[k] = w, x, y, z
-            k += 1
+        dq = attitude.rotvec_to_quat(dtheta_b[s0:s0 + BLOCK_ELEMENTS])
+        attitude_chain.chain_into(last, dq, q[s0:s0 + dq.shape[0]])
+        last = q[s0 + dq.shape[0] - 1]
     return q
 
 
@@ -217,7 +214,12 @@ def epoch_misfits(track: GyroTrack, t_ref, q_ref, shifts) -> tuple[np.ndarray, n
     j = np.flatnonzero((t_ref[:-1] - shifts.max() >= t_imu[0])
                        & (t_ref[1:] - shifts.min() <= t_imu[-1]))
     misfit = np.empty((shifts.size, j.size))
-    step = max(1, BLOCK_ELEMENTS // shifts.size)
+    if not j.size:
+        return misfit, j
+    # a block's pairs, and the track's samples its epochs span (one shift would otherwise
+    # ask for hours of track at once)
+    per_epoch = (t_imu.size - 1) / (t_imu[-1] - t_imu[0]) * float(np.median(np.diff(t_ref)))
+    step = max(1, int(min(BLOCK_ELEMENTS // shifts.size, BLOCK_ELEMENTS / max(per_epoch, 1.0))))
     for a in range(0, j.size, step):
         jb = j[a:a + step]
         t0 = t_ref[jb][None, :] - shifts[:, None]
