@@ -14,6 +14,13 @@ line.  Every loaded array of the two revisions is compared (sha1): they must be 
 ``--day`` also loads a 24-h recording with this checkout only (the base revision's loader
 took windows x samples for its pitch check: hours on a day).  Without ``--no-write`` the
 figures replace the ``akit-long`` section of docs/benchmarks.md.
+
+    python benchmarks/bench_akit_long.py --drift 1.0025 --hours 0.25,1
+
+loads, with this checkout only, files whose reference and DVL clock runs ``--drift`` times
+the IMU's (as the real files', both on one clock): past 800 s at 0.25 % the clock search
+must follow the drift.  Reported: the load's time and peak RSS, and the largest error of
+the measured map over the reference stamps (section ``akit-drift``).
 """
 from __future__ import annotations
 
@@ -53,6 +60,7 @@ t0 = time.perf_counter()
 rec = ar.load_trajectory(sys.argv[1], 1)
 secs = time.perf_counter() - t0
 out = {"secs": secs, "rss0_B": rss0, "peak_B": status("VmHWM"), "lines": int(rec.imu.time_s.size),
+       "clock": [rec.clock.offset_s, rec.clock.rate, rec.clock.dvl_offset_s],
        "digest": digest(rec.imu.time_s, rec.imu.dtheta_b, rec.imu.dv_b, rec.dvl.time_s, rec.dvl.z,
                         rec.reference.time_s, rec.reference.lla, rec.reference.vel_n,
                         rec.reference.q_bn, rec.reference_offset_b,
@@ -64,8 +72,14 @@ print(json.dumps(out))
 """
 
 
-def write_recording(directory: Path, hours: float) -> int:
-    """A synthetic A-KIT trajectory 1 of ``hours`` in ``directory``; its IMU lines."""
+#: the synthetic reference's lag behind the IMU [s]
+LAG_S = 0.7
+
+
+def write_recording(directory: Path, hours: float, rate: float = 1.0) -> tuple[int, object]:
+    """A synthetic A-KIT trajectory 1 of ``hours`` in ``directory`` (the reference's and,
+    unless ``rate`` is 1, the DVL's clock ``rate`` times the IMU's); its IMU lines and the
+    reference's stamps."""
     sys.path.insert(0, str(ROOT))
     from fuzzynav.sim.segments import Segment
     from fuzzynav.sim.trajectory import generate
@@ -76,8 +90,9 @@ def write_recording(directory: Path, hours: float) -> int:
              Segment("turn", 30, turn_deg=30)]
     tr = generate(akit_files.START, cycle * max(1, int(round(hours * 3600 / 120))), 100.0,
                   2.0, 0.5)
-    akit_files.write_akit(directory, tr, 1, lag=0.7, rate=1.0, lever_y=1.8)
-    return int(tr.time_s.size)
+    idx = akit_files.write_akit(directory, tr, 1, lag=LAG_S, rate=rate, lever_y=1.8,
+                                dvl_on_imu_clock=rate == 1.0)
+    return int(tr.time_s.size), tr.time_s[idx]
 
 
 def load(checkout: Path, directory: Path, traced: bool) -> dict:
@@ -97,7 +112,7 @@ def measure(ways: dict, hours: list, day: bool, rounds: int) -> list:
     for h, names in plan:
         tmp = Path(tempfile.mkdtemp(prefix="bench-akit-"))
         try:
-            lines = write_recording(tmp, h)
+            lines, _ = write_recording(tmp, h)
             runs = {n: [] for n in names}
             for r in range(rounds):
                 for n in (names if r % 2 == 0 else names[::-1]):
@@ -156,20 +171,75 @@ def render(rows, base_rev: str, load: tuple) -> str:
     return "\n".join(lines)
 
 
+def measure_drift(hours: list, rate: float, rounds: int) -> list:
+    """Rows of figures of this checkout's loads of drifting recordings."""
+    rows = []
+    for h in hours:
+        tmp = Path(tempfile.mkdtemp(prefix="bench-akit-"))
+        try:
+            lines, stamps = write_recording(tmp, h, rate)
+            runs = [load(ROOT, tmp, False) for _ in range(rounds)]
+            offset, r, _ = runs[0]["clock"]
+            truth = (stamps - LAG_S) / rate
+            rows.append({"hours": h, "lines": lines, "secs": min(x["secs"] for x in runs),
+                         "peak_B": max(x["peak_B"] for x in runs),
+                         "end_offset_s": float(stamps[-1] - truth[-1]),
+                         "error_s": float(max(abs((stamps - offset) / r - truth)))})
+            print(json.dumps(rows[-1]), flush=True)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+    return rows
+
+
+def render_drift(rows, rate: float, load: tuple) -> str:
+    """The docs section of the drifting recordings."""
+    lines = ["## Drifting A-KIT clocks: the clock search following "
+             "(`benchmarks/bench_akit_long.py --drift`)", "",
+             f"Synthetic A-KIT trajectories as above, their reference and DVL clock running "
+             f"{rate:g} times the IMU's (both on one clock, as the real files'), stamped "
+             f"{LAG_S:g} s late; loaded by this checkout in fresh processes (best time, "
+             "largest peak RSS of the rounds). Map error: the largest difference between "
+             "the IMU time the loaded clock map gives a reference stamp and the time it "
+             "was written for. Machine: " + machine() +
+             f"; load average {load[0]:.2f} at the start, {load[1]:.2f} at the end.", "",
+             "| recording | IMU lines | offset at the end (s) | load (s) | peak RSS (GB) | "
+             "map error (ms) |", "|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['hours']:g} h | {r['lines']:,} | {r['end_offset_s']:+.1f} | "
+                     f"{r['secs']:.1f} | {r['peak_B'] / 1e9:.2f} | {1e3 * r['error_s']:.1f} |")
+    lines += ["", "Where the stamps' offset passes 1.95 s the map leaves the +-2 s searched "
+              "about zero, and the search is made again following it "
+              "(`akit_timing.followed_clock`): twice the search's time."]
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--base", type=Path, required=True, help="a checkout of the base revision")
+    ap.add_argument("--base", type=Path, help="a checkout of the base revision")
+    ap.add_argument("--drift", type=float, help="the reference clock's rate: drifting files, "
+                    "this checkout only")
     ap.add_argument("--hours", default="0.5,1,2,4")
     ap.add_argument("--rounds", type=int, default=2)
     ap.add_argument("--day", action="store_true", help="also 24 h, this checkout only")
     ap.add_argument("--no-write", action="store_true")
     args = ap.parse_args(argv)
+    hours = [float(h) for h in args.hours.split(",")]
+    if args.drift is not None:
+        load0 = os.getloadavg()[0]
+        rows = measure_drift(hours, args.drift, args.rounds)
+        text = render_drift(rows, args.drift, (load0, os.getloadavg()[0]))
+        print(text)
+        if not args.no_write:
+            write_section("akit-drift", text)
+        return 0
+    if args.base is None:
+        ap.error("--base is needed unless --drift")
     base_rev = subprocess.run(["git", "-C", str(args.base), "rev-parse", "--short", "HEAD"],
                               capture_output=True, text=True).stdout.strip() or str(args.base)
     load0 = os.getloadavg()[0]
     t0 = time.monotonic()
     rows = measure({"this checkout": ROOT, f"base {base_rev}": args.base},
-                   [float(h) for h in args.hours.split(",")], args.day, args.rounds)
+                   hours, args.day, args.rounds)
     text = render(rows, base_rev, (load0, os.getloadavg()[0]))
     text += f" {(time.monotonic() - t0) / 60:.1f} min in all."
     print(text)
