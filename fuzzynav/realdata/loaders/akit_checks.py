@@ -32,9 +32,9 @@ __all__ = ["HELD_COPIES", "NOMINAL_RATE_HZ", "RATE_TOLERANCE", "MAX_START_S",
 #: peak memory of loading a file, in copies of its parsed table (float64 rows): the table
 #: and what the loader derives from it (the IMU's increments, the clock estimate's attitude
 #: track, gyro and misfit table; their temporaries are a block's, ``akit_timing``);
-#: measured 2.1 (the peak traced over ``load_trajectory`` grows by 117 B per IMU line from
-#: a synthetic 0.5-h file to a 4-h one at 100 Hz with a 1-Hz reference,
-#: ``benchmarks/bench_akit_long.py``), 19 before the array steps were made in blocks
+#: measured 2.0 (the peak traced over ``load_trajectory`` grows by 106 B per IMU line from
+#: a synthetic 0.5-h file to a 24-h one at 100 Hz with a 1-Hz reference, 113 B a line at
+#: 24 h: ``benchmarks/bench_akit_long.py``), 19 before the array steps were made in blocks
 HELD_COPIES = 5
 #: nominal rates [Hz] of the files (Phins IMU 100 Hz; DVL and reference 1 Hz) and how far
 #: the time column may imply another (the 1-Hz streams run 0.25 % slow; a time column in ms,
