@@ -15,7 +15,7 @@ import numpy as np
 __all__ = ["chain_into", "chain"]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def chain_into(q_prev, dq, out) -> None:
     """``out[k] = out[k-1] * dq[k]`` for each row of ``dq`` (unit quaternions, scalar
     first, (K, 4)), ``out[-1]`` being ``q_prev`` (4,)."""
