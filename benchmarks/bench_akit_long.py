@@ -31,12 +31,12 @@ import shutil
 import subprocess
 import sys
 import tempfile
-import time
+from contextlib import contextmanager
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from _report import machine, write_section  # noqa: E402
+from _report import machine, measured_section  # noqa: E402
 
 #: the measured program: load one trajectory, its figures and the arrays' digests
 CHILD = """
@@ -104,21 +104,30 @@ def load(checkout: Path, directory: Path, traced: bool) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def measure(ways: dict, hours: list, day: bool, rounds: int) -> list:
+@contextmanager
+def recording(tmp: Path, hours: float, rate: float = 1.0):
+    """:func:`write_recording` in a directory below ``tmp``, removed after use (a day's
+    files are a gigabyte): yields ``(directory, lines, stamps)``."""
+    d = Path(tempfile.mkdtemp(prefix="akit-", dir=tmp))
+    try:
+        yield (d, *write_recording(d, hours, rate))
+    finally:
+        shutil.rmtree(d, ignore_errors=True)
+
+
+def measure(tmp: Path, ways: dict, hours: list, day: bool, rounds: int) -> list:
     """Rows of figures: each length, each way (name -> checkout), ``rounds`` plain loads
     (best time, largest peak) and one traced."""
     rows = []
     plan = [(h, list(ways)) for h in hours] + ([(24.0, ["this checkout"])] if day else [])
     for h, names in plan:
-        tmp = Path(tempfile.mkdtemp(prefix="bench-akit-"))
-        try:
-            lines, _ = write_recording(tmp, h)
+        with recording(tmp, h) as (d, lines, _):
             runs = {n: [] for n in names}
             for r in range(rounds):
                 for n in (names if r % 2 == 0 else names[::-1]):
-                    runs[n].append(load(ways[n], tmp, False))
+                    runs[n].append(load(ways[n], d, False))
             for n in names:
-                traced = load(ways[n], tmp, True)
+                traced = load(ways[n], d, True)
                 rows.append({"hours": h, "way": n, "lines": lines,
                              "secs": min(x["secs"] for x in runs[n]),
                              "rss0_B": min(x["rss0_B"] for x in runs[n]),
@@ -127,8 +136,6 @@ def measure(ways: dict, hours: list, day: bool, rounds: int) -> list:
                              "traced_kept_B": traced["traced_kept_B"],
                              "digest": traced["digest"]})
                 print(json.dumps(rows[-1]), flush=True)
-        finally:
-            shutil.rmtree(tmp, ignore_errors=True)
     return rows
 
 
@@ -171,14 +178,12 @@ def render(rows, base_rev: str, load: tuple) -> str:
     return "\n".join(lines)
 
 
-def measure_drift(hours: list, rate: float, rounds: int) -> list:
+def measure_drift(tmp: Path, hours: list, rate: float, rounds: int) -> list:
     """Rows of figures of this checkout's loads of drifting recordings."""
     rows = []
     for h in hours:
-        tmp = Path(tempfile.mkdtemp(prefix="bench-akit-"))
-        try:
-            lines, stamps = write_recording(tmp, h, rate)
-            runs = [load(ROOT, tmp, False) for _ in range(rounds)]
+        with recording(tmp, h, rate) as (d, lines, stamps):
+            runs = [load(ROOT, d, False) for _ in range(rounds)]
             offset, r, _ = runs[0]["clock"]
             truth = (stamps - LAG_S) / rate
             rows.append({"hours": h, "lines": lines, "secs": min(x["secs"] for x in runs),
@@ -186,8 +191,6 @@ def measure_drift(hours: list, rate: float, rounds: int) -> list:
                          "end_offset_s": float(stamps[-1] - truth[-1]),
                          "error_s": float(max(abs((stamps - offset) / r - truth)))})
             print(json.dumps(rows[-1]), flush=True)
-        finally:
-            shutil.rmtree(tmp, ignore_errors=True)
     return rows
 
 
@@ -225,26 +228,19 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     hours = [float(h) for h in args.hours.split(",")]
     if args.drift is not None:
-        load0 = os.getloadavg()[0]
-        rows = measure_drift(hours, args.drift, args.rounds)
-        text = render_drift(rows, args.drift, (load0, os.getloadavg()[0]))
-        print(text)
-        if not args.no_write:
-            write_section("akit-drift", text)
+        measured_section("akit-drift", args,
+                         lambda tmp: measure_drift(tmp, hours, args.drift, args.rounds),
+                         lambda a, rows, load, secs: render_drift(rows, a.drift, load))
         return 0
     if args.base is None:
         ap.error("--base is needed unless --drift")
     base_rev = subprocess.run(["git", "-C", str(args.base), "rev-parse", "--short", "HEAD"],
                               capture_output=True, text=True).stdout.strip() or str(args.base)
-    load0 = os.getloadavg()[0]
-    t0 = time.monotonic()
-    rows = measure({"this checkout": ROOT, f"base {base_rev}": args.base},
-                   hours, args.day, args.rounds)
-    text = render(rows, base_rev, (load0, os.getloadavg()[0]))
-    text += f" {(time.monotonic() - t0) / 60:.1f} min in all."
-    print(text)
-    if not args.no_write:
-        write_section("akit-long", text)
+    ways = {"this checkout": ROOT, f"base {base_rev}": args.base}
+    measured_section("akit-long", args,
+                     lambda tmp: measure(tmp, ways, hours, args.day, args.rounds),
+                     lambda a, rows, load, secs: render(rows, base_rev, load)
+                     + f" {secs / 60:.1f} min in all.")
     return 0
 
 
