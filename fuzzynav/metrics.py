@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
+from fuzzynav.block_sums import BlockSums
 from fuzzynav.live_cache import LiveCache
 from fuzzynav.nav import attitude, earth
 
@@ -120,38 +121,28 @@ def rms_metrics(err: NavErrors, t_start_s: float = 0.0) -> dict:
     (horizontal), ``final_pos_h_m`` (horizontal error at the end),
     ``rms_{pitch,roll,heading}_deg``, ``rms_att_deg`` (RMS over the three angles) and
     ``max_pos_h_m`` and ``mean_pos_h_m`` (largest and mean horizontal error, paper 004).
+
+    It is :class:`StreamingRms` fed the whole run as one chunk, so a run scored chunk by
+    chunk reports these figures to the last bit; up to :data:`~fuzzynav.block_sums.
+    BLOCK_COLUMNS` epochs each RMS is ``sqrt(mean(x ** 2))`` as numpy computes it.
     """
     sel = err.time_s >= t_start_s
-    if sel.all():  # the usual case (no convergence skipped): no copies
-        sel = slice(None)
-    p, v, a = err.pos_m[sel], err.vel_mps[sel], np.rad2deg(err.att_rad[sel])
-
-    def rms(x):
-        return float(np.sqrt(np.mean(np.square(x)))) if x.size else float("nan")
-
-    h = np.hypot(p[:, 0], p[:, 1])
-    out = {f"rms_pos_{ax}_m": rms(p[:, i]) for i, ax in enumerate(AXES)}
-    out["rms_pos_h_m"] = rms(h)
-    out["rms_pos_m"] = rms(np.linalg.norm(p, axis=1))
-    out["max_pos_h_m"] = float(np.max(h)) if p.size else float("nan")
-    out["mean_pos_h_m"] = float(np.mean(h)) if p.size else float("nan")
-    out.update({f"rms_vel_{ax}_mps": rms(v[:, i]) for i, ax in enumerate(AXES)})
-    out["rms_vel_mps"] = rms(np.linalg.norm(v, axis=1))
-    out["rms_vel_h_mps"] = rms(np.hypot(v[:, 0], v[:, 1]))
-    out["final_pos_h_m"] = float(np.hypot(*p[-1, :2])) if p.size else float("nan")
-    out.update({f"rms_{nm}_deg": rms(a[:, i]) for i, nm in enumerate(ATT_NAMES)})
-    out["rms_att_deg"] = rms(np.linalg.norm(a, axis=1))
-    return out
+    if not sel.all():  # the usual case (no convergence skipped) needs no copies
+        err = NavErrors(err.time_s[sel], err.pos_m[sel], err.vel_mps[sel], err.att_rad[sel])
+    acc = StreamingRms(-np.inf)
+    acc.add(err)
+    return acc.metrics()
 
 
 class StreamingRms:
     """:func:`rms_metrics` accumulated over consecutive chunks of errors.
 
-    Each chunk adds its sums of squares, its horizontal-error sum and maximum and its last
-    error; :meth:`metrics` gives the same names as :func:`rms_metrics` without any array of
-    the run.  The maxima are exact (NaN propagates as in ``np.max``); the RMS and mean are
-    the whole run's up to the order of summation (numpy sums each chunk pairwise, the
-    chunks add in order): within a few ulps, 1e-12 relative is asserted in the tests.
+    Each chunk adds its squares and horizontal errors to :class:`~fuzzynav.block_sums.
+    BlockSums` and its maximum and last error; :meth:`metrics` gives the same names as
+    :func:`rms_metrics` without any array of the run.  The maxima are exact (NaN propagates
+    as in ``np.max``); the sums are cut into blocks counted from the run's first scored
+    epoch, not at the chunks, so every figure is the same to the last bit whatever the
+    chunking (:func:`rms_metrics` is the case of one chunk).
 
     Parameters
     ----------
@@ -171,9 +162,8 @@ class StreamingRms:
 
     def __init__(self, t_start_s: float = 0.0, truth=None, segments=None):
         self.t_start_s, self.truth, self.segments = float(t_start_s), truth, segments
-        self._sq = dict.fromkeys(self._RMS, 0.0)
-        self._n = 0
-        self._sum_h, self._max_h, self._final_h = 0.0, float("nan"), float("nan")
+        self._sums = BlockSums(len(self._RMS) + 1)  # the squares, then the horizontal errors
+        self._max_h, self._final_h = float("nan"), float("nan")
 
     def add_result(self, result) -> None:
         """Add a chunk of a filter result, scored against :attr:`truth`."""
@@ -188,9 +178,8 @@ class StreamingRms:
         if n <= 0:
             return
         p, v = err.pos_m[k:], err.vel_mps[k:]
-        # every RMS quantity a row of one array, in _RMS's order: each row is summed
-        # pairwise like a 1-D array of its own, so the sums are np.sum's of each column
-        q = np.empty((len(self._RMS), n))
+        # every summed quantity a contiguous row, in _RMS's order, then the horizontal error
+        q = np.empty((len(self._RMS) + 1, n))
         q[0:3] = p.T
         h = q[3]
         np.hypot(p[:, 0], p[:, 1], out=h)
@@ -201,23 +190,24 @@ class StreamingRms:
         a = np.rad2deg(err.att_rad[k:])
         q[10:13] = a.T
         q[13] = np.linalg.norm(a, axis=1)
+        q[14] = h
         # the first chunk's maximum as it is; later ones through np.maximum (NaN sticks)
         big = float(np.max(h))
-        self._max_h = big if self._n == 0 else float(np.maximum(self._max_h, big))
-        self._sum_h += float(np.sum(h))
+        self._max_h = big if self._sums.n == 0 else float(np.maximum(self._max_h, big))
         self._final_h = float(h[-1])
-        self._n += n
-        for name, sq in zip(self._RMS, np.square(q, out=q).sum(axis=1).tolist()):
-            self._sq[name] += sq
+        np.square(q[:-1], out=q[:-1])
+        self._sums.add(q, own=True)
 
     def metrics(self) -> dict:
         """The metrics of everything added (:func:`rms_metrics`' names and order; NaN
         when nothing was added)."""
-        n = self._n
-        rms = {k: (float(np.sqrt(s / n)) if n else float("nan")) for k, s in self._sq.items()}
+        n = self._sums.n
+        sums = self._sums.sums().tolist()
+        rms = {k: (float(np.sqrt(s / n)) if n else float("nan"))
+               for k, s in zip(self._RMS, sums)}
         out = {k: rms[k] for k in self._RMS[:5]}
         out["max_pos_h_m"] = self._max_h
-        out["mean_pos_h_m"] = self._sum_h / n if n else float("nan")
+        out["mean_pos_h_m"] = sums[-1] / n if n else float("nan")
         out.update({k: rms[k] for k in self._RMS[5:10]})
         out["final_pos_h_m"] = self._final_h
         out.update({k: rms[k] for k in self._RMS[10:]})

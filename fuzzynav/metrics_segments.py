@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from fuzzynav.block_sums import BlockSums
 from fuzzynav.metrics import NavErrors
 
 __all__ = ["SEGMENT_METRICS", "key", "scenario_edges_s", "SegmentRms", "segment_metrics",
@@ -49,9 +50,11 @@ def scenario_edges_s(scenario) -> np.ndarray:
 class SegmentRms:
     """Per-segment metrics (:data:`SEGMENT_METRICS`) accumulated over chunks of errors.
 
-    The maxima and end errors are exact; the RMS are the whole run's up to the order of
-    summation (each chunk's part of a segment summed pairwise by numpy, the parts added in
-    order), as :class:`fuzzynav.metrics.StreamingRms` has them.
+    The maxima and end errors are exact; each segment's squares are summed in blocks
+    counted from its first scored epoch (:class:`fuzzynav.block_sums.BlockSums`), so the
+    RMS are the same to the last bit whatever the chunking, as
+    :class:`fuzzynav.metrics.StreamingRms` has them.  A segment's part of a block waiting
+    for more epochs is summed once a chunk starts after the segment's end.
 
     Parameters
     ----------
@@ -68,7 +71,8 @@ class SegmentRms:
         self.edges_s, self.t_start_s = edges, float(t_start_s)
         k = edges.size - 1
         self._n = np.zeros(k, np.int64)
-        self._sq = np.zeros((k, len(_RMS)))
+        self._sq = np.zeros((k, len(_RMS)))   # a segment's sums once it has ended
+        self._open: dict = {}                  # segment -> BlockSums of a segment not ended
         self._max = np.full(k, np.nan)
         self._end = np.full(k, np.nan)
 
@@ -81,7 +85,9 @@ class SegmentRms:
         # where each segment's epochs begin in this chunk: contiguous runs, times increase
         bounds = np.concatenate([[0], np.searchsorted(t, self.edges_s[1:-1], side="left"),
                                  [t.size]])
-        for j in np.flatnonzero(np.diff(bounds) > 0):
+        active = np.flatnonzero(np.diff(bounds) > 0)
+        self._close(int(active[0]))
+        for j in active:
             rows = slice(k + bounds[j], k + bounds[j + 1])
             p, v = err.pos_m[rows], err.vel_mps[rows]
             q = np.empty((len(_RMS), p.shape[0]))
@@ -94,13 +100,21 @@ class SegmentRms:
             self._max[j] = big if self._n[j] == 0 else float(np.maximum(self._max[j], big))
             self._end[j] = h[-1]
             self._n[j] += p.shape[0]
-            self._sq[j] += np.square(q, out=q).sum(axis=1)
+            self._open.setdefault(int(j), BlockSums(len(_RMS))).add(np.square(q, out=q),
+                                                                  own=True)
+
+    def _close(self, before: int) -> None:
+        """Sum the segments before ``before``: no later chunk reaches them."""
+        for j in [j for j in self._open if j < before]:
+            self._sq[j] = self._open.pop(j).sums()
 
     def metrics(self) -> dict:
         """``{key(j, metric): value}`` for every segment and :data:`SEGMENT_METRICS`."""
-        out = {}
+        out, sq = {}, self._sq.copy()
+        for j, acc in self._open.items():
+            sq[j] = acc.sums()
         for j, n in enumerate(self._n.tolist()):
-            rms = dict(zip(_RMS, np.sqrt(self._sq[j] / n).tolist() if n else
+            rms = dict(zip(_RMS, np.sqrt(sq[j] / n).tolist() if n else
                            [float("nan")] * len(_RMS)))
             vals = {**rms, "max_pos_h_m": float(self._max[j]),
                     "end_pos_h_m": float(self._end[j])}

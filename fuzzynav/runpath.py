@@ -198,7 +198,8 @@ def run(source: Source, filter_spec: str, options=None,
         accumulated chunk by chunk at the filter's output rate (the source's
         ``streaming_scorer()``, :class:`~fuzzynav.metrics.StreamingRms`, finished by its
         ``score_streamed(result, scorer)``), so they are those of the undecimated run
-        up to the order of summation; a source without a ``scorer`` refuses it.
+        (the same sums, :mod:`fuzzynav.block_sums`); a source without a ``scorer``
+        refuses it.
     output_dir : path-like, optional
         Write each chunk's kept outputs and event logs there (``--output-dir``;
         :mod:`fuzzynav.filters.chunk_files`); a held source's increments are then cut into

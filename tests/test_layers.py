@@ -16,7 +16,8 @@ import pytest
 PKG = Path(__file__).resolve().parents[1] / "fuzzynav"
 
 #: the foundation every layer may use
-BASE = {"errors", "units", "fileio", "registry", "live_cache", "compile_notice", "fuzzynav"}
+BASE = {"errors", "units", "fileio", "registry", "live_cache", "compile_notice", "block_sums",
+        "fuzzynav"}
 #: layer -> the layers it may import (besides itself and BASE), as docs/architecture.md draws
 ALLOWED = {
     "fuzzy": set(),

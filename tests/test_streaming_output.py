@@ -1,14 +1,16 @@
 """Streaming metrics and decimated output (``fuzzynav run --output-rate HZ [--chunk S]``).
 
 :class:`~fuzzynav.metrics.StreamingRms` is checked against :func:`rms_metrics` on errors
-cut into uneven chunks (sums in another order: a few ulps; maxima and the last error
-exact), and a decimated run against every k-th row of the whole run.
+cut into uneven chunks (the same sums, :mod:`fuzzynav.block_sums`: equal to the last bit)
+and against numpy's mean of squares, and a decimated run against every k-th row of the
+whole run.
 """
 import dataclasses
 
 import numpy as np
 import pytest
 
+from fuzzynav import block_sums
 from fuzzynav.cli import main
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.experiment import SimulatedSource
@@ -16,7 +18,7 @@ from fuzzynav.metrics import NavErrors, StreamingRms, rms_metrics
 from fuzzynav.runpath import keep_every, run
 from fuzzynav.sim.scenario import load_scenario
 from fuzzynav.sim.sensor_log import simulate
-from tests.floats import ULP_RTOL
+from tests.floats import sum_order_rtol
 
 _EXACT = ("max_pos_h_m", "final_pos_h_m")
 
@@ -41,22 +43,30 @@ def test_streaming_rms_is_rms_metrics_over_chunks(t_start_s):
         acc.add(part)
     got = acc.metrics()
     assert list(got) == list(ref)  # the same names in the same order
-    for k in ref:
-        if k in _EXACT:
-            assert got[k] == ref[k], k
-        else:
-            assert got[k] == pytest.approx(ref[k], rel=1e-12), k
-    # a hand-made figure besides: the RMS of the east error from its definition
+    assert got == ref              # the same additions: to the last bit
+    # a figure from its definition: under BLOCK_COLUMNS epochs, numpy's mean of squares
     sel = err.time_s >= t_start_s
-    assert got["rms_pos_e_m"] == pytest.approx(np.sqrt(np.mean(err.pos_m[sel, 0] ** 2)),
-                                               rel=1e-12)
+    assert got["rms_pos_e_m"] == float(np.sqrt(np.mean(err.pos_m[sel, 0] ** 2)))
+    assert got["mean_pos_h_m"] == float(np.mean(np.hypot(*err.pos_m[sel, :2].T)))
 
 
-def test_streaming_rms_in_one_chunk_is_rms_metrics_to_the_bit():
-    err = _errors(999, seed=3)
-    acc = StreamingRms()
-    acc.add(err)
-    assert acc.metrics() == rms_metrics(err)
+@pytest.mark.parametrize("block", [50, None])
+def test_streaming_rms_over_many_blocks_is_rms_metrics_to_the_bit(block, monkeypatch):
+    if block:   # many small blocks and chunks cut across them
+        monkeypatch.setattr(block_sums, "BLOCK_COLUMNS", block)
+    n = 2 * block_sums.BLOCK_COLUMNS + 777
+    err = _errors(n, seed=3)
+    ref = rms_metrics(err, 1.0)
+    rng = np.random.default_rng(11)
+    for _ in range(3):
+        edges = np.unique(np.concatenate([[0, n], rng.integers(1, n, 9)]))
+        acc = StreamingRms(1.0)
+        for part in _cut(err, edges):
+            acc.add(part)
+        assert acc.metrics() == ref
+    sel = err.time_s >= 1.0   # against one pairwise sum: within its rounding bound
+    assert ref["rms_pos_n_m"] == pytest.approx(
+        np.sqrt(np.mean(err.pos_m[sel, 1] ** 2)), rel=sum_order_rtol(n), abs=0.0)
 
 
 def test_streaming_rms_nan_sticks_and_empty_is_nan():
@@ -160,24 +170,24 @@ def test_streamed_run_keeps_the_sensor_usage_metrics(tmp_path):
                          for k in usage)
 
 
-def test_streaming_rms_sums_are_each_chunks_own_sums_added_in_order():
-    """The accumulator's RMS is the square root of the mean of the chunks' sums of
-    squares, added in order (to the last bit here: each of its rows is summed pairwise as
-    np.sum sums a column; held to a few ulps as two paths, tests/floats.py)."""
+def test_streaming_rms_sums_are_blocks_added_in_order(monkeypatch):
+    """The accumulator's RMS is the square root of the mean of the blocks' sums of squares
+    (blocks of BLOCK_COLUMNS from the first epoch, each summed as np.sum sums a row), added
+    in order, whatever the chunks: the rule written out, to the last bit."""
+    monkeypatch.setattr(block_sums, "BLOCK_COLUMNS", 1000)
     err = _errors(3001, seed=5)
-    edges = [0, 7, 1000, 1001, 2999, 3001]
     acc = StreamingRms()
-    sums = {"rms_pos_n_m": 0.0, "rms_vel_h_mps": 0.0, "rms_att_deg": 0.0}
-    for part in _cut(err, edges):
+    for part in _cut(err, [0, 7, 1000, 1001, 2999, 3001]):
         acc.add(part)
-        sums["rms_pos_n_m"] += float(np.sum(np.square(part.pos_m[:, 1])))
-        sums["rms_vel_h_mps"] += float(np.sum(np.square(np.hypot(part.vel_mps[:, 0],
-                                                                  part.vel_mps[:, 1]))))
-        deg = np.rad2deg(part.att_rad)
-        sums["rms_att_deg"] += float(np.sum(np.square(np.linalg.norm(deg, axis=1))))
+    rows = {"rms_pos_n_m": np.square(err.pos_m[:, 1]),
+            "rms_vel_h_mps": np.square(np.hypot(err.vel_mps[:, 0], err.vel_mps[:, 1])),
+            "rms_att_deg": np.square(np.linalg.norm(np.rad2deg(err.att_rad), axis=1))}
     got = acc.metrics()
-    for k, s in sums.items():
-        assert got[k] == pytest.approx(float(np.sqrt(s / 3001)), rel=ULP_RTOL, abs=0.0), k
+    for k, sq in rows.items():
+        s = 0.0
+        for a in range(0, 3001, 1000):
+            s += float(np.sum(sq[a:a + 1000]))
+        assert got[k] == float(np.sqrt(s / 3001)), k
 
 
 def test_cli_output_dir_holding_an_earlier_runs_chunks_is_refused(capsys, sim_cache, tmp_path):

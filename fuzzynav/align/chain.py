@@ -206,7 +206,7 @@ def run_aligned_streamed(scenario, seed: int, nav_filter, options=None,
     ``output_rate_hz``, ``output_dir``, ``cache_dir``): the alignment on the chunks that
     hold the rest, the navigation fed the rest of the run a chunk at a time.  The aligned
     attitude is the whole log's to the last bit; the navigation metrics are the whole run's
-    up to the order of the RMS sums."""
+    (the same errors, summed as any chunking sums them: :mod:`fuzzynav.block_sums`)."""
     from fuzzynav.streamrun import run_streamed
 
     return run_streamed(scenario, seed, nav_filter, options,

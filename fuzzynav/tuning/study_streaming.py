@@ -18,8 +18,9 @@ as its first chunk only (:func:`fuzzynav.experiment.streamed_source`) and simula
 chunk by chunk for each of its runs (:func:`fuzzynav.experiment.streamed_run`): memory
 bounded by the chunk, at the price of a simulation per trial.  Both give the metrics of
 the other to the last bit (the same data, the same filter arithmetic, the same streamed
-sums: tests/tuning/test_study_streaming.py); against a whole-run study they differ only
-in the order of the RMS sums.
+sums: tests/tuning/test_study_streaming.py), and so do they against a whole-run study:
+the streamed sums are cut into blocks counted from each run's start, not at the chunks
+(:mod:`fuzzynav.block_sums`).
 
 A recording (``[train] recordings``) is loaded once and held, as without the table; its
 runs are filtered over chunks of ``chunk_s`` alike, their outputs kept at

@@ -213,7 +213,7 @@ def test_run_align_streamed_aligns_on_the_same_samples_and_navigates_alike(chunk
     errors are the whole run's), the navigation starts at its end (a chunk cut there; with
     6 000-sample chunks the end is a chunk boundary, whose epochs at that instant are the
     previous chunk's: dropping them moved the RMS by 0.2 %) and its metrics are the whole
-    run's up to the order of the RMS sums."""
+    run's (the same sums, fuzzynav.block_sums; two code paths, so within a few ulps)."""
     from fuzzynav.align.chain import run_aligned, run_aligned_streamed
     from fuzzynav.sim.scenario import load_scenario
     from fuzzynav.sim.sensor_log import simulate

@@ -15,7 +15,8 @@ from fuzzynav.sim.sensor_log import simulate
 from tests.floats import sum_order_rtol
 
 TINY = Path(__file__).resolve().parents[1] / "tuning" / "data" / "tiny.toml"
-#: streamed against whole: the same errors per epoch, the sums in another order
+#: streamed against whole: the same errors per epoch and sums (fuzzynav.block_sums); two
+#: code paths, so a tolerance
 RTOL = 1e-9
 
 
