@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import os
 
+from fuzzynav.block_sums import BLOCK_COLUMNS
 from fuzzynav.errors import InputFileError
 
 __all__ = ["BYTES_PER_IMU_SAMPLE", "BYTES_PER_BLOCK_SAMPLE", "BYTES_PER_EPOCH_COLUMN",
@@ -56,6 +57,10 @@ BYTES_PER_STREAM_EPOCH = 48
 #: bytes per kept output row of a streamed run (time, navigation state, sensor states and
 #: sigmas of up to 21 states: 35 floats, rounded up for the locals' and the concatenation)
 BYTES_PER_OUTPUT_ROW = 1024
+#: bytes a streamed run's scorer holds at most: the epochs of a block of its sums not yet
+#: complete (:class:`fuzzynav.block_sums.BlockSums`), 15 rows of the run's and 4 of each
+#: of two open motion segments, float64
+SCORER_BYTES = BLOCK_COLUMNS * 8 * (15 + 2 * 4)
 #: bytes of one sample of a kept :class:`~fuzzynav.sim.trajectory.Trajectory`: time,
 #: lla, vel_n, att, omega_nb_b (3 each), q_bn (4), dtheta_b and dv_b (3 each), float64
 BYTES_PER_TRUTH_SAMPLE = 8 * (1 + 3 * 4 + 4 + 3 * 2)
@@ -143,7 +148,8 @@ def streamed_estimate(duration_s: float, imu_rate_hz: float, sensors: dict,
     (:func:`fuzzynav.streamrun.run_streamed`): one chunk of samples
     (:data:`BYTES_PER_CHUNK_SAMPLE`), the epoch indices of the streamed sensors
     (:data:`BYTES_PER_STREAM_EPOCH`), the sensors simulated whole (their epochs, as a
-    whole run holds them), the truth kept from the first pass when it fits
+    whole run holds them), the scorer's block not yet summed (:data:`SCORER_BYTES`),
+    the truth kept from the first pass when it fits
     :data:`TRUTH_STORE_BYTES` and the kept outputs (:data:`BYTES_PER_OUTPUT_ROW` per row
     at ``output_rate_hz``).  A run whose whole log fits :data:`TRUTH_STORE_BYTES` may
     instead be cut from its cached log, which it then holds
@@ -157,7 +163,7 @@ def streamed_estimate(duration_s: float, imu_rate_hz: float, sensors: dict,
                                else _columns(sp) * BYTES_PER_EPOCH_COLUMN)
     cached = held_log_bytes(duration_s, imu_rate_hz, sensors)
     held = max(simulated, cached if cached <= TRUTH_STORE_BYTES else 0.0)
-    return (min(n_imu, chunk_samples) * BYTES_PER_CHUNK_SAMPLE + held
+    return (min(n_imu, chunk_samples) * BYTES_PER_CHUNK_SAMPLE + held + SCORER_BYTES
             + duration_s * output_rate_hz * BYTES_PER_OUTPUT_ROW)
 
 
@@ -300,6 +306,12 @@ DECIMATE_HOW = ("keep fewer outputs: --output-rate HZ on the command line, [stre
                 "output_rate_hz in a study")
 
 
+def output_bytes(output_rows: float, epochs: float = 0.0) -> float:
+    """Bytes of a run's recorded outputs (:data:`BYTES_PER_OUTPUT_ROW` a row) and event
+    logs (:data:`BYTES_PER_EVENT_ROW` an epoch)."""
+    return output_rows * BYTES_PER_OUTPUT_ROW + epochs * BYTES_PER_EVENT_ROW
+
+
 def check_run_outputs(what: str, held_bytes: float, output_rows: float, epochs: float,
                       how: str = DECIMATE_HOW) -> None:
     """Refuse a filter run whose recorded outputs, event logs and the data it is given
@@ -324,7 +336,7 @@ def check_run_outputs(what: str, held_bytes: float, output_rows: float, epochs: 
     InputFileError
         Without a file; ``where`` names the run.
     """
-    out = output_rows * BYTES_PER_OUTPUT_ROW + epochs * BYTES_PER_EVENT_ROW
+    out = output_bytes(output_rows, epochs)
     limit, source = memory_limit()
     if held_bytes + out > limit:
         raise InputFileError(None, what, f"its {output_rows:.3g} kept outputs and "

@@ -38,7 +38,8 @@ def test_the_estimate_is_samples_times_bytes_and_names_the_limit(tmp_path, monke
     # 100 Hz x 20 000 s = 2e6 samples x 1024 B + one block of 2**18 samples x 3072 B
     # + 20 000 GNSS epochs x 6 columns x 128 B = 2 048 000 000 + 805 306 368 + 15 360 000 B
     # = 2.67 GiB whole; in chunks 15 000 x 4096 B + the GNSS epochs + 20 000 1-Hz output
-    # rows x 1024 B = 61 440 000 + 15 360 000 + 20 480 000 B = 92.8 MiB (by hand)
+    # rows x 1024 B + the scorer's block = 61 440 000 + 15 360 000 + 20 480 000 + 12 058 624
+    # B = 104 MiB (by hand)
     path = _write(tmp_path / "big.toml", RUN.format(rate=100, duration=20000))
     scn = load_scenario(path)  # it fits in chunks
     with pytest.raises(InputFileError) as exc:
@@ -46,9 +47,9 @@ def test_the_estimate_is_samples_times_bytes_and_names_the_limit(tmp_path, monke
     assert exc.value.where == "imu.rate_hz"
     assert "= 2e+06 samples needs ~2.67 GB simulated whole" in exc.value.what
     assert "the limit is 512 MB ($FUZZYNAV_MAX_MEMORY_GB)" in exc.value.what
-    assert "in chunks it needs ~92.8 MB" in exc.value.what
+    assert "in chunks it needs ~104 MB" in exc.value.what
     monkeypatch.setenv(budget.ENV_VAR, "0.05")  # 51.2 MiB: not even in chunks
-    with pytest.raises(InputFileError, match="samples needs ~92.8 MB even simulated and "
+    with pytest.raises(InputFileError, match="samples needs ~104 MB even simulated and "
                                              "filtered in chunks of 15000 samples with 1-Hz "
                                              "output; the limit is 51.2 MB"):
         load_scenario(path)
@@ -90,13 +91,15 @@ def test_a_streamed_run_counts_the_truth_it_keeps(tmp_path, monkeypatch):
     # 50 Hz is 15 000 x 4096 + 50 001 x 184 + 1 000 GNSS epochs x 6 x 128 + 1 000 rows x 1024
     # = 61 440 000 + 9 200 184 + 768 000 + 1 024 000 B (by hand) simulated; its log (50 001 x
     # 288 + 768 000 = 15 168 288 B, under 128 MB) may be cached, and the chunks are then cut
-    # from it held whole: that is the larger, 61 440 000 + 15 168 288 + 1 024 000 B. At
-    # 20 000 s its 184 MB of truth is over the 128 MB kept, its log too large to be cut from,
-    # and each chunk generates its own again
+    # from it held whole: that is the larger, 61 440 000 + 15 168 288 + 1 024 000 B, and the
+    # scorer's block of 65 536 epochs x 23 rows x 8 B = 12 058 624 B. At 20 000 s its 184 MB
+    # of truth is over the 128 MB kept, its log too large to be cut from, and each chunk
+    # generates its own again
     short_run = load_scenario(_write(tmp_path / "a.toml", RUN.format(rate=50, duration=1000)))
-    assert budget.streamed_estimate(1000.0, 50.0, short_run.sensors) == 77_632_288
+    assert budget.SCORER_BYTES == 12_058_624
+    assert budget.streamed_estimate(1000.0, 50.0, short_run.sensors) == 77_632_288 + 12_058_624
     assert budget.streamed_estimate(20000.0, 50.0, short_run.sensors) == (
-        15_000 * 4096 + 20_000 * 6 * 128 + 20_000 * 1024)
+        15_000 * 4096 + 20_000 * 6 * 128 + 20_000 * 1024 + 12_058_624)
     # the traced peak grows by the kept truth, and that growth stays under its figure
     paths = [_write(tmp_path / f"{d}.toml", RUN.format(rate=50, duration=d)) for d in (2, 40, 80)]
     _traced_streamed(paths[0])

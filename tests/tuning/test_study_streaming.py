@@ -1,9 +1,9 @@
 """A study's ``[streaming]`` table (:mod:`fuzzynav.tuning.study_streaming`).
 
-Held runs (their log simulated once, cut into chunks) and long runs (simulated again chunk
-by chunk for every run) are the same data and the same filter arithmetic with the same
-streamed sums: their metrics agree to the bit.  Against a whole-run study only the order of
-the RMS sums differs (:func:`tests.floats.sum_order_rtol` over the run's outputs).
+Held runs (their log simulated once, filtered in one piece or cut into chunks) and long
+runs (simulated again chunk by chunk for every run) are the same data and the same filter
+arithmetic with the same streamed sums (:mod:`fuzzynav.block_sums`): their metrics agree
+with each other and with a whole-run study's to the bit.
 """
 from __future__ import annotations
 
@@ -19,7 +19,6 @@ from fuzzynav.tuning import study_streaming
 from fuzzynav.tuning.evaluate import run_table
 from fuzzynav.tuning.objective import Evaluator
 from fuzzynav.tuning.study_config import load_study_config
-from tests.floats import sum_order_rtol
 from tests.tuning.studies import GPS, TINY, finished_study, write_study
 
 CHUNKS = {"chunk_s": 7.0, "output_rate_hz": 1.0}
@@ -59,18 +58,41 @@ def _refuse_whole(*args, **kwargs):
     raise AssertionError("a long run of a [streaming] study was simulated whole")
 
 
-def test_a_streamed_study_scores_the_whole_runs_metrics(tmp_path):
+@pytest.mark.parametrize("cut", [False, True])
+def test_a_streamed_study_scores_the_whole_runs_metrics(tmp_path, monkeypatch, cut):
+    """Held in one piece (the tiny run's 601 outputs fit hold_log_mb) or cut into 7-s
+    chunks (outputs made to weigh 1 MB a row): the whole-run study's metrics to the bit."""
+    chunks = []
+    real = study_streaming.run
+
+    def spy(source, spec, options=None, setup=None, **kw):
+        chunks.append(kw["chunk_samples"])
+        return real(source, spec, options, setup, **kw)
+
+    monkeypatch.setattr(study_streaming, "run", spy)
+    if cut:
+        monkeypatch.setattr(budget, "BYTES_PER_OUTPUT_ROW", 2**20)
     whole = _evaluator(tmp_path, "whole")
     held = _evaluator(tmp_path, "held", streaming=CHUNKS)
     runs = whole.config.train
-    n_out = len(simulate(load_scenario(str(TINY)), 0).imu.time_s)  # outputs summed, at most
-    rtol = sum_order_rtol(n_out)
-    for (base_w, cand_w), (base_h, cand_h) in zip(_metrics(whole, runs), _metrics(held, runs)):
-        for w, h in ((base_w, base_h), (cand_w, cand_h)):
-            assert w.keys() == h.keys()
-            np.testing.assert_allclose([h[k] for k in w], [w[k] for k in w], rtol=rtol)
-    # the candidate did adapt: it is not the baseline's run again
-    assert cand_h["rms_pos_m"] != base_h["rms_pos_m"]
+    got_whole, got_held = _metrics(whole, runs), _metrics(held, runs)
+    assert chunks and set(chunks) == ({350} if cut else {None})  # 7 s at 50 Hz, or none
+    assert got_held == got_whole
+    base_h, cand_h = got_held[0]
+    assert cand_h["rms_pos_m"] != base_h["rms_pos_m"]  # the candidate did adapt
+
+
+def test_one_piece_is_the_outputs_against_hold_log_mb():
+    st = study_streaming.StudyStreaming(hold_log_bytes=600 * budget.BYTES_PER_OUTPUT_ROW)
+    assert st.one_piece(60.0, 10.0) and not st.one_piece(60.1, 10.0)
+    assert not study_streaming.StudyStreaming(hold_log_bytes=0.0).one_piece(1.0, 10.0)
+    # what a held run may keep in one piece joins its working estimate, bounded by the budget
+    scn = load_scenario(str(TINY))
+    args = (scn.duration_s, scn.imu.rate_hz, scn.sensors)
+    streamed = budget.streamed_estimate(*args)
+    assert study_streaming.StudyStreaming().working_bytes(*args) == streamed + \
+        budget.output_bytes(scn.duration_s * 10.0)
+    assert study_streaming.StudyStreaming(hold_log_bytes=0.0).working_bytes(*args) == streamed
 
 
 def test_a_study_runs_its_trials_on_long_runs(tmp_path, monkeypatch):
@@ -102,7 +124,7 @@ kind = "gnss"
 
 
 def test_a_run_too_long_to_hold_asks_for_the_table(tmp_path, monkeypatch):
-    """2e6 samples: ~2.7 GB simulated whole against a 0.5-GB limit, ~93 MB in chunks
+    """2e6 samples: ~2.7 GB simulated whole against a 0.5-GB limit, ~104 MB in chunks
     (tests/sim/test_budget.py works the figures by hand)."""
     monkeypatch.setenv(budget.ENV_VAR, "0.5")
     scn = tmp_path / "long.toml"
