@@ -222,8 +222,9 @@ def render(rows, repeat, load0, load1) -> str:
         "neutral-point streams chunk by chunk (each random term its own generator drawn in "
         "order, its state carried: the whole log's numbers to the last bit, "
         "`tests/sim/test_stream.py`) and feeds each chunk and its epochs to the filter; "
-        "the metrics are streamed at the filter's 10 Hz (equal to the whole run's up to "
-        "the order of summation: the RMS column is printed in full to show it). What it "
+        "the metrics are streamed at the filter's 10 Hz (the whole run's to the last bit: "
+        "the sums are cut into blocks counted from the run's start, not at the chunks, "
+        "`fuzzynav/block_sums.py`; the RMS column is printed in full to show it). What it "
         "holds beyond the baseline is one chunk, the streamed sensors' epoch indices "
         "(8 B an epoch) and the kept rows.",
     ]
