@@ -2,14 +2,15 @@
 
 :func:`fuzzynav.streamrun.run_streamed` against :func:`fuzzynav.experiment.run_on_log` on
 the whole simulated log fed in the same chunks (the same data, filter arithmetic and
-streamed sums: identical metrics, solution and event logs), and against the whole run in
-one chunk; on every paper's scenario family that navigates on simulated data.  Also: the
+streamed sums: identical metrics, solution and event logs), and its metrics against the
+whole run in one piece, scored whole; on every paper's scenario family that navigates on simulated data.  Also: the
 files of ``--output-dir``, the refusals (an oracle told the whole run's noise, a run too
 long to simulate whole, one too long even in chunks).
 """
 import numpy as np
 import pytest
 
+from fuzzynav import block_sums
 from fuzzynav.errors import FuzzynavError, InputFileError
 from fuzzynav.experiment import run_on_log
 from fuzzynav.sim import budget
@@ -30,13 +31,17 @@ def _same(a, b):
                                         ("paper003", "fuzzy-ship"), ("paper004", "huber"),
                                         ("paper003-storm", "ekf"),
                                         ("paper000", "strong-tracking")])
-def test_streamed_run_is_the_whole_logs_run(name, filt):
+def test_streamed_run_is_the_whole_logs_run(name, filt, monkeypatch):
+    # sums in blocks of 50 outputs, which the chunks of 73 cut across (fuzzynav.block_sums)
+    monkeypatch.setattr(block_sums, "BLOCK_COLUMNS", 50)
     scn = short(name, 60.0)
     chunk = int(round(7.3 * scn.imu.rate_hz))  # boundaries between and (every 73 s) on epochs
-    whole = run_on_log(simulate(scn, 2), filt, chunk_samples=chunk, output_rate_hz=1.0)
+    log = simulate(scn, 2)
+    whole = run_on_log(log, filt, chunk_samples=chunk, output_rate_hz=1.0)
     got = run_streamed(scn, 2, filt, chunk_samples=chunk, output_rate_hz=1.0,
                        keep_events=True)
     _same(got.metrics, whole.metrics)
+    _same(got.metrics, run_on_log(log, filt).metrics)  # and the run in one piece, scored whole
     if name == "paper001":
         assert any(k.startswith("r_use") for k in got.metrics)
     for f in ("time_s", "lla", "vel_n", "q_bn", "sigma", "sensor_states"):
