@@ -156,8 +156,9 @@ def test_a_run_that_fits_only_in_chunks_is_refused_whole_with_both_estimates(tmp
     monkeypatch.setenv(budget.ENV_VAR, "1")
     # 200 Hz x 86 400 s = 1.728e7 samples; whole: x 1024 B + 2**18 x 3072 B + the log's
     # 1.728e7 epochs x 1 column x 128 B = 20 711 866 368 B = 19.3 GiB; in chunks:
-    # 15 000 x 4096 B + 1.728e7 epoch indices x 48 B + 86 400 1-Hz rows x 1024 B
-    # = 979 353 600 B = 934 MiB (by hand; twice as long: 1 897 267 200 B = 1.77 GiB)
+    # 15 000 x 4096 B + 1.728e7 epoch indices x 48 B + 86 400 1-Hz rows x 1024 B + the
+    # scorer's block (budget.SCORER_BYTES, 12 058 624 B) = 991 412 224 B = 945 MiB (by hand;
+    # twice as long: 1 909 325 824 B = 1.78 GiB)
     path = tmp_path / "day.toml"
     path.write_text(RUN.format(rate=200, duration=86400))
     scn = load_scenario(path)  # fits in chunks: accepted
@@ -165,10 +166,10 @@ def test_a_run_that_fits_only_in_chunks_is_refused_whole_with_both_estimates(tmp
         simulate(scn, 0)
     assert exc.value.where == "imu.rate_hz"
     assert "needs ~19.3 GB simulated whole; the limit is 1 GB" in exc.value.what
-    assert "in chunks it needs ~934 MB: run it with --output-rate" in exc.value.what
+    assert "in chunks it needs ~945 MB: run it with --output-rate" in exc.value.what
     # twice as long does not fit even in chunks: refused when read
     path.write_text(RUN.format(rate=200, duration=2 * 86400))
-    with pytest.raises(InputFileError, match=r"samples needs ~1.77 GB even simulated and "
+    with pytest.raises(InputFileError, match=r"samples needs ~1.78 GB even simulated and "
                                              "filtered in chunks of 15000 samples with 1-Hz "
                                              "output; the limit is 1 GB"):
         load_scenario(path)
