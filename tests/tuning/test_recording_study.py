@@ -26,6 +26,24 @@ def same_metrics(got: dict, ref: dict, rtol: float = 1e-12):
         assert got[k] == pytest.approx(v, rel=rtol, abs=0.0, nan_ok=True), k
 
 
+def _pieces(monkeypatch, cut: bool) -> list:
+    """The ``chunk_samples`` of every streamed study run, recorded; with ``cut`` the held
+    runs are cut into chunks whatever their outputs (else these short ones run in one
+    piece: :meth:`~fuzzynav.tuning.study_streaming.StudyStreaming.one_piece`)."""
+    from fuzzynav.tuning import study_streaming
+
+    seen, real = [], study_streaming.run
+
+    def spy(source, spec, options=None, setup=None, **kw):
+        seen.append(kw["chunk_samples"])
+        return real(source, spec, options, setup, **kw)
+
+    monkeypatch.setattr(study_streaming, "run", spy)
+    if cut:
+        monkeypatch.setattr(study_streaming.StudyStreaming, "one_piece", lambda *a: False)
+    return seen
+
+
 DVL_CTRL = {"name": "dvl", "template": str(RULES / "paper004_ror_dvl.json"),
             "partitions": {"ror": [3], "t": [3]}, "window": [3, 10],
             "output_low": [0.5, 0.95], "output_range": [1.05, 2.0]}
@@ -192,14 +210,18 @@ def test_t_start_is_refused_in_a_study_with_recordings(tmp_path, with_data, t_st
         load_study_config(write_study(tmp_path, doc))
 
 
+@pytest.mark.parametrize("cut", [False, True])
 def test_a_streamed_study_on_recordings_scores_their_whole_runs_to_the_bit(tmp_path,
-                                                                          with_data):
-    """With ``[streaming]`` a recording is filtered over chunks of ``chunk_s`` with its
-    output kept at ``output_rate_hz`` and scored chunk by chunk against its reference: each
-    reference epoch is interpolated from the same two rows as in the whole run, so the
-    baseline's, a candidate's and the test table's metrics are the whole study's (to the
-    last bit here; held to 1e-12 as two paths)."""
+                                                                          with_data,
+                                                                          monkeypatch, cut):
+    """With ``[streaming]`` a recording is filtered in one piece or (``cut``) over chunks of
+    ``chunk_s``, with its output kept at ``output_rate_hz`` and scored chunk by chunk
+    against its reference: each reference epoch is interpolated from the same two rows as
+    in the whole run, so the baseline's, a candidate's and the test table's metrics are the
+    whole study's (to the last bit here; held to 1e-12 as two paths)."""
     from fuzzynav.fuzzy import load_fis
+
+    pieces = _pieces(monkeypatch, cut)
 
     runs = ["akit:auv:1", "akit:auv:2@20-100%"]
     whole = Evaluator(load_study_config(write_study(tmp_path, _doc(runs[:1], runs[1:]),
@@ -222,6 +244,7 @@ def test_a_streamed_study_on_recordings_scores_their_whole_runs_to_the_bit(tmp_p
     cols = [c for c in tables[0] if c not in ("filter", "scenario")]
     np.testing.assert_allclose(tables[0][cols].to_numpy(float), tables[1][cols].to_numpy(float),
                                rtol=1e-12, atol=0.0)
+    assert pieces and set(pieces) == ({730} if cut else {None})  # 7.3 s at 100 Hz
 
 
 def test_a_streamed_study_refuses_an_output_rate_the_filter_cannot_keep(tmp_path, with_data):
@@ -248,10 +271,14 @@ def car_data(monkeypatch, tmp_path_factory):
     return root
 
 
-def test_a_streamed_gnss_study_scores_the_whole_runs_to_the_bit(tmp_path, car_data):
+@pytest.mark.parametrize("cut", [False, True])
+def test_a_streamed_gnss_study_scores_the_whole_runs_to_the_bit(tmp_path, car_data,
+                                                                monkeypatch, cut):
     """A GNSS recording's study runs (the validation protocol's noisy fixes, scored against
-    the RTK fixes) streamed: the baseline's and another filter's metrics are the whole
-    run's (held to 1e-12 as two paths), for two seeds of the fed noise."""
+    the RTK fixes) streamed, in one piece or cut: the baseline's and another filter's
+    metrics are the whole run's (held to 1e-12 as two paths), for two seeds of the fed
+    noise."""
+    pieces = _pieces(monkeypatch, cut)
     runs = ["rtklib:car@0-60%", "rtklib:car@60-100%"]
     docs = [_doc(runs[:1], runs[1:]) for _ in range(2)]
     docs[1]["streaming"] = {"chunk_s": 5.3, "output_rate_hz": 2.0}
@@ -265,3 +292,4 @@ def test_a_streamed_gnss_study_scores_the_whole_runs_to_the_bit(tmp_path, car_da
         got, ref = (ev.run(runs[0], seed, "sage-husa") for ev in (streamed, whole))
         same_metrics(got.metrics, ref.metrics)
         assert np.allclose(np.diff(got.result.time_s), 0.5, atol=1e-9)
+    assert pieces and (None not in pieces if cut else set(pieces) == {None})
