@@ -254,7 +254,8 @@ def run(source: Source, filter_spec: str, options=None,
 
 def _check_outputs(source, imu, sensors: dict, config, keep: int, chunk_samples) -> None:
     """:func:`fuzzynav.sim.budget.check_run_outputs` of a run about to be filtered: the
-    solution rows it will keep (one per output period, every ``keep``-th), the epochs its
+    solution rows it will keep (one per output period, every ``keep``-th) and, decimated,
+    those made at a time before (a chunk's; the whole run's in one piece), the epochs its
     event logs record (given chunk by chunk, :class:`EpochsByChunk`: a chunk's share),
     beside the IMU and sensor arrays it is given (of increments made chunk by chunk, one
     chunk)."""
@@ -275,7 +276,10 @@ def _check_outputs(source, imu, sensors: dict, config, keep: int, chunk_samples)
     epochs = sum(d.time_s.size for d in sensors.values())
     if isinstance(imu, EpochsByChunk):  # its event logs are a chunk's at a time
         epochs *= min(1.0, (int(chunk_samples) + 1) / n)
-    check_run_outputs(source.name, held, n / stride / keep, epochs)
+    # decimated rows are made a chunk at a time (the whole run's in one piece) first
+    made = 0.0 if keep == 1 else (n if chunk_samples is None else
+                                  min(n, int(chunk_samples) + 1)) / stride
+    check_run_outputs(source.name, held, n / stride / keep, epochs, made_rows=made)
 
 
 def keep_every(filter_rate_hz: float, output_rate_hz: float) -> int:

@@ -135,11 +135,13 @@ def test_an_oracle_told_the_whole_runs_noise_is_refused():
 
 def test_a_streamed_run_passes_the_run_paths_output_check(monkeypatch):
     """The streamed run goes through runpath.run: its kept outputs are sized before it
-    runs, decimated ones as decimated (60 s of the 10-Hz filter: 600 rows, at 1 Hz 60)."""
+    runs, decimated ones as decimated, beside a chunk's made before decimation (60 s of
+    the 10-Hz filter: 600 rows, at 1 Hz 60 and the 100 of a 501-sample chunk at 50 Hz)."""
     scn = short("paper003", 60.0)
     monkeypatch.setenv(budget.ENV_VAR, "1e-6")  # 1 kiB: nothing fits
-    for rate, rows in ((None, "600"), (1.0, "60")):
-        with pytest.raises(InputFileError, match=f"its {rows} kept outputs and "):
+    for rate, rows in ((None, "600 kept outputs and"),
+                       (1.0, r"60 kept outputs \(and 100 made at a time before decimation\)")):
+        with pytest.raises(InputFileError, match=f"its {rows}"):
             run_streamed(scn, 0, "ekf", chunk_samples=500, output_rate_hz=rate)
     monkeypatch.delenv(budget.ENV_VAR)
     assert run_streamed(scn, 0, "ekf", chunk_samples=500).metrics["completed"] == 1.0

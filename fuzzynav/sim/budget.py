@@ -313,7 +313,7 @@ def output_bytes(output_rows: float, epochs: float = 0.0) -> float:
 
 
 def check_run_outputs(what: str, held_bytes: float, output_rows: float, epochs: float,
-                      how: str = DECIMATE_HOW) -> None:
+                      how: str = DECIMATE_HOW, made_rows: float = 0.0) -> None:
     """Refuse a filter run whose recorded outputs, event logs and the data it is given
     need more than :func:`memory_limit`, before the run allocates them (every run passes
     here: :func:`fuzzynav.runpath.run`).  A recording is held as loaded, and an
@@ -330,16 +330,20 @@ def check_run_outputs(what: str, held_bytes: float, output_rows: float, epochs: 
     epochs : float
         Sensor epochs the event logs record (:data:`BYTES_PER_EVENT_ROW` each).
     how : str
+    made_rows : float
+        Rows made at once before they are decimated to the kept ones (a chunk's, or the
+        whole run's in one piece), held beside them.
 
     Raises
     ------
     InputFileError
         Without a file; ``where`` names the run.
     """
-    out = output_bytes(output_rows, epochs)
+    out = output_bytes(output_rows + made_rows, epochs)
     limit, source = memory_limit()
     if held_bytes + out > limit:
-        raise InputFileError(None, what, f"its {output_rows:.3g} kept outputs and "
+        made = f" (and {made_rows:.3g} made at a time before decimation)" if made_rows else ""
+        raise InputFileError(None, what, f"its {output_rows:.3g} kept outputs{made} and "
                              f"{epochs:.3g} sensor epochs need ~{human_bytes(out)} beside the "
                              f"~{human_bytes(held_bytes)} of data it is given; the limit is "
                              f"{human_bytes(limit)} ({source}): {how}")

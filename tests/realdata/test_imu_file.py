@@ -316,7 +316,7 @@ def test_the_output_check_counts_a_chunks_epochs_when_they_come_chunk_by_chunk(d
     import fuzzynav.runpath as runpath
 
     seen = []
-    monkeypatch.setattr(runpath, "check_run_outputs", lambda *a: seen.append(a))
+    monkeypatch.setattr(runpath, "check_run_outputs", lambda *a, **kw: seen.append(a))
     kw = dict(chunk_samples=613, output_rate_hz=1.0)
     validate(load_rtklib(drive, mounting=None), "ekf", **kw)
     validate(load_rtklib(drive, mounting=None, streamed=True), "ekf", **kw)

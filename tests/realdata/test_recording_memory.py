@@ -129,8 +129,9 @@ def test_the_output_estimate_bounds_what_a_run_on_a_recording_allocates(auv_reco
 def test_a_run_whose_outputs_do_not_fit_is_refused_before_it_runs(auv_recording,
                                                                   monkeypatch):
     """Loaded, the recording's data fits a 2.5-MB limit; its 3 000 undecimated outputs do not:
-    the run is refused naming the run, both figures and how to decimate; kept at 1 Hz it
-    runs (what ``--output-rate 1`` and a study's ``[streaming]`` do)."""
+    the run is refused naming the run, both figures and how to decimate; kept at 1 Hz in
+    one piece it is refused too (all 3 000 rows are made before they are decimated), in
+    chunks of 500 samples it runs (what ``--output-rate 1`` does)."""
     from fuzzynav.realdata.akit import AkitSource
     from fuzzynav.runpath import run
 
@@ -145,7 +146,9 @@ def test_a_run_whose_outputs_do_not_fit_is_refused_before_it_runs(auv_recording,
     msg = str(exc.value)
     assert exc.value.where == src.name and "kept outputs" in msg and "--output-rate" in msg
     assert f"limit is {budget.human_bytes(limit)}" in msg and "output_rate_hz" in msg, msg
-    out = run(src, "ekf", output_rate_hz=1.0)
+    with pytest.raises(InputFileError, match="its 300 kept outputs \\(and 3e\\+03 made at a time"):
+        run(src, "ekf", output_rate_hz=1.0)
+    out = run(src, "ekf", output_rate_hz=1.0, chunk_samples=500)
     assert out.metrics["completed"] == 1.0 and out.result.time_s.size <= 301
 
 
