@@ -3,9 +3,9 @@
 :func:`fuzzynav.streamrun.run_streamed` against :func:`fuzzynav.experiment.run_on_log` on
 the whole simulated log fed in the same chunks (the same data, filter arithmetic and
 streamed sums: identical metrics, solution and event logs), and its metrics against the
-whole run in one piece, scored whole; on every paper's scenario family that navigates on simulated data.  Also: the
-files of ``--output-dir``, the refusals (an oracle told the whole run's noise, a run too
-long to simulate whole, one too long even in chunks).
+whole run in one piece, scored whole; on every paper's scenario family that navigates on
+simulated data.  Also: the files of ``--output-dir``, the refusals (an oracle told the
+whole run's noise, a run too long to simulate whole, one too long even in chunks).
 """
 import numpy as np
 import pytest

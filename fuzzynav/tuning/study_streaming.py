@@ -20,8 +20,9 @@ streamed_run`): memory bounded by the chunk, at the price of a simulation per tr
 
 A held run is filtered in one piece when all its outputs at the filter's rate would fit
 ``hold_log_mb`` too (:meth:`StudyStreaming.one_piece`), else over chunks of ``chunk_s`` cut
-from its log (the event logs are kept whole either way, for the sensor-usage metrics).  Cutting a run that fits only costs time (the
-loop's call, scoring and keeping rows per chunk): the metrics are the same to the last bit
+from its log (the event logs are kept whole either way, for the sensor-usage metrics).
+Cutting a run that fits only costs time (the loop's call, scoring and keeping rows per
+chunk): the metrics are the same to the last bit
 however a run is cut, one piece included, because the streamed sums are cut into blocks
 counted from the run's start, not at the chunks (:mod:`fuzzynav.block_sums`).  So a
 streamed study's trials are a whole-run study's, held and long runs alike
