@@ -20,6 +20,7 @@ bit-identity is the property under test.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 #: a few ulp, relative: the same operations done in another order
 ULP_RTOL = 4 * np.finfo(float).eps
@@ -38,3 +39,17 @@ def sum_order_rtol(n_terms: int) -> float:
 def assert_same_up_to_rounding(actual, desired, rtol: float = ULP_RTOL):
     """``actual`` equals ``desired`` up to ``rtol`` (NaN where the other is NaN)."""
     np.testing.assert_allclose(actual, desired, rtol=rtol, atol=0.0)
+
+
+#: a run scored chunk by chunk against the whole run scored at once: the same sums
+#: (fuzzynav.block_sums), equal to the last bit on the machines measured, but the errors
+#: summed are formed on other slices of the arrays (numpy's vectorised loops): held to this
+METRICS_RTOL = 1e-12
+
+
+def same_metrics(got: dict, ref: dict, rtol: float = METRICS_RTOL) -> None:
+    """Two paths' metrics: the same names in the same order, each value within ``rtol``
+    (NaN where the other is NaN)."""
+    assert list(got) == list(ref)
+    for k, v in ref.items():
+        assert got[k] == pytest.approx(v, rel=rtol, abs=0.0, nan_ok=True), k

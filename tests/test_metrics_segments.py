@@ -73,7 +73,8 @@ def test_chunked_equals_whole_and_the_streaming_rms_carries_it(block, monkeypatc
         acc = StreamingRms(2.0, None, SegmentRms(EDGES, 2.0))
         for a, b in zip(cuts[:-1], cuts[1:]):
             acc.add(_cut(err, a, b))
-        assert acc.metrics() == whole   # the same additions, whatever the chunks
+        # the same errors given, the same additions whatever the chunks: to the bit
+        assert acc.metrics() == whole
 
 
 def test_squares_add_up_to_the_whole_runs():

@@ -13,17 +13,9 @@ from fuzzynav.realdata.dataspec import DATA_DIR_ENV
 from fuzzynav.tuning.study_config import load_study_config
 from fuzzynav.tuning.evaluate import run_table
 from fuzzynav.tuning.objective import Evaluator, score_metrics
+from tests.floats import same_metrics
 from tests.realdata.akit_files import auv_trajectory, write_akit
 from tests.tuning.studies import RULES, study_doc, write_study
-
-
-def same_metrics(got: dict, ref: dict, rtol: float = 1e-12):
-    """Two paths' metrics (a run fed in chunks, scored chunk by chunk, against the whole
-    run): equal to the last bit on this machine, held to ``rtol`` here (tests/floats.py);
-    NaN where the other is NaN."""
-    assert list(got) == list(ref)
-    for k, v in ref.items():
-        assert got[k] == pytest.approx(v, rel=rtol, abs=0.0, nan_ok=True), k
 
 
 def _pieces(monkeypatch, cut: bool) -> list:
