@@ -39,7 +39,7 @@ from fuzzynav.tuning.slots import TrialSlots
 
 __all__ = ["FINISHED", "MAX_RETRIES", "MAX_FAILS_IN_ROW", "READY_POLL_S", "RUN_ATTRS",
            "journal_path", "with_driver", "make_storage", "sampler_seed", "make_sampler",
-           "make_pruner", "open_study", "n_finished", "reap_stale", "reap_orphans",
+           "make_pruner", "open_study", "NewStudy", "n_finished", "reap_stale", "reap_orphans",
            "run_worker", "pareto_front", "best_trials"]
 
 optuna.logging.set_verbosity(optuna.logging.WARNING)
@@ -136,11 +136,12 @@ def make_pruner(cfg):
     return optuna.pruners.WilcoxonPruner(p_threshold=0.1, n_startup_steps=2)
 
 
-def open_study(cfg, storage_url=None, worker: int = 0, create: bool = False):
+def open_study(cfg, storage_url=None, worker: int = 0, create: bool = False, opened=None):
     """Create (``create=True``, in the parent) or load the study of a config.
 
     Loading a study that does not exist raises :class:`FuzzynavError` (and creates no
-    journal file).
+    journal file).  ``opened``: the storage of ``storage_url`` already opened
+    (:class:`NewStudy`'s).
     """
     url = storage_url or cfg.storage_url
     missing = f"no study named {cfg.name!r} in {_hide_password(url)}; run it first"
@@ -149,7 +150,7 @@ def open_study(cfg, storage_url=None, worker: int = 0, create: bool = False):
         raise FuzzynavError(missing)
     with warnings.catch_warnings():  # group=True, Wilcoxon, heartbeat: chosen knowingly
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
-        kw = dict(study_name=cfg.name, storage=make_storage(url),
+        kw = dict(study_name=cfg.name, storage=opened or make_storage(url),
                   sampler=make_sampler(cfg, worker), pruner=make_pruner(cfg))
     if create:
         study = optuna.create_study(directions=cfg.directions, load_if_exists=True, **kw)
@@ -167,6 +168,43 @@ def open_study(cfg, storage_url=None, worker: int = 0, create: bool = False):
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
         study.sampler = make_sampler(cfg, worker, len(study.get_trials(deepcopy=False)))
     return study
+
+
+def _sqlite_path(url: str):
+    """The database file of a ``sqlite:///PATH`` URL (None for other storages)."""
+    return url[len("sqlite:///"):] or None if url.startswith("sqlite:///") else None
+
+
+class NewStudy:
+    """Whether a config's study is new to its storage, and undoing its creation.
+
+    Made before :func:`open_study` creates the study: a study that a run creates and that
+    stops before any trial finished (a refused objective, a bad rule template, Ctrl-C while
+    the training runs are simulated) is removed again by :meth:`discard`, so a failed first
+    run leaves nothing behind -- a journal or SQLite file it created is deleted, and in a
+    storage that held the study's neighbours (a shared journal, a database) only that study
+    goes.
+    """
+
+    def __init__(self, cfg, storage_url=None):
+        self.name = cfg.name
+        self.url = storage_url or cfg.storage_url
+        path = journal_path(self.url) or _sqlite_path(self.url)
+        self.file = path if path is not None and not os.path.isfile(path) else None
+        #: the storage, opened once: :func:`open_study` takes it (a journal is replayed once)
+        self.storage = make_storage(self.url)
+        self.new = self.file is not None or \
+            self.name not in optuna.get_all_study_names(self.storage)
+
+    def discard(self, study) -> None:
+        """Remove the study when this run created it and none of its trials finished."""
+        if not self.new or n_finished(study):
+            return
+        if self.file is not None:
+            if os.path.isfile(self.file):
+                os.unlink(self.file)
+        else:
+            optuna.delete_study(study_name=self.name, storage=self.storage)
 
 
 # -- bookkeeping ---------------------------------------------------------------------------------

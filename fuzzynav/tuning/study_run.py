@@ -25,7 +25,8 @@ from tqdm.auto import tqdm
 
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.tuning.samplers import get_optimiser
-from fuzzynav.tuning.optuna_study import n_finished, open_study, reap_orphans, run_worker
+from fuzzynav.tuning.optuna_study import NewStudy, n_finished, open_study, reap_orphans, \
+    run_worker
 
 __all__ = ["WORKER_BOOT", "FORK", "MAX_RESTARTS", "USER_ERROR", "POLL_S", "worker_command",
            "ForkedWorker", "wait_for_exit", "supervise", "run_study", "run_plan",
@@ -226,6 +227,10 @@ def run_study(cfg, trials=None, workers: int = 1, storage=None, cache_dir=None,
     Returns
     -------
     optuna.Study
+
+    A study this call creates is removed again when the run stops before any of its
+    trials finished (:class:`~fuzzynav.tuning.optuna_study.NewStudy`): a refused first
+    run leaves no empty study behind.
     """
     from fuzzynav.tuning.kinds.fuzzy import FuzzyPlan
 
@@ -235,7 +240,18 @@ def run_study(cfg, trials=None, workers: int = 1, storage=None, cache_dir=None,
         raise FuzzynavError(f"--workers must be >= 1, got {workers}")
     if workers > 1 and cfg.path is None:
         raise FuzzynavError("several workers need the study config as a file")
-    study = open_study(cfg, storage, create=True)
+    created = NewStudy(cfg, storage)
+    study = open_study(cfg, storage, create=True, opened=created.storage)
+    try:
+        _run(cfg, study, plan, part, total, workers, storage, cache_dir, progress)
+    except BaseException:
+        created.discard(study)  # stopped before any trial finished: nothing left behind
+        raise
+    return study
+
+
+def _run(cfg, study, plan, part, total, workers, storage, cache_dir, progress):
+    """:func:`run_study`'s work on the opened ``study``."""
     if not study.trials:  # a new study: a warm start's first trial (a plan's, if it has one)
         for params in getattr(plan, "first_trials", list)():
             study.enqueue_trial(params, user_attrs={"warm_start": True})
@@ -261,7 +277,6 @@ def run_study(cfg, trials=None, workers: int = 1, storage=None, cache_dir=None,
                   if progress else None)
     bar.update(min(n_finished(study), total) - bar.n)
     bar.close()
-    return study
 
 
 def run_plan(plan, trials=None, workers: int = 1, storage=None, progress: bool = True):

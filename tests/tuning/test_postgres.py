@@ -137,3 +137,22 @@ def test_baseline_and_alignment_studies_share_postgresql_too(tmp_path, sim_cache
     assert [t.params for t in trials[:2]] == [t.params for t in first]
     assert len(trials) == 3 and not list(tmp_path.glob("*.journal"))
     assert len(open_study(plan.config(part), postgres_url).trials) == 3
+
+
+def test_a_refused_new_study_is_removed_from_postgresql(tmp_path, sim_cache, postgres_url):
+    """A new study whose first trial is refused is deleted from the database; the other
+    studies there stay."""
+    import optuna
+
+    from fuzzynav.errors import FuzzynavError
+    from fuzzynav.tuning.optuna_study import make_storage
+
+    name = f"refused_{os.getpid()}"
+    cfg = load_study_config(write_study(
+        tmp_path, name=name,
+        objective={"weights": {"pos": 1.0, "vel": 1.0, "att": 1.0, "r_use": 0.1}}))
+    before = optuna.get_all_study_names(make_storage(postgres_url, heartbeat=False))
+    with pytest.raises(FuzzynavError, match="'r_use' has weight"):
+        run_study(cfg, trials=2, storage=postgres_url, cache_dir=sim_cache, progress=False)
+    after = optuna.get_all_study_names(make_storage(postgres_url, heartbeat=False))
+    assert name not in after and sorted(after) == sorted(before)
