@@ -74,7 +74,7 @@ def params_lines(params: Path) -> list:
     lines = ["| filter | training score (ratio to ekf) | parameters |", "|---|---|---|"]
     hits = []
     for name, p in doc["filters"].items():
-        ends = bound_hits(name, p)
+        ends = bound_hits(name, p, doc=doc)
         vals = ", ".join(f"{k} = {v:.3g}" + (f" (at the {ends[k]} end)" if k in ends else "")
                          for k, v in p.items())
         lines.append(f"| {name} | {doc['train_score'][name]:.3f} | {vals} |")

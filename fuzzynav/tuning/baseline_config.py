@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -32,14 +32,17 @@ from fuzzynav.experiment import filter_context
 from fuzzynav.fileio import study_output, write_atomic
 from fuzzynav.filters import measurements
 from fuzzynav.filters.baselines import Q_FIELDS, TUNED
-from fuzzynav.filters.params_file import PARAMS_FORMAT, check_params
+from fuzzynav.filters.multipliers import R_ALL, R_PREFIX
+from fuzzynav.filters.params_file import PARAMS_FORMAT, check_params, known_keys
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
+from fuzzynav.tuning.baseline_ranges import parse_ranges, recorded, with_ranges
 from fuzzynav.tuning.study_config import study_config_from_dict
 from fuzzynav.tuning.objective import TrialObjective
 
 __all__ = ["TUNABLE", "Q_BOUNDS", "R_BOUNDS", "SPACES", "BaselineConfig",
            "load_baseline_config", "training_channels", "space_of", "suggest", "run_params",
-           "BaselineObjective", "sub_config", "best_params", "write_params", "train_score", "bound_hits"]
+           "BaselineObjective", "sub_config", "best_params", "write_params", "train_score", "bound_hits",
+           "default_space"]
 
 #: filters a baseline study can tune: the searched ones, the ALS estimate and paper 004's
 #: APSO (the ``apso`` filter's Q/R multipliers, best with ``sampler = "pso"``)
@@ -63,13 +66,15 @@ SPACES = {
 }
 
 
-def bound_hits(name: str, params: dict, rel: float = 0.01) -> dict:
+def bound_hits(name: str, params: dict, rel: float = 0.01, doc=None) -> dict:
     """Parameter -> ``"lower"``/``"upper"`` for each of ``params`` (tuned values of baseline
     ``name``) within ``rel`` of its search range's end (on the log scale where searched on
-    it): the optimum may lie outside what was searched.  Unsearched keys are left out."""
+    it): the optimum may lie outside what was searched.  ``doc``: the parameter file, whose
+    ``space`` says the ranges searched (else the defaults).  Unsearched keys are left out."""
+    space = recorded(doc or {}, name, default_space(name))
     out = {}
     for key, value in params.items():
-        lo, hi, scale = SPACES.get(name, {}).get(key, (None, None, None))
+        lo, hi, scale = space.get(key, (None, None, None))
         if lo is None:
             continue
         f = (math.log(value / lo) / math.log(hi / lo) if scale is True
@@ -88,6 +93,7 @@ class BaselineConfig:
     study: object          # StudyConfig (no controllers)
     tune: tuple
     out: Path
+    ranges: dict = field(default_factory=dict)  # filter -> {key: (lo, hi)}: [baselines.ranges]
 
 
 def load_baseline_config(path) -> BaselineConfig:
@@ -102,10 +108,12 @@ def load_baseline_config(path) -> BaselineConfig:
                 not all(isinstance(n, str) and n in TUNABLE for n in tune):
             raise bt.error("tune", f"must be a non-empty array of: {', '.join(TUNABLE)}")
         out = Path(bt.string("out", f"{path.stem}.json"))
+        ranges = parse_ranges(bt.table("ranges", False), lambda name: (
+            default_space(name) or None if name in tune else None))
         bt.finish()
         study = study_config_from_dict(doc, path, need_controllers=False)
     out = study_output(out, path, "baselines.out")
-    return BaselineConfig(study, tuple(dict.fromkeys(tune)), out)
+    return BaselineConfig(study, tuple(dict.fromkeys(tune)), out, ranges)
 
 
 # -- search spaces ------------------------------------------------------------------------------
@@ -118,11 +126,24 @@ def training_channels(evaluator, runs) -> tuple:
     return tuple(chans)
 
 
-def space_of(name: str, channels=()) -> dict:
-    """The searched parameters of a tuned filter: key -> (low, high, log | ``"int"``)."""
+def space_of(name: str, channels=(), ranges=None) -> dict:
+    """The searched parameters of a tuned filter: key -> (low, high, log | ``"int"``);
+    ``ranges``: a study file's ranges of its keys (:mod:`fuzzynav.tuning.baseline_ranges`)."""
     if name == "ekf-tuned":
-        return {**{k: Q_BOUNDS for k in Q_FIELDS}, **{f"r_{c}": R_BOUNDS for c in channels}}
-    return dict(SPACES[name])
+        space = {**{k: Q_BOUNDS for k in Q_FIELDS}, **{f"r_{c}": R_BOUNDS for c in channels}}
+    else:
+        space = dict(SPACES[name])
+    return with_ranges(space, ranges or {}, f"baselines.ranges.{name}")
+
+
+def default_space(name: str) -> dict:
+    """Every key filter ``name`` may search, with its default range (``ekf-tuned``: an
+    ``r_<channel>`` for every channel a measurement model has); empty for a filter that is
+    not searched (``als``)."""
+    if name == "ekf-tuned":
+        return space_of(name, [k[len(R_PREFIX):] for k in known_keys(name)
+                               if k.startswith(R_PREFIX) and k != R_ALL])
+    return space_of(name) if name in SPACES else {}
 
 
 def suggest(trial, space: dict) -> dict:
@@ -202,15 +223,19 @@ def best_params(bcfg: BaselineConfig, study) -> tuple:
 
 
 def write_params(bcfg: BaselineConfig, found: dict, scores: dict, trials: dict,
-                 history=None) -> Path:
+                 history=None, spaces=None) -> Path:
     """Write the tuned-parameter file the named filters read (atomically); ``history``:
-    filter -> the PSO swarm's convergence (:func:`fuzzynav.tuning.pso.history`)."""
+    filter -> the PSO swarm's convergence (:func:`fuzzynav.tuning.pso.history`);
+    ``spaces``: filter -> the ranges searched (written as ``space``)."""
     for name, p in found.items():  # what the reader would refuse is never written
         check_params(name, p, bcfg.out, f"$.filters.{name}.")
     doc = {"format": PARAMS_FORMAT, "version": 1, "study": bcfg.study.name,
            "baseline": bcfg.study.baseline,
            "train": [list(r) for r in bcfg.study.train],
            "trials": trials, "train_score": scores, "filters": found}
+    if spaces:
+        doc["space"] = {name: {k: [lo, hi] for k, (lo, hi, _) in sp.items()}
+                        for name, sp in spaces.items()}
     if history:
         doc.update(sampler=bcfg.study.sampler, history=history)
     text = json.dumps(doc, indent=1) + "\n"

@@ -179,8 +179,9 @@ def apso_bounds_lines(folds=AKIT_FOLDS) -> list:
             path = ROOT / st.tuning_file(fold.apso, k)
             if not path.is_file():
                 continue
-            params = json.loads(path.read_text())["filters"]["apso"]
-            ends = bound_hits("apso", params)
+            doc = json.loads(path.read_text())
+            params = doc["filters"]["apso"]
+            ends = bound_hits("apso", params, doc=doc)
             if ends:
                 out.append(f"- `{fold.label}`, tuning {k}: " + ", ".join(
                     f"{key} = {params[key]:.3g} at the {end} end" for key, end in ends.items()))

@@ -47,7 +47,8 @@ class BaselinePlan:
     def space(self, key: str) -> dict:
         from fuzzynav.tuning.baseline_config import space_of, training_channels
 
-        return space_of(key, training_channels(self.evaluator, self.bcfg.study.train))
+        return space_of(key, training_channels(self.evaluator, self.bcfg.study.train),
+                        self.bcfg.ranges.get(key))
 
     def config(self, key: str):
         """The study of filter ``key`` (:func:`fuzzynav.tuning.baseline_config.sub_config`)."""
@@ -87,7 +88,7 @@ class BaselinePlan:
         from fuzzynav.tuning.pso import history as swarm_history
 
         bcfg = self.bcfg if out is None else replace(self.bcfg, out=Path(out))
-        found, scores, counts, hist = {}, {}, {}, {}
+        found, scores, counts, hist, spaces = {}, {}, {}, {}, {}
         for name in bcfg.tune:
             if name == "als":
                 from fuzzynav.tuning.als_fit import als_params
@@ -103,9 +104,10 @@ class BaselinePlan:
             study = studies[name]
             found[name], scores[name] = best_params(bcfg, study)
             counts[name] = len(study.get_trials(deepcopy=False))
+            spaces[name] = self.space(name)
             if bcfg.study.sampler == "pso":
                 hist[name] = swarm_history(study, self.config(name))
-        return write_params(bcfg, found, scores, counts, hist)
+        return write_params(bcfg, found, scores, counts, hist, spaces)
 
     def summary(self, studies: dict) -> None:
         from fuzzynav.tuning.baseline_report import evaluate_baselines
