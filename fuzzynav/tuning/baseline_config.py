@@ -40,9 +40,9 @@ from fuzzynav.tuning.study_config import study_config_from_dict
 from fuzzynav.tuning.objective import TrialObjective
 
 __all__ = ["TUNABLE", "Q_BOUNDS", "R_BOUNDS", "SPACES", "BaselineConfig",
-           "load_baseline_config", "training_channels", "space_of", "suggest", "run_params",
-           "BaselineObjective", "sub_config", "best_params", "write_params", "train_score", "bound_hits",
-           "default_space"]
+           "load_baseline_config", "training_channels", "space_of", "default_space", "suggest",
+           "run_params", "BaselineObjective", "sub_config", "best_params", "write_params",
+           "train_score", "bound_hits"]
 
 #: filters a baseline study can tune: the searched ones, the ALS estimate and paper 004's
 #: APSO (the ``apso`` filter's Q/R multipliers, best with ``sampler = "pso"``)
