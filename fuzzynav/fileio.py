@@ -23,7 +23,7 @@ from pathlib import Path
 from fuzzynav.errors import InputFileError, OutputError, brief
 
 __all__ = ["say_written", "write_npz", "FILE_MODE", "publish", "MAX_STEM", "safe_stem", "output_errors", "SYSTEM_DIRS",
-           "is_inside", "check_place", "study_output", "make_dir", "write_atomic", "write_text_atomic",
+           "is_inside", "check_place", "check_output_dir", "study_output", "make_dir", "write_atomic", "write_text_atomic",
            "publish_all", "process_alive", "sweep_staged", "staged", "json_ready"]
 
 
@@ -94,6 +94,21 @@ def check_place(path, what: str = "") -> Path:
             raise OutputError(path, f"{d} is a system directory; fuzzynav writes nothing "
                                     "there", what)
     return Path(path)
+
+
+def check_output_dir(path, what: str = "") -> Path:
+    """``path`` if a directory can be written there, checked before any work and creating
+    nothing: not in a system directory, not a file, and below a directory this process may
+    write in; else an :class:`OutputError` naming it (and ``what``)."""
+    path = check_place(Path(path), what)
+    if path.exists() and not path.is_dir():
+        raise OutputError(path, "it is a file, not a directory", what)
+    parent = path
+    while not parent.exists():
+        parent = parent.parent
+    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
+        raise OutputError(path, f"{parent} cannot be written in", what)
+    return path
 
 
 def study_output(text, study_file, key: str) -> Path:

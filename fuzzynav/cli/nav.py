@@ -188,7 +188,14 @@ MAX_SEED = 2**63 - 1
 
 
 def check_common(args) -> None:
-    """Refuse meaningless values of the options every run shares."""
+    """Refuse meaningless values of the options every run shares, and output directories
+    that cannot be written, before any work."""
+    from fuzzynav.fileio import check_output_dir
+
+    for flag, what in (("plot", "figure directory (--plot)"),
+                       ("output_dir", "chunk directory (--output-dir)")):
+        if getattr(args, flag, None) is not None:
+            check_output_dir(getattr(args, flag), what)
     check_count("--mc", args.mc)
     if args.mc > MAX_MC:
         raise FuzzynavError(f"--mc must be <= {MAX_MC} (each run is simulated and kept in "

@@ -23,10 +23,17 @@ from fuzzynav.errors import InputFileError, brief
 from fuzzynav.filters import measurements
 from fuzzynav.filters.multipliers import Q_FIELDS, R_ALL, R_PREFIX, new_name
 
-__all__ = ["PARAMS_FORMAT", "MAX_FILE_BYTES", "MULTIPLIER", "Param", "MULTIPLIER_FILTERS",
-           "PARAMETERS", "ALL_REQUIRED", "known_keys", "check_params", "read_params_file"]
+__all__ = ["PARAMS_FORMAT", "PARAMS_VERSION", "TOP_KEYS", "MAX_FILE_BYTES", "MULTIPLIER",
+           "Param", "MULTIPLIER_FILTERS", "PARAMETERS", "ALL_REQUIRED", "known_keys",
+           "check_params", "read_params_file"]
 
 PARAMS_FORMAT = "fuzzynav-baselines"
+#: the version of the format this reader reads (and :func:`~fuzzynav.tuning.baseline_config.
+#: write_params` writes)
+PARAMS_VERSION = 1
+#: the top-level keys of a tuned-parameter file (what a baseline study writes)
+TOP_KEYS = ("format", "version", "study", "baseline", "train", "trials", "train_score",
+            "filters", "sampler", "history", "space")
 #: largest tuned-parameter file read (bytes); a study writes a few kilobytes
 MAX_FILE_BYTES = 1 << 20
 #: range of a constant noise multiplier (Q or R factor): beyond it the filter's covariance
@@ -158,6 +165,13 @@ def read_params_file(path) -> dict:
     if not isinstance(doc, dict) or doc.get("format") != PARAMS_FORMAT:
         raise InputFileError(path, "$.format", f"must be {PARAMS_FORMAT!r} (a file written "
                                                "by a baseline study)")
+    if doc.get("version") != PARAMS_VERSION or isinstance(doc.get("version"), bool):
+        raise InputFileError(path, "$.version", f"unsupported version {brief(doc.get('version'))}"
+                                                f" (this fuzzynav reads {PARAMS_VERSION})")
+    extra = [k for k in doc if k not in TOP_KEYS]
+    if extra:
+        raise InputFileError(path, f"$.{brief(extra[0])[1:-1]}", "unknown key of a "
+                             f"tuned-parameter file (known: {', '.join(TOP_KEYS)})")
     filters = doc.get("filters")
     if not isinstance(filters, dict):
         raise InputFileError(path, "$.filters", "must be an object: filter -> parameters")

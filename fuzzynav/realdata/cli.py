@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import sys
 from dataclasses import asdict
 from pathlib import Path
@@ -87,7 +88,13 @@ def settings_from(args):
           if getattr(args, dest, None) is not None}
     if getattr(args, "t_start", None):
         kw["t_start_s"] = float(args.t_start)
-    return ProtocolSettings(**kw)
+    try:
+        return ProtocolSettings(**kw)
+    except FuzzynavError as exc:  # the settings' field names, as the options the user gave
+        flags = {field: _FLAGS[dest] for dest, field in {**_SETTINGS,
+                                                          "t_start": "t_start_s"}.items()}
+        raise FuzzynavError(re.sub(r"\b(" + "|".join(flags) + r")\b",
+                                   lambda m: flags[m.group(1)], str(exc))) from None
 
 
 def _span(text):

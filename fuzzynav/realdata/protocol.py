@@ -29,10 +29,19 @@ from fuzzynav.realdata import degrade
 from fuzzynav.sim.sensors import SensorData
 from fuzzynav.sim.sensors.gnss import outage_windows
 
-__all__ = ["VELOCITY_MODES", "ProtocolSettings", "read_later", "degraded_fixes",
+__all__ = ["VELOCITY_MODES", "LIMITS", "ProtocolSettings", "read_later", "degraded_fixes",
            "windows_after", "with_outages"]
 
 VELOCITY_MODES = ("shift", "raw", "inflate", "off")
+
+
+#: the range of each number of :class:`ProtocolSettings` (infinities and NaN refused):
+#: noises beyond these are no longer a GNSS receiver's, lags and outages no longer a run's
+LIMITS = {"noise_pos_m": (0.0, 1e3), "noise_vel_mps": (0.0, 1e2),
+          "outage_period_s": (0.0, 1e6), "outage_duration_s": (0.0, 1e6),
+          "first_outage_s": (0.0, 1e6), "velocity_lag_s": (-10.0, 10.0),
+          "velocity_inflate_mps": (0.0, 1e2), "t_start_s": (0.0, 1e7),
+          "nhc_sigma_mps": (0.0, 1e2), "nhc_rate_hz": (0.0, 1e4)}
 
 
 @dataclass(frozen=True)
@@ -83,16 +92,13 @@ class ProtocolSettings:
         if self.velocity not in VELOCITY_MODES:
             raise FuzzynavError(f"velocity mode {self.velocity!r}: expected one of "
                                 f"{', '.join(VELOCITY_MODES)}")
-        for name in ("noise_pos_m", "noise_vel_mps", "outage_duration_s",
-                     "velocity_inflate_mps", "nhc_sigma_mps"):
-            if not getattr(self, name) >= 0.0:
-                raise FuzzynavError(f"{name} must be >= 0, got {getattr(self, name)}")
+        for name, (lo, hi) in LIMITS.items():
+            value = getattr(self, name)
+            if value is not None and not lo <= value <= hi:  # NaN fails too
+                raise FuzzynavError(f"{name} must lie in [{lo:g}, {hi:g}], got {value}")
         if self.outage_duration_s > 0.0 and not (self.outage_period_s > self.outage_duration_s):
             raise FuzzynavError(f"outage_period_s ({self.outage_period_s}) must exceed "
                                 f"outage_duration_s ({self.outage_duration_s})")
-        if self.first_outage_s is not None and not self.first_outage_s >= 0.0:
-            raise FuzzynavError(f"first_outage_s must be >= 0, got {self.first_outage_s}")
-
         if not self.nhc_rate_hz > 0.0:
             raise FuzzynavError(f"nhc_rate_hz must be > 0, got {self.nhc_rate_hz}")
 

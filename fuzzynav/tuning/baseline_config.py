@@ -33,7 +33,8 @@ from fuzzynav.fileio import study_output, write_atomic
 from fuzzynav.filters import measurements
 from fuzzynav.filters.baselines import Q_FIELDS, TUNED
 from fuzzynav.filters.multipliers import R_ALL, R_PREFIX
-from fuzzynav.filters.params_file import PARAMS_FORMAT, check_params, known_keys
+from fuzzynav.filters.params_file import PARAMS_FORMAT, PARAMS_VERSION, check_params, \
+    known_keys
 from fuzzynav.sim.tomltable import Table, read_toml, with_path
 from fuzzynav.tuning.baseline_ranges import parse_ranges, recorded, with_ranges
 from fuzzynav.tuning.study_config import study_config_from_dict
@@ -229,7 +230,7 @@ def write_params(bcfg: BaselineConfig, found: dict, scores: dict, trials: dict,
     ``spaces``: filter -> the ranges searched (written as ``space``)."""
     for name, p in found.items():  # what the reader would refuse is never written
         check_params(name, p, bcfg.out, f"$.filters.{name}.")
-    doc = {"format": PARAMS_FORMAT, "version": 1, "study": bcfg.study.name,
+    doc = {"format": PARAMS_FORMAT, "version": PARAMS_VERSION, "study": bcfg.study.name,
            "baseline": bcfg.study.baseline,
            "train": [list(r) for r in bcfg.study.train],
            "trials": trials, "train_score": scores, "filters": found}

@@ -182,3 +182,27 @@ def test_the_sane_run_still_works_and_prints_finite_json(capsys, sim_cache):
     assert code == 0, err
     doc = json.loads(out)
     assert np.isfinite(doc["filters"]["ekf"]["rms_pos_m"]["mean"])
+
+
+@pytest.mark.parametrize("command", [["run", TINY], ["compare", TINY, "--filters", "ekf,fakf"]])
+@pytest.mark.parametrize("where", ["/proc/fuzzynav-plots", "a-file", "/sys/x"])
+def test_a_plot_directory_that_cannot_be_written_is_refused_before_the_run(
+        capsys, tmp_path, monkeypatch, command, where):
+    """It was found only after the whole run, its table already printed."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "a-file").write_text("kept")
+    ran = []
+    monkeypatch.setattr(fuzzynav.experiment, "monte_carlo",
+                        lambda *a, **k: ran.append(1) or pytest.fail("ran"))
+    code, out, err = _run(capsys, *command, "--mc", "1", "--plot", where, "--cache", "cache")
+    assert code == 2 and _one_line(err) and "figure directory (--plot)" in err, err
+    assert out == "" and not ran and (tmp_path / "a-file").read_text() == "kept"
+
+
+def test_an_output_dir_that_is_a_file_is_refused_before_the_run(capsys, tmp_path):
+    target = tmp_path / "chunks"
+    target.write_text("kept")
+    code, out, err = _run(capsys, "run", TINY, "--output-rate", "1", "--output-dir", target,
+                          "--cache", tmp_path / "cache")
+    assert code == 2 and _one_line(err) and "it is a file, not a directory" in err, err
+    assert out == "" and target.read_text() == "kept"

@@ -71,6 +71,28 @@ def test_a_bad_parameter_file_is_one_line_naming_the_key(tmp_path, label, edit, 
     assert msg.startswith(f"{path}: {where}:") and phrase in msg and "\n" not in msg
 
 
+TOP = [
+    ("a later version", lambda d: d.update(version=7), "$.version", "unsupported version 7"),
+    ("a version as text", lambda d: d.update(version="1"), "$.version",
+     "unsupported version '1'"),
+    ("no version", lambda d: d.pop("version"), "$.version", "unsupported version None"),
+    ("an unknown key", lambda d: d.update(extra_top=1), "$.extra_top",
+     "unknown key of a tuned-parameter file"),
+]
+
+
+@pytest.mark.parametrize("label, edit, where, phrase", TOP, ids=[t[0] for t in TOP])
+def test_the_file_itself_is_checked_too(tmp_path, label, edit, where, phrase):
+    doc = _doc()
+    edit(doc)
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(InputFileError) as exc:
+        read_params_file(path)
+    msg = str(exc.value)
+    assert msg.startswith(f"{path}: {where}:") and phrase in msg and "\n" not in msg
+
+
 def test_the_shipped_files_read_back_unchanged():
     assert read_params(SHIPPED)["filters"] == _doc()["filters"]
     assert read_params(APSO)["filters"] == json.loads(APSO.read_text())["filters"]

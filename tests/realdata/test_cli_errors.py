@@ -43,8 +43,8 @@ def test_missing_files_are_named(tmp_path):
     (("--span", "10"), "--span"),
     (("--span", "20,10"), "--span"),
     (("--mounting", "no-such-mounting"), "rtklib-drive"),
-    (("--noise", "-1"), "noise_pos_m"),
-    (("--outage-period", "30"), "outage_period_s"),
+    (("--noise", "-1"), "--noise must lie in [0, 1000], got -1.0"),
+    (("--outage-period", "30"), "--outage-period (30.0) must exceed --outage-duration (60.0)"),
 ])
 def test_bad_options(tmp_path, argv, words):
     code, _, err = _run("run", "--data", f"rtklib:{tmp_path}", *argv)
@@ -119,3 +119,26 @@ def test_an_akit_run_with_non_finite_metrics_prints_nothing_and_exits_3(monkeypa
     code, out, err = _run("run", "--data", "akit:x:3", "--filter", "ekf",
                           *(["--json"] if as_json else []))
     assert code == 3 and out == "" and "diverged" in err and "rms_pos_h_m" in err, err
+
+
+@pytest.mark.parametrize("extra, phrase", [
+    (["--noise", "inf"], "--noise must lie in [0, 1000], got inf"),
+    (["--noise", "1e300"], "--noise must lie in [0, 1000]"),
+    (["--velocity-lag", "nan"], "--velocity-lag must lie in [-10, 10], got nan"),
+    (["--vel-noise", "inf"], "--vel-noise must lie in [0, 100]"),
+    (["--first-outage", "-5"], "--first-outage must lie in"),
+])
+def test_a_bad_protocol_value_is_refused_naming_the_option(tmp_path, extra, phrase):
+    """Checked before the recording is read (the directory need hold nothing); the message
+    names the option given, not the settings field behind it."""
+    code, out, err = _run("run", "--data", f"rtklib:{tmp_path}", "--filter", "ekf", *extra)
+    assert code == 2 and out == "" and phrase in err, err
+    assert "Traceback" not in err and "_m " not in err
+
+
+@pytest.mark.parametrize("value", ["nan", "inf", "-20"])
+def test_an_imu_delay_that_is_not_a_delay_is_refused_before_reading(tmp_path, value):
+    # nan and inf raised ValueError / OverflowError deep in the loader (exit 1, a traceback)
+    code, out, err = _run("run", "--data", f"rtklib:{tmp_path}", "--filter", "ekf",
+                          "--imu-delay", value)
+    assert code == 2 and out == "" and "--imu-delay" in err and "Traceback" not in err, err

@@ -1,4 +1,6 @@
 """The validation protocol's parts on hand-made data (no recording needed)."""
+import math
+
 import numpy as np
 import pytest
 
@@ -50,6 +52,23 @@ def test_outages_remove_exactly_the_epochs_inside():
 def test_bad_settings_are_refused(kw):
     with pytest.raises(FuzzynavError):
         ProtocolSettings(**kw)
+
+
+@pytest.mark.parametrize("field, value", [
+    ("noise_pos_m", math.inf), ("noise_pos_m", math.nan), ("noise_pos_m", 1e300),
+    ("noise_vel_mps", math.inf), ("velocity_lag_s", math.nan), ("velocity_lag_s", -math.inf),
+    ("t_start_s", math.inf), ("nhc_sigma_mps", 1e9), ("outage_period_s", math.inf)])
+def test_a_number_that_is_not_finite_or_beyond_its_limit_is_refused_by_name(field, value):
+    # infinite noise ran and diverged (exit 3), an infinite lag failed later with a message
+    # about the GNSS fixes
+    with pytest.raises(FuzzynavError, match=rf"{field} must lie in \["):
+        ProtocolSettings(**{field: value})
+
+
+def test_the_limits_admit_the_defaults_and_the_documented_settings():
+    ProtocolSettings()
+    ProtocolSettings(noise_pos_m=0.0, velocity="inflate", velocity_lag_s=-0.2,
+                     first_outage_s=0.0, outage_duration_s=0.0, nhc_sigma_mps=0.3)
 
 
 # -- the fed copy -------------------------------------------------------------------------

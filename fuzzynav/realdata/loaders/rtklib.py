@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fuzzynav.errors import DataMissingError, InputFileError
+from fuzzynav.errors import DataMissingError, FuzzynavError, InputFileError
 from fuzzynav.sim.imu import ImuData
 from fuzzynav.realdata.loaders import checks, increments, timetag
 from fuzzynav.realdata.loaders.chunked import DEFAULT_CHUNK_ROWS
@@ -49,8 +49,8 @@ from fuzzynav.realdata.loaders.rtkpos import read_pos
 from fuzzynav.sim.sensors import SensorData
 from fuzzynav.realdata.start_options import StartOptions
 
-__all__ = ["STREAMED_HINT", "DEFAULT_IMU_DELAY_S", "TimeAlignment", "Recording", "read_imu_csv",
-           "align_time", "load_rtklib"]
+__all__ = ["STREAMED_HINT", "DEFAULT_IMU_DELAY_S", "MAX_IMU_DELAY_S", "TimeAlignment",
+           "Recording", "read_imu_csv", "align_time", "load_rtklib"]
 
 #: how a recording too long to hold is read instead (the end of the held load's refusal)
 STREAMED_HINT = ("load it streamed, its IMU read from the file chunk by chunk "
@@ -58,6 +58,9 @@ STREAMED_HINT = ("load it streamed, its IMU read from the file chunk by chunk "
                  "--chunk S)")
 #: sample-to-fitted-arrival delay of the rtklib-drive IMU [s] (see the module docstring)
 DEFAULT_IMU_DELAY_S = 0.21
+#: largest IMU delay accepted either way [s]: a logger's buffering is milliseconds to a
+#: fraction of a second; seconds would be a clock error, which the tag fit measures
+MAX_IMU_DELAY_S = 10.0
 
 
 @dataclass(frozen=True)
@@ -310,6 +313,9 @@ def load_rtklib(directory, mounting="auto", imu_delay_s=DEFAULT_IMU_DELAY_S,
     InputFileError
         A file is malformed or the recording fails a check of :mod:`.checks`.
     """
+    if not (isinstance(imu_delay_s, (int, float)) and abs(imu_delay_s) <= MAX_IMU_DELAY_S):
+        raise FuzzynavError(f"imu_delay_s (--imu-delay) must be a number of seconds within "
+                            f"+-{MAX_IMU_DELAY_S:g}, got {imu_delay_s!r}")
     directory = Path(directory)
     files = find_files(directory, session)
     mount = _resolve_mounting(mounting, directory, files)
