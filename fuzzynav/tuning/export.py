@@ -34,6 +34,11 @@ EXPECTED_METRICS = ("rms_pos_m", "rms_vel_mps", "rms_att_deg", "rms_pos_e_m", "r
 
 def choose_trial(study, cfg, trial_number=None, pareto_index=None):
     """The trial to export: a given number, a Pareto member, or the best fully run one."""
+    if pareto_index is not None and not cfg.multi_objective:
+        raise FuzzynavError(f"--pareto: study {cfg.name!r} is single-objective (it has no "
+                            "Pareto front); export its best trial, or a given one with --trial")
+    if pareto_index is not None and trial_number is not None:
+        raise FuzzynavError("--trial and --pareto each choose the trial: give one of them")
     if trial_number is not None:
         trials = study.get_trials(deepcopy=False)
         if not 0 <= trial_number < len(trials):

@@ -116,6 +116,12 @@ def repair(path) -> str | None:
     kept, n, nbytes = salvage(data)
     if n == 0:
         return None
+    if not kept and not data.lstrip().startswith(RECORD_START):  # nothing of a journal
+        raise FuzzynavError(f"{path}: not an Optuna journal (none of its {len(data)} bytes "
+                            "is a journal record); move it away or name another storage")
+    # lines that are not even the start of a record: something else wrote into the file
+    foreign = sum(1 for line in data.splitlines(keepends=True)
+                  if not _complete(line) and not line.startswith(RECORD_START))
     bak = None
     try:
         bak = _backup(path)
@@ -127,9 +133,11 @@ def repair(path) -> str | None:
         raise FuzzynavError(f"{path}: the journal has {n} damaged record(s) ({nbytes} bytes) "
                             f"and cannot be repaired: {why}") from None
     n_kept = kept.count(b"\n")
-    return (f"{path}: dropped {n} incomplete record(s) ({nbytes} bytes; a write cut off by "
-            f"a full disk or a killed process), kept {n_kept} complete ones; "
-            f"the original is kept as {bak}")
+    why = ("a write cut off by a full disk or a killed process" if not foreign else
+           f"{foreign} of them not journal records at all: the file was changed by "
+           "something other than Optuna")
+    return (f"{path}: dropped {n} incomplete record(s) ({nbytes} bytes; {why}), kept "
+            f"{n_kept} complete ones; the original is kept as {bak}")
 
 
 def _repair_locked(path, lock) -> bool:

@@ -156,3 +156,13 @@ def test_export_picks_a_pareto_member(done, tmp_path):
         sorted(vals[i] for i in (0, 1, 3))
     with pytest.raises(FuzzynavError, match=r"--pareto must be in 0\.\.2"):
         choose_trial(s, mo, pareto_index=3)
+
+
+def test_pareto_on_a_single_objective_study_is_refused_not_ignored(done):
+    cfg, study, _ = done
+    assert not cfg.multi_objective
+    with pytest.raises(FuzzynavError, match="--pareto: study .* is single-objective"):
+        choose_trial(study, cfg, pareto_index=3)  # exported the best trial silently
+    mo = dataclasses.replace(cfg, multi_objective=True)
+    with pytest.raises(FuzzynavError, match="give one of them"):
+        choose_trial(_mo_study([(1.0, 2.0, 3.0)]), mo, trial_number=0, pareto_index=0)

@@ -15,6 +15,7 @@ import pytest
 from optuna.trial import TrialState
 
 from fuzzynav.cli import main
+from fuzzynav.errors import FuzzynavError
 from fuzzynav.tuning.study_config import load_study_config
 from fuzzynav.tuning.journal import salvage, tail_ok
 from fuzzynav.tuning.study_run import run_study
@@ -156,3 +157,30 @@ def test_a_repair_on_a_full_disk_changes_nothing(tmp_path, monkeypatch, capsys, 
     assert path.read_bytes() == cut  # the journal as found
     # no backup (partial or whole) and no temporary file: the next repair starts afresh
     assert sorted(p.name for p in path.parent.iterdir()) == before
+
+
+def test_a_line_written_by_something_else_is_named_so(tmp_path, monkeypatch, capsys):
+    """Not every damaged line is a cut-off write: a line that is not even the start of a
+    record is reported as foreign (the repair still keeps every complete record)."""
+    monkeypatch.setattr(Objective, "_run", _fake_run(_dead_pid()))
+    cfg = load_study_config(write_study(tmp_path, study={"trials": 2}))
+    run_study(cfg, progress=False)
+    path = Path(cfg.storage_url[len("journal:"):])
+    lines = path.read_bytes().splitlines(keepends=True)
+    path.write_bytes(b"".join(lines[:2] + [b"garbage{{\n"] + lines[2:]))
+    study = open_study(cfg)
+    err = capsys.readouterr().err
+    assert "dropped 1 incomplete record(s)" in err and "not journal records at all" in err
+    assert "cut off by a full disk" not in err
+    assert len(study.get_trials(states=(TrialState.COMPLETE,))) == 2
+
+
+@pytest.mark.parametrize("content", [b"\x00\x01\x02", b"hello, not a journal\n"])
+def test_a_file_that_is_no_journal_is_refused_not_emptied(tmp_path, content):
+    """It was 'repaired' to nothing and the study silently started again from scratch."""
+    cfg = load_study_config(write_study(tmp_path, study={"trials": 2}))
+    path = Path(cfg.storage_url[len("journal:"):])
+    path.write_bytes(content)
+    with pytest.raises(FuzzynavError, match="not an Optuna journal"):
+        open_study(cfg)
+    assert path.read_bytes() == content and not list(tmp_path.glob("*.bak"))
