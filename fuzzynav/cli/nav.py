@@ -231,6 +231,9 @@ def check_rules(args, filters, option: str) -> None:
 
 
 def _cmd_run(args) -> int:
+    if args.data is not None and not args.data.strip():
+        raise FuzzynavError("--data is empty: give KIND:DIR, KIND:DIR:SESSION or a dataset "
+                            "NAME (fuzzynav data list)")
     if (args.scenario is None) == (args.data is None):
         raise FuzzynavError("give either a SCENARIO or --data KIND:DIR")
     check_common(args)
@@ -264,7 +267,10 @@ def _cmd_run(args) -> int:
 def _cmd_compare(args) -> int:
     from fuzzynav.papers.claims import claims_for, rows_for
 
-    filters = [f.strip() for f in args.filters.split(",") if f.strip()]
+    filters = [f.strip() for f in args.filters.split(",")]
+    if "" in filters:  # a doubled or trailing comma: a filter the user meant may be missing
+        raise FuzzynavError(f"--filters {args.filters!r}: an empty filter name (a doubled or "
+                            "trailing comma)")
     if len(filters) < 2:
         raise FuzzynavError("--filters needs at least two comma-separated filter names")
     twice = sorted({f for f in filters if filters.count(f) > 1})

@@ -157,7 +157,8 @@ def read_params_file(path) -> dict:
     except (OSError, UnicodeDecodeError) as exc:
         raise InputFileError(path, "", f"cannot be read ({exc.__class__.__name__})") from None
     except json.JSONDecodeError as exc:
-        raise InputFileError(path, "", f"is not JSON ({exc.msg} at line {exc.lineno})") from None
+        raise InputFileError(path, "", f"is not JSON ({exc.msg}: line {exc.lineno}, "
+                                       f"column {exc.colno})") from None
     if isinstance(doc, dict) and "multipliers" in doc and "format" not in doc:
         raise InputFileError(path, "$.multipliers", "an old APSO result file: rerun the study "
                              "(fuzzynav study run studies/paper004_apso.toml), which writes "

@@ -104,6 +104,8 @@ def _span(text):
         a, b = (float(x) for x in text.split(","))
     except ValueError:
         raise FuzzynavError(f"--span: expected START,END in seconds, got {text!r}") from None
+    if not (math.isfinite(a) and math.isfinite(b)):
+        raise FuzzynavError(f"--span: START and END must be finite seconds, got {text!r}")
     if not b > a:
         raise FuzzynavError(f"--span: END must exceed START, got {text!r}")
     return a, b

@@ -88,15 +88,17 @@ def _quiet_pooch():
 
 
 @contextlib.contextmanager
-def _no_empty_directory(path: Path):
-    """Remove ``path`` afterwards if it is left empty (a fetch that failed at once leaves
-    no sign of a dataset, so ``data list`` and ``--data`` still say to fetch it)."""
+def _no_empty_directory(path: Path, created=()):
+    """Remove ``path`` afterwards if it is left empty, and the directories of ``created``
+    (made for it, deepest first) that are left empty too: a fetch that failed at once
+    leaves no sign of a dataset, so ``data list`` and ``--data`` still say to fetch it."""
     try:
         yield
     finally:
-        with contextlib.suppress(OSError):
-            if not any(path.iterdir()):
-                path.rmdir()
+        for d in dict.fromkeys([path, *created]):
+            with contextlib.suppress(OSError):
+                if d.is_dir() and not any(d.iterdir()):
+                    d.rmdir()
 
 
 def _fetcher(ds: Dataset, home: Path, url: str, retries: int):
@@ -153,10 +155,12 @@ def fetch(name: str, dest=None, url: str | None = None, retries: int | None = No
     ds = get_dataset(name)
     home = Path(dest).expanduser() if dest is not None else fetch_home()
     url = base_url() if url is None else (url if url.endswith("/") else url + "/")
-    make_dir(home / ds.name, "data directory")   # (refuses a system directory, names a failure)
+    target_dir = (home / ds.name).absolute()
+    created = [d for d in (target_dir, *target_dir.parents) if not d.exists()]
+    make_dir(target_dir, "data directory")   # (refuses a system directory, names a failure)
     getter = _fetcher(ds, home, url, RETRIES if retries is None else int(retries))
     downloader = pooch.HTTPDownloader(timeout=TIMEOUT_S, progressbar=False)
-    with _quiet_pooch(), _no_empty_directory(home / ds.name):
+    with _quiet_pooch(), _no_empty_directory(target_dir, created):
         for f in ds.files:
             target = home / ds.name / f.path
             if _holds(target, f.sha256):

@@ -241,6 +241,11 @@ def parse_data_spec(spec: str) -> tuple[DataSource, Path, str | None]:
     head, colon, tail = rest.rpartition(":")
     if colon and not _is_dir(Path(rest).expanduser()):
         directory, session = head, tail
+    if not sep and kind and kind not in SOURCES and not _is_dir(Path(kind).expanduser()) \
+            and "/" not in kind:  # a bare word, no directory: a dataset's name, misspelt
+        from fuzzynav.realdata.datasets import DATASETS
+
+        raise UnknownNameError("dataset", kind, DATASETS)
     if not sep or not kind or not directory or session == "":
         raise FuzzynavError(f"--data: expected KIND:DIR, KIND:DIR:SESSION or a dataset "
                             f"NAME[:SESSION] (e.g. rtklib:path/to/drive, rtklib-drive or "

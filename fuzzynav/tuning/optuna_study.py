@@ -100,13 +100,14 @@ def make_storage(url: str, heartbeat: bool = True):
         raise FuzzynavError(f"storage {url}: not a storage URL; for a journal file write "
                             f"journal:{url}, for a database a URL such as "
                             "sqlite:///study.db or postgresql://user@host/db")
-    kw = {}
-    if heartbeat:
-        kw = dict(heartbeat_interval=10, grace_period=60,
-                  heartbeat_stale_trial_callback=optuna.storages.
-                  RetryHeartbeatStaleTrialCallback(max_retry=MAX_RETRIES))
     try:
-        return optuna.storages.RDBStorage(with_driver(url), **kw)
+        with warnings.catch_warnings():  # the heartbeat and its retry, chosen knowingly
+            warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+            kw = dict(heartbeat_interval=10, grace_period=60,
+                      heartbeat_stale_trial_callback=optuna.storages.
+                      RetryHeartbeatStaleTrialCallback(max_retry=MAX_RETRIES)) \
+                if heartbeat else {}
+            return optuna.storages.RDBStorage(with_driver(url), **kw)
     except Exception as exc:  # sqlalchemy: bad URL, missing driver, server down
         raise FuzzynavError(f"storage {_hide_password(url)}: cannot open it "
                             f"({type(exc).__name__}: {str(exc).splitlines()[0]})") from None

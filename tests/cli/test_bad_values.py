@@ -37,6 +37,8 @@ def _one_line(err):
 
 @pytest.mark.parametrize("argv, fragment", [
     (["run", TINY, "--seed", "-1"], "--seed must be >= 0"),
+    (["compare", TINY, "--filters", "ekf,,fakf"], "an empty filter name"),
+    (["compare", TINY, "--filters", "ekf,fakf,"], "an empty filter name"),
     (["run", TINY, "--mc", "-2"], "--mc must be >= 1"),
     (["compare", TINY, "--filters", "ekf,fakf", "--mc", "0"], "--mc must be >= 1"),
     (["run", TINY, "--t-start", "-1"], "--t-start must be a finite number"),

@@ -142,3 +142,15 @@ def test_an_imu_delay_that_is_not_a_delay_is_refused_before_reading(tmp_path, va
     code, out, err = _run("run", "--data", f"rtklib:{tmp_path}", "--filter", "ekf",
                           "--imu-delay", value)
     assert code == 2 and out == "" and "--imu-delay" in err and "Traceback" not in err, err
+
+
+@pytest.mark.parametrize("argv, phrase", [
+    (["--data", ""], "--data is empty"),
+    (["--data", "  "], "--data is empty"),
+    (["--data", "nosuchdataset"], "unknown dataset 'nosuchdataset'; known: akit, rtklib-drive"),
+    (["--data", "rtklib:DIR", "--span", "nan,5"], "--span: START and END must be finite"),
+])
+def test_an_empty_or_misspelt_data_spec_says_so(argv, phrase, tmp_path):
+    argv = [a.replace("DIR", str(tmp_path)) for a in argv]
+    code, out, err = _run("run", *argv, "--filter", "ekf")
+    assert code == 2 and out == "" and phrase in err and err.count("\n") == 1, err

@@ -181,6 +181,10 @@ def test_offline_fetch_is_one_line_saying_what_to_download_and_where(home, monke
     assert "cannot download" in err and "no connection" in err
     assert "fuzzynav data list akit --files" in err and str(home / "akit") in err
     assert not (home / "akit").exists()                       # not even an empty directory
+    assert not home.exists()  # nor the data directory $FUZZYNAV_DATA named, made for it
+    home.mkdir()  # a data directory that was there before stays
+    assert main(["data", "fetch", "akit"]) == 2
+    assert home.is_dir() and not (home / "akit").exists()
 
 
 def test_data_list_says_size_presence_and_where(home, capsys):
