@@ -49,7 +49,7 @@ def write_baseline_report(bcfg, out, cache_dir=None, evaluate: bool = True) -> P
         for name, params in doc["filters"].items():
             p = ", ".join(f"{k} = {v:.4g}" for k, v in params.items())
             lines.append(f"| {name} | {doc['train_score'].get(name, float('nan')):.3f} | {p} |")
-    with staged(out, last=("report.md",)) as tmp:
+    with staged(out, "study report", last=("report.md",)) as tmp:
         if doc is not None and evaluate:
             train, test = evaluate_baselines(bcfg, cache_dir)
             runs = pd.concat([train.assign(set="train"), test.assign(set="test")])

@@ -100,7 +100,7 @@ def export_rules(cfg, study, out, trial_number=None, pareto_index=None, cache_di
     test = run_table(ev, systems, cfg.test)
     held_out = summary(test).iloc[0].to_dict() if not test.empty else {}
     created = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
-    with staged(next(iter(paths.values())).parent) as tmp:
+    with staged(next(iter(paths.values())).parent, "rule file") as tmp:
         files = {name: tmp / p.name for name, p in paths.items()}
         for name, fis in systems.items():
             prov = {

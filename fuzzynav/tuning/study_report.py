@@ -155,7 +155,7 @@ def write_report(cfg, study, out_dir, cache_dir=None, evaluate: bool = True) -> 
     place at the end (``report.md`` last), so a failure part-way leaves ``out_dir`` as it
     was (see :func:`fuzzynav.fileio.staged`).
     """
-    with staged(out_dir, last=("report.md",)) as tmp:
+    with staged(out_dir, "study report", last=("report.md",)) as tmp:
         _write_files(cfg, study, tmp, cache_dir, evaluate)
     return Path(out_dir) / "report.md"
 

@@ -64,6 +64,15 @@ def _set(col, value, row=None):
     return fn
 
 
+def _field(row, col, text):
+    """Rows with field ``col`` of data row ``row`` (0-based, after the header) replaced."""
+    def fn(rows):
+        parts = rows[row].split(",")
+        parts[col] = text
+        return rows[:row] + [",".join(parts)] + rows[row + 1:]
+    return fn
+
+
 def _swap(i, j):
     def fn(a):
         a[:, [i, j]] = a[:, [j, i]]
@@ -116,7 +125,13 @@ CASES = [
     ("dvl time in ms", _columns(DVL, _set(0, lambda t: t * 1e3)), DVL, "milliseconds?"),
     ("dvl cut short", _rows(DVL, lambda r: r[:40]), DVL, "truncated"),
     ("dvl x and y swapped", _columns(DVL, _swap(1, 2)), DVL, "forward velocity"),
+    ("dvl a NaN", _rows(DVL, _field(20, 3, "nan")), DVL,
+     "line 22, column DVL Z [m/s]: not finite: 'nan'"),
+    ("dvl a word", _rows(DVL, _field(5, 1, "x")), DVL,
+     "line 7, column DVL X [m/s]: not a number: 'x'"),
     # -- the reference
+    ("gt a NaN", _rows(GT, _field(10, 1, "nan")), GT,
+     "line 12, column Longitude [rad]: not finite"),
     ("latitude 7.5 rad", _columns(GT, _set(2, 7.5, row=10)), GT, "Latitude [rad]"),
     ("position in degrees", _columns(GT, _set(slice(1, 3), lambda x: np.rad2deg(x))), GT,
      "degrees?"),

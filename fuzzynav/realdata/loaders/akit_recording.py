@@ -116,10 +116,16 @@ def parse_trajectories(text) -> list[int]:
 _ERROR_ORDER = ("row", "time")
 
 
-def _parse_rows(path, lines, first_lineno: int, ncol: int):
+def _column(names, j: int) -> str:
+    """``column NAME`` of the header's ``j``-th field (its number when the header has none)."""
+    name = names[j].strip() if j < len(names) else ""
+    return f"column {name or j + 1}"
+
+
+def _parse_rows(path, lines, first_lineno: int, ncol: int, names=()):
     """The numbers of text rows (``lines``, the first being line ``first_lineno`` of the
     file, 1-based); raises the error of the first row that is cut, not a number or not
-    finite."""
+    finite, naming its column from the header's ``names``."""
     plain = _parsed_at_once(lines, ncol)
     if plain is not None:
         return plain
@@ -129,13 +135,16 @@ def _parse_rows(path, lines, first_lineno: int, ncol: int):
         if len(parts) != ncol:
             raise InputFileError(path, f"line {i}", f"has {len(parts)} columns, expected "
                                                     f"{ncol} (a cut or damaged row)")
-        try:
-            vals = [float(p) for p in parts]
-        except ValueError:
-            raise InputFileError(path, f"line {i}", f"a field is not a number: {line[:60]!r}") \
-                from None
-        if not all(np.isfinite(vals)):
-            raise InputFileError(path, f"line {i}", "a field is not finite")
+        vals = []
+        for j, part in enumerate(parts):
+            try:
+                vals.append(float(part))
+            except ValueError:
+                raise InputFileError(path, f"line {i}, {_column(names, j)}",
+                                     f"not a number: {part.strip()[:40]!r}") from None
+            if not np.isfinite(vals[-1]):
+                raise InputFileError(path, f"line {i}, {_column(names, j)}",
+                                     f"not finite: {part.strip()[:40]!r}")
         rows.append(vals)
     return np.array(rows, dtype=float).reshape(len(rows), ncol)
 
@@ -185,13 +194,15 @@ def read_table(path: Path, kind: str, chunk_rows=DEFAULT_CHUNK_ROWS) -> np.ndarr
     chunk_rows = chunked.check_chunk_rows(chunk_rows)
     ncol = COLUMNS[kind]
     errors = chunked.FirstErrors(_ERROR_ORDER)
-    n_lines, last = 0, None  # last: the previous block's last (time, line)
+    n_lines, last, names = 0, None, ()  # last: the previous block's last (time, line)
     try:
         held = chunked.counted_lines(path, checks.held_bytes_per_row(ncol), universal=True)
         rows = chunked.Rows(path, held, ncol)
         with open(path) as f:
             for _, block in chunked.line_blocks(f, chunk_rows):
                 lines = _split_lines(block)
+                if not n_lines and lines:
+                    names = lines[0].split(",")  # the header: the columns' names
                 # the header is line 1; rows are numbered from 2
                 first = max(n_lines, 1) - n_lines
                 lineno = n_lines + first + 1
@@ -199,7 +210,7 @@ def read_table(path: Path, kind: str, chunk_rows=DEFAULT_CHUNK_ROWS) -> np.ndarr
                 if "row" in errors or not lines[first:]:  # past a bad row only lines count
                     continue
                 try:
-                    a = _parse_rows(path, lines[first:], lineno, ncol)
+                    a = _parse_rows(path, lines[first:], lineno, ncol, names)
                 except InputFileError as exc:
                     errors.note("row", exc)
                     continue

@@ -38,7 +38,7 @@ def write_alignment_report(plan, study, out, evaluate: bool = True) -> Path:
                              f"{summary[group]['tuned']:.4f} |")
     frame = study.trials_dataframe(attrs=("number", "value", "state", "params"))
     text = "\n".join(lines) + "\n"
-    with staged(Path(out), last=("report.md",)) as tmp:
+    with staged(Path(out), "study report", last=("report.md",)) as tmp:
         write_atomic(tmp / "trials.csv", lambda t: frame.to_csv(t, index=False))
         write_atomic(tmp / "report.md", lambda t: Path(t).write_text(text))
     return Path(out) / "report.md"
