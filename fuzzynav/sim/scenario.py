@@ -16,6 +16,7 @@ path (``segments[3].turn_deg``, ``sensors.gps.rate_hz``) and what was wrong.
 from __future__ import annotations
 
 import datetime as _dt
+import difflib
 import functools
 import json
 import re
@@ -31,7 +32,7 @@ from fuzzynav.sim.imu import ImuSpec
 from fuzzynav.sim.scenario_checks import as_base, check_scenario
 from fuzzynav.sim.sea import SeaState
 from fuzzynav.sim.segments import SEGMENT_KINDS, Profile, Segment
-from fuzzynav.sim.sensors import spec_class
+from fuzzynav.sim.sensors import SENSOR_KINDS, spec_class
 from fuzzynav.sim.tomltable import Table, parse_toml, read_toml, with_path
 
 __all__ = ["DEFAULT_UTC", "Scenario", "scenario_from_dict", "builtin_files", "list_scenarios",
@@ -159,10 +160,16 @@ def _segment(t: Table) -> Segment:
         raise InputFileError(None, exc.where.replace("segment", t.where, 1), exc.what) from None
 
 
-def _sensor(t: Table, name: str):
+def _sensor(t: Table, name: str, others=()):
     if not _SENSOR_NAME.match(name):
         raise t.error("", "a sensor name must start with a letter and use only letters, "
                           "digits, '_' and '-' (at most 40)")
+    if not t.has("kind"):  # a new sensor needs its kind; a misspelt name makes a new one
+        close = difflib.get_close_matches(name, [o for o in others if o != name], n=1)
+        raise t.error("kind", "missing required key: a sensor table needs kind = one of "
+                              f"{', '.join(sorted(SENSOR_KINDS.load()))}" + (
+                                  f" (or is it the sensor {close[0]!r}, misspelt?)"
+                                  if close else ""))
     kind = t.string("kind")
     try:
         cls = spec_class(kind)
@@ -197,7 +204,7 @@ def scenario_from_dict(d: dict, default_name: str = "scenario") -> Scenario:
     sensors = {}
     if sens is not None:
         for key in list(sens.data):
-            sensors[key] = _sensor(sens.table(key), key)
+            sensors[key] = _sensor(sens.table(key), key, list(sens.data))
     sea_table = top.table("sea", required=False)
     sea = SeaState.from_dict(sea_table.data, sea_table.where) if sea_table else None
     top.finish()

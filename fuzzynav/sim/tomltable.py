@@ -83,7 +83,10 @@ class Table:
         if key in self.data:
             return self.data[key], True
         if default is _REQUIRED:
-            raise self.error(key, "missing required key")
+            close = difflib.get_close_matches(key, [str(k) for k in self.data], n=1,
+                                              cutoff=0.75)
+            raise self.error(key, "missing required key" + (
+                f" (is {close[0]!r} a misspelling of it?)" if close else ""))
         return default, False
 
     def _check_range(self, key, x, lo, hi, lo_open, hi_open):

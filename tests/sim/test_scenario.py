@@ -123,6 +123,17 @@ def test_unknown_names_and_missing_files():
         load_scenario("/nowhere/nowhere.toml")
 
 
+def test_a_misspelt_sensor_of_the_base_is_named(tmp_path):
+    """[sensors.gpz] in a file derived from paper000 is a new sensor without a kind: the
+    message lists the kinds and names the base's sensor it resembles."""
+    bad = write(tmp_path, 'base = "paper000"\n[sensors.gpz]\nrate_hz = 1.0\n', "bad.toml")
+    with pytest.raises(InputFileError) as exc:
+        load_scenario(bad)
+    assert exc.value.where == "sensors.gpz.kind"
+    assert "needs kind = one of" in str(exc.value) and "gnss" in str(exc.value)
+    assert "the sensor 'gps', misspelt?" in str(exc.value)
+
+
 def test_a_file_can_derive_from_a_built_in(tmp_path, paper000):
     path = write(tmp_path, 'base = "paper000"\n[sensors.gps]\noutlier_rate = 0.02\n'
                            'outlier_pos_m = 20.0\n', "variant.toml")

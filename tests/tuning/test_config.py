@@ -171,6 +171,15 @@ def test_missing_tables_are_named(tmp_path):
             load_study_config(path)
 
 
+def test_a_misspelt_table_is_named_beside_the_one_missing(tmp_path):
+    doc = study_doc()
+    doc["trian"] = doc.pop("train")
+    path = write_study(tmp_path, doc, file_name="bad.toml")
+    with pytest.raises(InputFileError, match=rf"^{path}: train: missing required key "
+                                             r"\(is 'trian' a misspelling of it\?\)"):
+        load_study_config(path)
+
+
 def test_a_broken_template_is_reported_by_its_own_file_and_json_path(tmp_path):
     bad = ROOT / "tests" / "data" / "bad_fis" / "unsorted_params.json"
     path = write_study(tmp_path, controllers=[dict(ATT_CONTROLLER, template=str(bad))])
