@@ -295,3 +295,15 @@ def test_damaged_copy_of_the_real_drive(rtklib_drive, tmp_path, damage, name, fi
     code, out, err = run_cli(tmp_path)
     assert code == 2 and out == "" and err.count("\n") == 1, err
     assert str(tmp_path / name) in err and field in err, err
+
+
+@pytest.mark.filterwarnings("error::RuntimeWarning")
+def test_an_absurd_value_is_named_with_no_numpy_warning_before_the_line(drive, tmp_path):
+    """1e300 overflows to inf in the physics check, which names it; numpy's overflow
+    warnings came before that line on stderr (here: turned into errors)."""
+    d = tmp_path / "rec"
+    shutil.copytree(drive, d)
+    _edit_fields(d, CSV, 3000, 0, "1e300")
+    code, out, err = run_cli(d)
+    assert code == 2 and out == "" and err.count("\n") == 1, err
+    assert "line 3000, columns acc x,y,z: magnitude inf" in err

@@ -219,6 +219,12 @@ class PhysicsScan:
 
     def add(self, acc_g, gyro_dps, lineno) -> None:
         """The next rows: accelerometer [g], gyro [deg/s] (K, 3), their 1-based lines."""
+        # an absurd value (1e300) overflows to inf here, which the check then names: numpy's
+        # warnings about it would only come before that one line
+        with np.errstate(over="ignore", invalid="ignore"):
+            self._add(acc_g, gyro_dps, lineno)
+
+    def _add(self, acc_g, gyro_dps, lineno) -> None:
         for name, data, scale in (("gyro", gyro_dps, units.DPS), ("acc", acc_g, units.G0)):
             mag = np.linalg.norm(data, axis=1) * scale
             k = int(np.argmax(mag))
