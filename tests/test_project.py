@@ -20,6 +20,29 @@ def test_readme_links_resolve():
         assert (ROOT / target).exists(), target
 
 
+def test_the_files_the_readme_commands_read_exist():
+    """Every .toml / .json a README command reads (not one it writes with --out) is in the
+    repository: ``ship-day.toml`` was named by three commands and shipped nowhere."""
+    readme = (ROOT / "README.md").read_text()
+    blocks = "\n".join(re.findall(r"```\n(.*?)\n```", readme, re.S))
+    written, missing = set(), []
+    for m in re.finditer(r"(--out\s+)?\b([\w./-]+\.(?:toml|json))\b", blocks):
+        if m.group(1):  # written by the command (and read by the ones after it)
+            written.add(m.group(2))
+        elif m.group(2) not in written and not any(
+                (d / m.group(2)).is_file() for d in (ROOT, ROOT / "studies")):
+            missing.append(m.group(2))
+    assert "examples/ship-day.toml" in blocks
+    assert not missing, missing
+
+
+def test_the_example_day_at_sea_is_a_day_long(tmp_path):
+    from fuzzynav.sim.scenario import load_scenario
+
+    s = load_scenario(ROOT / "examples" / "ship-day.toml")
+    assert s.duration_s == 86400.0 and {"log", "pol"} <= set(s.sensors)
+
+
 def test_numba_cache_is_keyed_by_the_sources(tmp_path):
     import numba
 

@@ -166,7 +166,9 @@ def read_params_file(path) -> dict:
     if not isinstance(doc, dict) or doc.get("format") != PARAMS_FORMAT:
         raise InputFileError(path, "$.format", f"must be {PARAMS_FORMAT!r} (a file written "
                                                "by a baseline study)")
-    if doc.get("version") != PARAMS_VERSION or isinstance(doc.get("version"), bool):
+    # a file written by hand may leave the version out; one that gives another is refused
+    if "version" in doc and (doc["version"] != PARAMS_VERSION
+                             or isinstance(doc["version"], bool)):
         raise InputFileError(path, "$.version", f"unsupported version {brief(doc.get('version'))}"
                                                 f" (this fuzzynav reads {PARAMS_VERSION})")
     extra = [k for k in doc if k not in TOP_KEYS]

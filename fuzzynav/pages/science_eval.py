@@ -16,10 +16,11 @@ import pandas as pd
 
 from fuzzynav.pages.science_tuning import (baseline_params_at, fuzzy_systems_at)
 
-__all__ = ["held_out_runs", "curve_points"]
+__all__ = ["fuzzy_rows", "named_rows", "held_out_runs", "curve_points"]
 
 
-def _fuzzy_rows(cfg, systems, runs, label, cache) -> pd.DataFrame:
+def fuzzy_rows(cfg, systems, runs, label, cache) -> pd.DataFrame:
+    """Rows of the fuzzy systems ``systems`` of study ``cfg`` on ``runs``, labelled ``label``."""
     from fuzzynav.tuning.evaluate import run_table
     from fuzzynav.tuning.objective import CANDIDATE, Evaluator
 
@@ -27,7 +28,7 @@ def _fuzzy_rows(cfg, systems, runs, label, cache) -> pd.DataFrame:
     return df.assign(filter=df["filter"].replace({CANDIDATE: label}))
 
 
-def _named_rows(cfg, specs: dict, runs, cache) -> pd.DataFrame:
+def named_rows(cfg, specs: dict, runs, cache) -> pd.DataFrame:
     """Rows of named filters (label -> ``NAME`` or ``NAME@FILE``)."""
     from fuzzynav.tuning.evaluate import run_table
     from fuzzynav.tuning.objective import Evaluator
@@ -44,14 +45,14 @@ def held_out_runs(tunings, runs, cache, trials=None) -> pd.DataFrame:
     frames = []
     cfg0 = next(iter(tunings[0].fuzzy.values()))[0]  # the fair study: its compared filters
     tuned = [n for n in cfg0.compare if n in TUNED]
-    untuned = _named_rows(cfg0, {n: n for n in cfg0.compare if n not in TUNED}, runs, cache)
+    untuned = named_rows(cfg0, {n: n for n in cfg0.compare if n not in TUNED}, runs, cache)
     for t in tunings:
         for label, (cfg, study) in t.fuzzy.items():
             systems, _ = fuzzy_systems_at(cfg, study, trials)
-            frames.append(_fuzzy_rows(cfg, systems, runs, label, cache)
+            frames.append(fuzzy_rows(cfg, systems, runs, label, cache)
                           .assign(tuning_seed=t.seed))
         specs = {n: f"{n}@{t.params}" for n in tuned}
-        frames.append(_named_rows(cfg0, specs, runs, cache).assign(tuning_seed=t.seed))
+        frames.append(named_rows(cfg0, specs, runs, cache).assign(tuning_seed=t.seed))
         frames.append(untuned.assign(tuning_seed=t.seed))
     return pd.concat(frames, ignore_index=True)
 
@@ -71,7 +72,7 @@ def curve_points(tunings, labels, budgets, runs, cache) -> pd.DataFrame:
     from fuzzynav.pages.scores import scores_to
 
     cfg0 = next(iter(tunings[0].fuzzy.values()))[0]
-    ekf = _named_rows(cfg0, {"ekf": "ekf"}, runs, cache)
+    ekf = named_rows(cfg0, {"ekf": "ekf"}, runs, cache)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for t in tunings:
@@ -84,11 +85,11 @@ def curve_points(tunings, labels, budgets, runs, cache) -> pd.DataFrame:
                     if label in t.fuzzy:
                         cfg = t.fuzzy[label][0]
                         systems, train = fuzzy_systems_at(cfg, study, n)
-                        df = _fuzzy_rows(cfg, systems, runs, label, cache)
+                        df = fuzzy_rows(cfg, systems, runs, label, cache)
                     else:
                         params, train = baseline_params_at(t, label, n)
                         path = _params_file(label, params, Path(tmp))
-                        df = _named_rows(cfg0, {label: f"{label}@{path}"}, runs, cache)
+                        df = named_rows(cfg0, {label: f"{label}@{path}"}, runs, cache)
                     s = scores_to(pd.concat([df, ekf]), "ekf")
                     held = s[s["filter"] == label]["score"]
                     rows.append({"tuning_seed": t.seed, "filter": label, "trials": n,

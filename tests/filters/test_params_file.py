@@ -75,7 +75,6 @@ TOP = [
     ("a later version", lambda d: d.update(version=7), "$.version", "unsupported version 7"),
     ("a version as text", lambda d: d.update(version="1"), "$.version",
      "unsupported version '1'"),
-    ("no version", lambda d: d.pop("version"), "$.version", "unsupported version None"),
     ("an unknown key", lambda d: d.update(extra_top=1), "$.extra_top",
      "unknown key of a tuned-parameter file"),
 ]
@@ -91,6 +90,14 @@ def test_the_file_itself_is_checked_too(tmp_path, label, edit, where, phrase):
         read_params_file(path)
     msg = str(exc.value)
     assert msg.startswith(f"{path}: {where}:") and phrase in msg and "\n" not in msg
+
+
+def test_a_hand_written_file_may_leave_the_version_out(tmp_path):
+    doc = _doc()
+    del doc["version"]
+    path = tmp_path / "mine.json"
+    path.write_text(json.dumps(doc))
+    assert read_params_file(path) == read_params_file(SHIPPED)
 
 
 def test_the_shipped_files_read_back_unchanged():
