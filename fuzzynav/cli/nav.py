@@ -6,14 +6,14 @@ import os
 from pathlib import Path
 
 from fuzzynav.cli.segment_table import add_segments_argument, refuse_segments
-from fuzzynav.cli.values import check_count, check_t_start
+from fuzzynav.cli.values import check_common, check_t_start
 from fuzzynav.errors import FuzzynavError
 from fuzzynav.fileio import safe_stem, say_written
 
 __all__ = ["default_cache_dir", "register", "add_source_arguments", "add_recording_arguments",
            "DEFAULT_CHUNK_S", "add_streaming_arguments", "streaming_options",
-           "add_common_arguments", "data_sources", "filter_options", "MAX_MC", "MAX_SEED",
-           "check_common", "check_rules", "run_scenario_filters", "plot_traces"]
+           "add_common_arguments", "data_sources", "filter_options", "check_rules",
+           "run_scenario_filters", "plot_traces"]
 
 
 def default_cache_dir() -> Path:
@@ -177,33 +177,6 @@ def filter_options(args) -> dict:
     if args.rules:
         opts["rules"] = list(args.rules)
     return opts
-
-
-#: most Monte-Carlo runs of one command: each keeps its metrics (and its seed list is built
-#: up front), so a typo such as ``--mc 2000000000`` would end in an out-of-memory crash
-MAX_MC = 100_000
-
-#: largest seed: seeds go into int64 columns of the results table (numpy takes any >= 0)
-MAX_SEED = 2**63 - 1
-
-
-def check_common(args) -> None:
-    """Refuse meaningless values of the options every run shares, and output directories
-    that cannot be written, before any work."""
-    from fuzzynav.fileio import check_output_dir
-
-    for flag, what in (("plot", "figure directory (--plot)"),
-                       ("output_dir", "chunk directory (--output-dir)")):
-        if getattr(args, flag, None) is not None:
-            check_output_dir(getattr(args, flag), what)
-    check_count("--mc", args.mc)
-    if args.mc > MAX_MC:
-        raise FuzzynavError(f"--mc must be <= {MAX_MC} (each run is simulated and kept in "
-                            f"memory; split a larger experiment), got {args.mc}")
-    check_count("--seed", args.seed, lo=0)
-    if args.seed + args.mc - 1 > MAX_SEED:
-        raise FuzzynavError(f"--seed {args.seed} with --mc {args.mc}: the last seed must be "
-                            f"<= {MAX_SEED} (a 64-bit integer)")
 
 
 def check_rules(args, filters, option: str) -> None:

@@ -15,7 +15,7 @@ import pytest
 
 from fuzzynav import compile_notice
 from fuzzynav.cli import EXIT_BROKEN_PIPE, MAX_MESSAGE, main
-from fuzzynav.cli.nav import MAX_MC
+from fuzzynav.cli.values import MAX_MC
 from tests.cli.test_bad_values import _one_line, _run
 
 ROOT = Path(__file__).resolve().parents[2]
